@@ -1,0 +1,447 @@
+"""Compile C source once through cffi (API mode) into a cache folder and load it.
+
+The module name is a hash of everything that changes the binary (source, cdef, compiler
+identity, flags, Python ABI, machine, cffi version, and the CPU because of ``-march=native``),
+so a cached ``.so`` is never stale.  Several processes may ask for the same new module at the
+same moment: the first to create ``<modname>.lock`` exclusively compiles in a private temporary
+folder, moves the ``.so`` into place atomically and writes ``<modname>.ready`` last; the others
+poll for the marker.  A failed build renames the lock to ``<modname>.failed`` (holding the
+compiler log); waiters raise from it and a later fresh call removes it and tries again.
+No lock library is used (the scheme follows FEniCS FFCx's JIT cache).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import importlib.machinery
+import importlib.util
+import os
+import platform
+import re
+import shlex
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import types
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = [
+    "COMPILE_FLAGS",
+    "CompilationError",
+    "CompiledModule",
+    "CompilerNotFoundError",
+    "cache_dir",
+    "cache_key",
+    "compile_module",
+    "module_name",
+]
+
+COMPILE_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-ffp-contract=fast", "-std=gnu11")
+
+#: Bump when the way modules are built changes (invalidates every cached binary).
+_JIT_FORMAT = "1"
+#: Environment variables that distutils folds into the compile or link command.
+_BUILD_ENV = ("CFLAGS", "CPPFLAGS", "LDFLAGS", "LDSHARED")
+_POLL_S = 0.05
+_LOG_TAIL_CHARS = 6000
+_NAME_RE = re.compile(r"[A-Za-z0-9_]+")
+
+# One build or load at a time per process: compiling redirects fds 1/2, changes the working
+# directory (cffi) and sets $CC, which are all process-wide.
+_LOCK = threading.RLock()
+_MEMO: dict[str, CompiledModule] = {}
+
+
+class CompilerNotFoundError(RuntimeError):
+    """No C compiler could be found for ``backend='c'``."""
+
+
+class CompilationError(RuntimeError):
+    """The C compiler failed; the message ends with the tail of its output."""
+
+
+@dataclass(frozen=True)
+class CompiledModule:
+    """A loaded cffi extension module and how it was obtained."""
+
+    module: types.ModuleType  # the cffi extension module (has .ffi and .lib)
+    compiled: bool  # True if this call compiled it, False if loaded from cache/memo
+    seconds: float  # wall time spent in this call (compile or load)
+    path: Path  # the .so file
+
+
+# --------------------------------------------------------------------------- cache folder
+
+
+def cache_dir() -> Path:
+    """Return the cache folder (created if missing).
+
+    ``$ANCF_CACHE_DIR`` if set, else the platform's user cache folder: ``$XDG_CACHE_HOME/ancf``
+    or ``~/.cache/ancf`` on Linux, ``~/Library/Caches/ancf`` on macOS,
+    ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.
+    """
+    env = os.environ.get("ANCF_CACHE_DIR")
+    if env:
+        path = Path(env).expanduser()
+    elif sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
+        path = Path(base) / "ancf" / "Cache"
+    elif sys.platform == "darwin":
+        path = Path.home() / "Library" / "Caches" / "ancf"
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME")
+        base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
+        path = base / "ancf"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+# --------------------------------------------------------------------------- compiler, key
+
+
+def _resolve_compiler() -> tuple[tuple[str, ...] | None, list[str]]:
+    """Find the C compiler: ``$CC`` (may hold arguments), then ``gcc``, then ``cc``.
+
+    Returns the command (program resolved to an absolute path) or None, and the names tried.
+    """
+    candidates: list[tuple[str, list[str]]] = []
+    env_cc = os.environ.get("CC", "").strip()
+    if env_cc:
+        with contextlib.suppress(ValueError):
+            argv = shlex.split(env_cc)
+            if argv:
+                candidates.append((f"$CC={env_cc!r}", argv))
+        if not candidates:
+            candidates.append((f"$CC={env_cc!r}", []))
+    candidates += [("gcc", ["gcc"]), ("cc", ["cc"])]
+    tried: list[str] = []
+    for label, argv in candidates:
+        tried.append(label)
+        exe = shutil.which(argv[0]) if argv else None
+        if exe:
+            return (os.path.abspath(exe), *argv[1:]), tried
+    return None, tried
+
+
+@functools.lru_cache(maxsize=16)
+def _compiler_identity(cmd: tuple[str, ...] | None) -> str:
+    """``CC --version`` output (memoized per process and command)."""
+    if cmd is None:
+        return "<no compiler>"
+    try:
+        res = subprocess.run(
+            [*cmd, "--version"], capture_output=True, text=True, timeout=60, check=False
+        )
+        out = (res.stdout + res.stderr).strip()
+    except (OSError, subprocess.SubprocessError) as exc:
+        out = f"<{type(exc).__name__}>"
+    return f"{shlex.join(cmd)}\n{out}"
+
+
+@functools.lru_cache(maxsize=1)
+def _cpu_identity() -> str:
+    """CPU model name and feature flags from /proc/cpuinfo (memoized), '' if unavailable."""
+    keys = ("model name", "flags", "features", "cpu implementer", "cpu part", "cpu model")
+    found: dict[str, str] = {}
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                key, sep, value = line.partition(":")
+                key = key.strip().lower()
+                if sep and key in keys and key not in found:
+                    found[key] = " ".join(value.split())
+    except OSError:
+        return platform.processor()
+    return "\n".join(f"{k}: {found[k]}" for k in keys if k in found)
+
+
+@functools.lru_cache(maxsize=1)
+def _cffi_version() -> str:
+    import cffi
+
+    return cffi.__version__
+
+
+def cache_key(source: str, cdef: str, flags: Sequence[str] | None = None) -> str:
+    """SHA-256 (hex) over everything that changes the compiled binary.
+
+    ``flags`` defaults to the current value of :data:`COMPILE_FLAGS`.
+    """
+    flags = COMPILE_FLAGS if flags is None else tuple(flags)
+    cmd, _ = _resolve_compiler()
+    parts = [
+        f"ancf-jit {_JIT_FORMAT}",
+        source,
+        cdef,
+        _compiler_identity(cmd),
+        "\0".join(flags),
+        sys.implementation.cache_tag or "",
+        platform.machine(),
+        sys.platform,
+        _cffi_version(),
+        _cpu_identity(),
+        "\0".join(f"{k}={os.environ.get(k, '')}" for k in _BUILD_ENV),
+    ]
+    h = hashlib.sha256()
+    for part in parts:
+        data = part.encode("utf-8", "surrogateescape")
+        h.update(len(data).to_bytes(8, "little"))
+        h.update(data)
+    return h.hexdigest()
+
+
+def module_name(name: str, source: str, cdef: str, flags: Sequence[str] | None = None) -> str:
+    """The extension module name ``_ancf_{name}_{key[:16]}`` for this source and cdef."""
+    if not _NAME_RE.fullmatch(name):
+        raise ValueError(f"module name part must match [A-Za-z0-9_]+, got {name!r}")
+    return f"_ancf_{name}_{cache_key(source, cdef, flags)[:16]}"
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def _so_path(folder: Path, modname: str) -> Path:
+    suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
+    return folder / f"{modname}{suffix}"
+
+
+def _import_so(modname: str, path: Path) -> types.ModuleType:
+    spec = importlib.util.spec_from_file_location(modname, path)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"cannot load extension module {modname} from {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    sys.modules[modname] = module
+    return module
+
+
+# --------------------------------------------------------------------------- locking
+
+
+def _take_lock(lock: Path) -> int | None:
+    """Create the lock file exclusively; return its fd, or None if someone holds it."""
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    except FileExistsError:
+        return None
+    os.write(fd, f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n".encode())
+    return fd
+
+
+def _owner_is_dead(lock: Path) -> bool:
+    """True if the lock names a process on this host that no longer exists."""
+    try:
+        pid_s, host, _ = lock.read_text().split()
+        pid = int(pid_s)
+    except (OSError, ValueError):
+        return False  # gone, or not written yet
+    if host != socket.gethostname() or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:
+        return False
+    return False
+
+
+def _break_stale_lock(lock: Path, timeout_s: float) -> None:
+    """Remove the lock if it is older than ``timeout_s`` or its owner process died."""
+    try:
+        st = lock.stat()
+    except FileNotFoundError:
+        return
+    if time.time() - st.st_mtime <= timeout_s and not _owner_is_dead(lock):
+        return
+    # Rename first so that we never delete a lock that another waiter re-created meanwhile.
+    grave = lock.with_name(f"{lock.name}.stale.{os.getpid()}.{time.monotonic_ns()}")
+    try:
+        os.rename(lock, grave)
+    except FileNotFoundError:
+        return
+    try:
+        if grave.stat().st_ino != st.st_ino:  # took a fresh lock by mistake: put it back
+            with contextlib.suppress(OSError):
+                os.link(grave, lock)
+    finally:
+        with contextlib.suppress(OSError):
+            grave.unlink()
+
+
+# --------------------------------------------------------------------------- building
+
+
+@contextlib.contextmanager
+def _captured_output(log_path: Path) -> Iterator[None]:
+    """Send fds 1 and 2 and sys.stdout/sys.stderr to ``log_path`` (compiler and build logs)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(log_path, "a", encoding="utf-8", errors="replace") as text:
+            os.dup2(fd, 1)
+            os.dup2(fd, 2)
+            try:
+                with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
+                    yield
+            finally:
+                text.flush()
+                os.dup2(saved[0], 1)
+                os.dup2(saved[1], 2)
+    finally:
+        for f in (*saved, fd):
+            os.close(f)
+
+
+@contextlib.contextmanager
+def _compiler_env(cmd: tuple[str, ...]) -> Iterator[None]:
+    """Make distutils use exactly the compiler that went into the cache key."""
+    old = os.environ.get("CC")
+    os.environ["CC"] = shlex.join(cmd)
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("CC", None)
+        else:
+            os.environ["CC"] = old
+
+
+def _tail(text: str) -> str:
+    text = text.strip()
+    if len(text) > _LOG_TAIL_CHARS:
+        text = "...\n" + text[-_LOG_TAIL_CHARS:]
+    return text
+
+
+def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: Path) -> Path:
+    """Compile in a private temporary folder and move the .so into ``folder`` atomically."""
+    import cffi
+
+    tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=folder))
+    log_path = tmp / "build.log"
+    try:
+        error: BaseException | None = None
+        built: str | None = None
+        with _captured_output(log_path), _compiler_env(cmd):
+            try:
+                ffi = cffi.FFI()
+                ffi.cdef(cdef)
+                ffi.set_source(modname, source, extra_compile_args=list(COMPILE_FLAGS))
+                built = ffi.compile(tmpdir=str(tmp), verbose=False)
+            except Exception as exc:  # cffi.VerificationError, CDefError, distutils errors
+                error = exc
+        if error is not None or built is None:
+            log = log_path.read_text(encoding="utf-8", errors="replace")
+            raise CompilationError(
+                f"compiling C module {modname} with {shlex.join(cmd)} failed: {error}\n"
+                f"--- compiler output (tail) ---\n{_tail(log)}"
+            ) from error
+        target = _so_path(folder, modname)
+        os.replace(built, target)
+        return target
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _no_compiler_message(tried: list[str]) -> str:
+    return (
+        f"backend='c' needs a C compiler and none was found (tried {', '.join(tried)}): "
+        "install gcc or use backend='numpy'."
+    )
+
+
+def _obtain(
+    modname: str, source: str, cdef: str, folder: Path, timeout_s: float
+) -> tuple[types.ModuleType, bool, Path]:
+    """Load ``modname`` from the cache, compiling it (or waiting for another process) first."""
+    so = _so_path(folder, modname)
+    ready = folder / f"{modname}.ready"
+    lock = folder / f"{modname}.lock"
+    failed = folder / f"{modname}.failed"
+    fresh = True  # a fresh call clears an old .failed; a waiter raises from a new one
+    retried_load = False
+    while True:
+        if ready.exists() and so.exists():
+            try:
+                return _import_so(modname, so), False, so
+            except ImportError:
+                if retried_load:
+                    raise
+                retried_load = True  # damaged binary: rebuild once
+                with contextlib.suppress(FileNotFoundError):
+                    ready.unlink()
+                continue
+        if failed.exists():
+            if not fresh:
+                log = failed.read_text(encoding="utf-8", errors="replace")
+                raise CompilationError(
+                    f"compiling C module {modname} failed in another process:\n{_tail(log)}"
+                )
+            with contextlib.suppress(FileNotFoundError):
+                failed.unlink()
+        cmd, tried = _resolve_compiler()
+        if cmd is None:
+            raise CompilerNotFoundError(_no_compiler_message(tried))
+        fd = _take_lock(lock)
+        if fd is None:
+            fresh = False
+            _break_stale_lock(lock, timeout_s)
+            time.sleep(_POLL_S)
+            continue
+        # We own the lock: build, publish the .so, write .ready last, release.
+        holding = True
+        try:
+            if ready.exists() and so.exists():
+                continue  # finished by someone else between our checks
+            try:
+                path = _build(modname, source, cdef, cmd, folder)
+            except CompilationError as exc:
+                os.write(fd, str(exc).encode("utf-8", "replace"))
+                os.close(fd)
+                fd = -1
+                os.replace(lock, failed)
+                holding = False
+                raise
+            ready.write_text(f"{path.name}\n")
+            return _import_so(modname, path), True, path
+        finally:
+            if fd != -1:
+                os.close(fd)
+            if holding:
+                with contextlib.suppress(FileNotFoundError):
+                    lock.unlink()
+
+
+# --------------------------------------------------------------------------- public entry
+
+
+def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) -> CompiledModule:
+    """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
+
+    ``name`` becomes part of the module name ``_ancf_{name}_{hash}``.  Returns the loaded
+    module; ``compiled`` tells whether this call ran the compiler.  ``timeout_s`` is the age
+    after which another process's lock counts as stale.  Raises :class:`CompilerNotFoundError`
+    when no C compiler exists and :class:`CompilationError` when compilation fails.
+    """
+    t0 = time.perf_counter()
+    modname = module_name(name, source, cdef)
+    with _LOCK:
+        memo = _MEMO.get(modname)
+        if memo is not None:
+            return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
+        module, compiled, path = _obtain(modname, source, cdef, cache_dir(), timeout_s)
+        result = CompiledModule(module, compiled, time.perf_counter() - t0, path)
+        _MEMO[modname] = result
+        return result

@@ -1,0 +1,213 @@
+"""Derivations shared by every element: gradients, integrals over the box, invariant algebra.
+
+Notation (DESIGN.md section 4): ``n`` shape functions, ``B`` (n x dim) their gradients with
+respect to the reference position r0, ``P = B B^T``.  Everything an evaluation method needs
+is a linear combination of four integrals over the reference volume:
+
+* ``volume`` = int dV0,
+* ``mass``   = int s s^T dV0              (n x n; times rho and kron I_dim: the mass matrix),
+* ``i2``     = int P dV0                  (n x n; gives K1 of eq. 29),
+* ``i4``     = int P_kl P_mn dV0          (n^4; gives C^ij of eq. 35 and the gram tensor D).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import cache
+
+import sympy as sp
+
+from symgen.element import ElementSpec, height, length, width
+
+lam, shear, rho = sp.symbols("lambda G rho", positive=True)
+
+
+def pairs(n: int) -> list[tuple[int, int]]:
+    """Upper-triangle index pairs (k, l), k <= l, in row order: the symmetric-storage order."""
+    return [(k, m) for k in range(n) for m in range(k, n)]
+
+
+def pair_index(n: int) -> dict[tuple[int, int], int]:
+    """Position of (k, l) and (l, k) in ``pairs(n)``."""
+    index = {}
+    for a, (k, m) in enumerate(pairs(n)):
+        index[(k, m)] = index[(m, k)] = a
+    return index
+
+
+def quad_key(n: int, k: int, m: int, p: int, q: int) -> tuple[int, int]:
+    """Canonical (a, b), a <= b, of the i4 entry int P_km P_pq (symmetric in k<->m, p<->q, swap)."""
+    index = pair_index(n)
+    a, b = index[(k, m)], index[(p, q)]
+    return (a, b) if a <= b else (b, a)
+
+
+def shape_gradients(spec: ElementSpec) -> sp.Matrix:
+    """d s_k / d x_alpha in the local box coordinates, an n x dim matrix of polynomials."""
+    return sp.Matrix(
+        [[sp.expand(sp.diff(s, c)) for c in spec.coordinates] for s in spec.shape_functions]
+    )
+
+
+def gradient_pattern(spec: ElementSpec) -> list[tuple[int, int]]:
+    """Structurally nonzero entries (k, alpha) of the shape-function gradient matrix."""
+    grads = shape_gradients(spec)
+    return [(k, c) for k in range(spec.n_shape) for c in range(spec.dim) if grads[k, c] != 0]
+
+
+def box_integral(spec: ElementSpec, expr: sp.Expr) -> sp.Expr:
+    """Exact integral of a polynomial in (x, y[, z]) over the straight element volume.
+
+    Integrates monomial by monomial: int_0^l x^a dx = l^(a+1)/(a+1), and the symmetric
+    transverse intervals kill odd powers.  In 2D the thickness ``w`` scales the area.
+    """
+    poly = sp.Poly(sp.expand(expr), *spec.coordinates)
+    total = sp.Integer(0)
+    for powers, coeff in poly.terms():
+        term = coeff * length ** (powers[0] + 1) / (powers[0] + 1)
+        for power, size in zip(powers[1:], (height, width), strict=False):
+            if power % 2:
+                term = 0
+                break
+            term *= 2 * (size / 2) ** (power + 1) / (power + 1)
+        total += term
+    if spec.dim == 2:
+        total *= width
+    return sp.factor(total)
+
+
+@dataclass(frozen=True)
+class Integrals:
+    """Integrals of one element reference, symbolic or numeric.
+
+    i4 maps a canonical key (a, b) (see ``quad_key``) to int P P; missing keys are zero.
+    mass and i2 are n x n, volume a scalar.
+    """
+
+    volume: object
+    mass: object
+    i2: object
+    i4: Callable[[tuple[int, int]], object]
+
+
+@cache
+def straight_integrals(spec: ElementSpec) -> Integrals:
+    """Closed-form integrals of the straight reference (J0 = I, so B = ds/dx), in l, h, w."""
+    n = spec.n_shape
+    grads = shape_gradients(spec)
+    s = sp.Matrix(spec.shape_functions)
+    p_matrix = (grads * grads.T).applyfunc(sp.expand)
+    p_poly = {
+        ab: sp.Poly(p_matrix[ab], *spec.coordinates) for ab in pairs(n)
+    }
+    mass = sp.Matrix(n, n, lambda k, m: box_integral(spec, s[k] * s[m]))
+    i2 = sp.Matrix(n, n, lambda k, m: box_integral(spec, p_matrix[k, m]))
+    i4_values: dict[tuple[int, int], sp.Expr] = {}
+    keys = pairs(n)
+    for a, ka in enumerate(keys):
+        for b in range(a, len(keys)):
+            product = (p_poly[ka] * p_poly[keys[b]]).as_expr()
+            value = box_integral(spec, product)
+            if value != 0:
+                i4_values[(a, b)] = value
+    volume = box_integral(spec, sp.Integer(1))
+    return Integrals(volume, mass, i2, lambda key: i4_values.get(key, sp.Integer(0)))
+
+
+# --- invariant algebra: from the four integrals to what each method stores -------------------
+
+
+def cij_value(spec: ElementSpec, i4: Callable, k: int, p: int, m: int, q: int) -> object:
+    """Entry c^{kp}_{mq} of the shape-level C^ij invariant (eq. 35 with eq. 28 and 33).
+
+    C^{(k,a),(p,b)} has c^{kp}_{mq} at ((m,a), (q,b)) and zeros elsewhere:
+    c^{kp}_{mq} = int (lambda/2 P_km P_qp + G P_kq P_mp) dV0.
+    """
+    n = spec.n_shape
+    return lam / 2 * i4(quad_key(n, k, m, q, p)) + shear * i4(quad_key(n, k, q, m, p))
+
+
+def gram_value(spec: ElementSpec, i4: Callable, a: int, b: int) -> object:
+    """Entry (a, b) of the symmetric gram matrix Dm with U = g^T Dm g, g_a = DeltaG_(k,l).
+
+    Dm_ab = mu_a mu_b Dsym_klmn with mu = 1 on diagonal pairs and 2 off them, and the fully
+    symmetrised tensor Dsym_klmn = lambda/8 int P_kl P_mn + G/8 int (P_km P_ln + P_kn P_lm).
+    """
+    n = spec.n_shape
+    (k, m), (p, q) = pairs(n)[a], pairs(n)[b]
+    mu = (1 if k == m else 2) * (1 if p == q else 2)
+    value = lam / 8 * i4(quad_key(n, k, m, p, q)) + shear / 8 * (
+        i4(quad_key(n, k, p, m, q)) + i4(quad_key(n, k, q, m, p))
+    )
+    return mu * value
+
+
+def strain_energy_constant(spec: ElementSpec, volume: object) -> object:
+    """U0 of eqs. 40-41: the energy of e = 0, (dim^2 lambda + 2 dim G) V / 8."""
+    d = spec.dim
+    return (d * d * lam + 2 * d * shear) * volume / 8
+
+
+def k1_value(spec: ElementSpec, i2: object, k: int, m: int) -> object:
+    """Shape-level K1 of eqs. 29/31: -(dim lambda + 2 G)/2 int P_km (times I_dim)."""
+    return -(spec.dim * lam + 2 * shear) / 2 * i2[k, m]
+
+
+@dataclass(frozen=True)
+class Patterns:
+    """Which invariant entries an evaluation variant stores, in storage order.
+
+    i4: canonical keys (a, b) of the i4 integrals; gram: (a, b), a <= b, entries of Dm;
+    cij: (k, p, m, q), k <= p, entries c^{kp}_{mq}.  The ``straight`` variant keeps only
+    the structurally nonzero entries of the straight reference; ``general`` keeps all.
+    """
+
+    variant: str
+    i4: tuple[tuple[int, int], ...]
+    gram: tuple[tuple[int, int], ...]
+    cij: tuple[tuple[int, int, int, int], ...]
+
+
+VARIANTS = ("straight", "general")
+
+
+@cache
+def patterns(spec: ElementSpec, variant: str) -> Patterns:
+    """Storage patterns of ``variant`` (see ``Patterns``), found symbolically for straight."""
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+    n = spec.n_shape
+    npairs = len(pairs(n))
+    all_i4 = [(a, b) for a in range(npairs) for b in range(a, npairs)]
+    all_gram = list(all_i4)
+    all_cij = [(k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
+               for q in range(n)]
+    if variant == "general":
+        return Patterns(variant, tuple(all_i4), tuple(all_gram), tuple(all_cij))
+    i4 = straight_integrals(spec).i4
+    return Patterns(
+        variant,
+        tuple(key for key in all_i4 if i4(key) != 0),
+        tuple(ab for ab in all_gram if sp.expand(gram_value(spec, i4, *ab)) != 0),
+        tuple(kpmq for kpmq in all_cij if sp.expand(cij_value(spec, i4, *kpmq)) != 0),
+    )
+
+
+def invariant_values(
+    spec: ElementSpec, pattern: Patterns, integrals: Integrals
+) -> dict[str, Sequence[object]]:
+    """Everything the kernels store, as flat lists in storage order.
+
+    Keys: ``mass`` and ``k1`` (upper triangles of the n x n shape-level matrices; the full
+    matrices are these times I_dim), ``gram`` (Dm), ``cij`` (c^{kp}_{mq}), ``u0``.
+    Works on symbolic and numeric integrals alike.
+    """
+    n = spec.n_shape
+    return {
+        "mass": [rho * integrals.mass[k, m] for k, m in pairs(n)],
+        "k1": [k1_value(spec, integrals.i2, k, m) for k, m in pairs(n)],
+        "gram": [gram_value(spec, integrals.i4, a, b) for a, b in pattern.gram],
+        "cij": [cij_value(spec, integrals.i4, *kpmq) for kpmq in pattern.cij],
+        "u0": [strain_energy_constant(spec, integrals.volume)],
+    }

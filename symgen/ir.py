@@ -1,0 +1,151 @@
+"""A tiny kernel language: what a template needs to print one batched kernel.
+
+A kernel runs its ``body`` once per element of a batch.  Array elements are written
+``name[i]`` in both backends, so one expression printer serves C and NumPy; the templates
+only differ in how arrays are declared, loaded and stored.
+
+Array roles:
+* ``batch``  - one row per element (input), may be broadcast (stride 0);
+* ``shared`` - one array for the whole batch (invariants, material constants);
+* ``output`` - one row per element (result);
+* ``local``  - per-element scratch vector (needed where a sparse product reads or writes);
+* ``table``  - one row per point of the optional point loop (quadrature tables);
+* ``csr``    - a sparse matrix shared by the batch, used by ``SparseProduct``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class Array:
+    """A named array of ``size`` doubles per element (or per point, or shared)."""
+
+    name: str
+    size: int
+    role: str
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Assign:
+    """``target = expr`` (or ``+=`` when ``accumulate``); a plain symbol target is a temporary."""
+
+    target: str
+    expr: sp.Expr
+    accumulate: bool = False
+
+
+@dataclass(frozen=True)
+class SparseProduct:
+    """``target = matrix @ source`` for local/output vectors; ``nnz`` is for operation counts."""
+
+    target: str
+    matrix: str
+    source: str
+    rows: int
+    nnz: int
+
+
+@dataclass(frozen=True)
+class PointLoop:
+    """Repeat ``body`` for every row of the table ``table`` (e.g. every Gauss point)."""
+
+    table: str
+    body: tuple
+    default_points: int
+
+
+@dataclass
+class Kernel:
+    """One batched kernel: signature arrays in call order plus the per-element body."""
+
+    name: str
+    doc: str
+    arrays: list[Array]
+    body: list = field(default_factory=list)
+
+    def role(self, role: str) -> list[Array]:
+        """The arrays of one role, in signature order."""
+        return [a for a in self.arrays if a.role == role]
+
+    def array(self, name: str) -> Array:
+        """The array called ``name``."""
+        return next(a for a in self.arrays if a.name == name)
+
+
+def ref(name: str, index: int) -> sp.Symbol:
+    """The symbol printed as ``name[index]``."""
+    return sp.Symbol(f"{name}[{index}]", real=True)
+
+
+def refs(name: str, size: int) -> list[sp.Symbol]:
+    """``ref(name, i)`` for i in range(size)."""
+    return [ref(name, i) for i in range(size)]
+
+
+class Temporaries:
+    """Numbered temporaries t0, t1, ... unique within one kernel."""
+
+    def __init__(self, prefix: str = "t") -> None:
+        self.prefix = prefix
+        self.count = 0
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> sp.Symbol:
+        symbol = sp.Symbol(f"{self.prefix}{self.count}", real=True)
+        self.count += 1
+        return symbol
+
+
+def emit_cse(body: list, outputs: list[tuple[str, sp.Expr, bool]], temps: Temporaries) -> None:
+    """Append common-subexpression-eliminated statements computing ``outputs``.
+
+    outputs: (target, expr, accumulate) triples; their expressions share temporaries.
+    """
+    replacements, reduced = sp.cse([expr for _, expr, _ in outputs], symbols=temps,
+                                   order="none")
+    for symbol, expr in replacements:
+        body.append(Assign(symbol.name, expr))
+    for (target, _, accumulate), expr in zip(outputs, reduced, strict=True):
+        if expr != 0 or not accumulate:
+            body.append(Assign(target, expr, accumulate))
+
+
+def count_operations(expr: sp.Expr) -> int:
+    """Floating-point operations to evaluate ``expr`` as printed (add, mul, div each 1)."""
+    if expr.is_Atom:
+        return 0
+    if expr.is_Add:
+        return len(expr.args) - 1 + sum(count_operations(a) for a in expr.args)
+    if expr.is_Mul:
+        factors = [a for a in expr.args if a not in (sp.S.NegativeOne,)]
+        return max(len(factors) - 1, 0) + sum(count_operations(a) for a in factors)
+    if expr.is_Pow:
+        base, exponent = expr.args
+        if exponent.is_Integer:
+            return abs(int(exponent)) - 1 + (1 if exponent < 0 else 0) + count_operations(base)
+        return 1 + count_operations(base)
+    return 1 + sum(count_operations(a) for a in expr.args)
+
+
+def kernel_operations(kernel: Kernel, points: int | None = None) -> int:
+    """Operations per element of one kernel call (point loops counted ``points`` times)."""
+
+    def count(statements, repeat: int) -> int:
+        total = 0
+        for st in statements:
+            if isinstance(st, Assign):
+                total += repeat * (count_operations(st.expr) + (1 if st.accumulate else 0))
+            elif isinstance(st, SparseProduct):
+                total += repeat * 2 * st.nnz
+            elif isinstance(st, PointLoop):
+                total += count(st.body, repeat * (points or st.default_points))
+        return total
+
+    return count(kernel.body, 1)

@@ -1,0 +1,461 @@
+"""Kernel builders: each evaluation method (and the invariant builders) as ``ir.Kernel``s.
+
+Families (one generated module each, so a scene compiles only what it uses):
+
+* ``invariants``       - shape-function tables, closed-form straight integrals, and the map
+                         from integrals to stored invariants (both variants);
+* ``quadrature``       - Gauss quadrature of eq. 23 at every call (the paper's baseline);
+* ``cij_<variant>``    - the paper's invariants C^ij, K1, U0 (eqs. 27-41);
+* ``gram_<variant>``   - the compact gram tensor Dm with U = g^T Dm g, g = DeltaG.
+
+Each method family has ``force``, ``jacobian`` and ``energy`` kernels.  All translate the
+positions to the element's first node first; ``gram`` and ``quadrature`` work in the
+DeltaG / displacement-gradient form so the reference state cancels exactly.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from symgen import derive
+from symgen.element import ElementSpec, height, length, width
+from symgen.ir import Array, Assign, Kernel, PointLoop, SparseProduct, Temporaries, emit_cse
+from symgen.ir import ref, refs
+
+QUANTITIES = ("force", "jacobian", "energy")
+
+
+def families(spec: ElementSpec) -> list[str]:
+    """Names of every kernel family generated for an element."""
+    methods = ["quadrature"] + [f"{m}_{v}" for m in ("cij", "gram") for v in derive.VARIANTS]
+    return ["invariants", *methods]
+
+
+def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
+    """All kernels of one family."""
+    if family == "invariants":
+        return invariant_kernels(spec)
+    method, _, variant = family.partition("_")
+    builder = {"quadrature": quadrature_kernel, "cij": cij_kernel, "gram": gram_kernel}[method]
+    return [builder(spec, quantity, variant) for quantity in QUANTITIES]
+
+
+# --- common pieces -----------------------------------------------------------------------------
+
+
+def _output(spec: ElementSpec, quantity: str) -> Array:
+    size = {"force": spec.ndof, "jacobian": spec.ndof**2, "energy": 1}[quantity]
+    doc = {
+        "force": "elastic force -dU/de (N), per element",
+        "jacobian": "d(force)/de (N/m), row-major ndof x ndof, per element",
+        "energy": "strain energy U (J), per element",
+    }[quantity]
+    return Array(quantity, size, "output", doc)
+
+
+def _coordinates(spec: ElementSpec, with_reference: bool) -> list[Array]:
+    arrays = [Array("e", spec.ndof, "batch", "element coordinates e, node-major")]
+    if with_reference:
+        arrays.append(Array("e0", spec.ndof, "batch", "reference coordinates e0"))
+    return arrays
+
+
+def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference: bool):
+    """Positions relative to the element's first node.
+
+    Returns (q, q0, dq), each a list of ndof expressions: translated current coordinates,
+    translated reference, and their difference (None entries when no reference).  The first
+    node's position becomes exactly zero.
+    """
+    d = spec.dim
+    e, e0 = refs("e", spec.ndof), refs("e0", spec.ndof)
+    first = spec.position_vectors[0]
+    q, q0, dq = list(e), list(e0), [None] * spec.ndof
+    for k in range(spec.n_shape):
+        for c in range(d):
+            i = k * d + c
+            if k == first:
+                q[i] = q0[i] = dq[i] = sp.Integer(0)
+                continue
+            if k in spec.position_vectors:
+                q[i] = next(temps)
+                body.append(Assign(q[i].name, e[i] - e[first * d + c]))
+                if with_reference:
+                    q0[i] = next(temps)
+                    body.append(Assign(q0[i].name, e0[i] - e0[first * d + c]))
+            if with_reference:
+                dq[i] = next(temps)
+                if k in spec.position_vectors:
+                    shift = (e[i] - e0[i]) - (e[first * d + c] - e0[first * d + c])
+                    body.append(Assign(dq[i].name, shift))
+                else:
+                    body.append(Assign(dq[i].name, e[i] - e0[i]))
+    return q, q0, dq
+
+
+def _materialize(body: list, temps: Temporaries, exprs: list) -> list:
+    """Assign every non-trivial expression of a stage to a temporary (with CSE)."""
+    exprs = [sp.sympify(x) for x in exprs]
+    replacements, reduced = sp.cse(exprs, symbols=temps, order="none")
+    for symbol, expr in replacements:
+        body.append(Assign(symbol.name, expr))
+    out = []
+    for expr in reduced:
+        if expr.is_Atom:
+            out.append(expr)
+        else:
+            symbol = next(temps)
+            body.append(Assign(symbol.name, expr))
+            out.append(symbol)
+    return out
+
+
+def _store(body: list, name: str, values: list, accumulate: bool = False) -> None:
+    for i, value in enumerate(values):
+        if value != 0 or not accumulate:
+            body.append(Assign(f"{name}[{i}]", sp.sympify(value), accumulate))
+
+
+def _store_symmetric(body: list, name: str, n: int, upper: dict, accumulate: bool) -> None:
+    """Store a symmetric n x n matrix given its upper entries {(i, j): value}."""
+    for i in range(n):
+        for j in range(n):
+            value = upper.get((min(i, j), max(i, j)), 0)
+            if value != 0 or not accumulate:
+                body.append(Assign(f"{name}[{i * n + j}]", sp.sympify(value), accumulate))
+
+
+# --- invariant builders ------------------------------------------------------------------------
+
+
+def invariant_kernels(spec: ElementSpec) -> list[Kernel]:
+    """Shape tables, closed-form straight integrals and the integrals -> invariants maps."""
+    kernels = [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
+               _straight_integrals_kernel(spec)]
+    kernels += [_invariants_kernel(spec, variant) for variant in derive.VARIANTS]
+    return kernels
+
+
+def _geometry_subs(name: str) -> dict:
+    l_, h_, w_ = refs(name, 3)
+    return {length: l_, height: h_, width: w_}
+
+
+def _shape_values_kernel(spec: ElementSpec) -> Kernel:
+    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
+              Array("geometry", 3, "shared", "length, height, width in m"),
+              Array("values", spec.n_shape, "output", "shape functions s_k")]
+    subs = {**_geometry_subs("geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
+                                                      strict=True))}
+    body: list = []
+    emit_cse(body, [(f"values[{k}]", s.subs(subs), False)
+                    for k, s in enumerate(spec.shape_functions)], Temporaries())
+    return Kernel("shape_values", "Shape functions at local points.", arrays, body)
+
+
+def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
+    pattern = derive.gradient_pattern(spec)
+    grads = derive.shape_gradients(spec)
+    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
+              Array("geometry", 3, "shared", "length, height, width in m"),
+              Array("gradients", len(pattern), "output",
+                    "structurally nonzero ds_k/dx_alpha, in gradient-pattern order")]
+    subs = {**_geometry_subs("geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
+                                                      strict=True))}
+    body: list = []
+    emit_cse(body, [(f"gradients[{j}]", grads[k, c].subs(subs), False)
+                    for j, (k, c) in enumerate(pattern)], Temporaries())
+    return Kernel("shape_gradients", "Local shape-function gradients at local points.",
+                  arrays, body)
+
+
+def _integral_arrays(spec: ElementSpec, pattern: derive.Patterns, role: str) -> list[Array]:
+    npairs = len(derive.pairs(spec.n_shape))
+    return [Array("i4", len(pattern.i4), role, "int P_kl P_mn dV0 in i4-pattern order"),
+            Array("i2", npairs, role, "int P dV0, upper triangle"),
+            Array("mass_shape", npairs, role, "int s s^T dV0 (m^3), upper triangle"),
+            Array("volume", 1, role, "int dV0 (m^3)")]
+
+
+def _straight_integrals_kernel(spec: ElementSpec) -> Kernel:
+    pattern = derive.patterns(spec, "straight")
+    integrals = derive.straight_integrals(spec)
+    subs = _geometry_subs("geometry")
+    arrays = [Array("geometry", 3, "batch", "length, height, width in m"),
+              *_integral_arrays(spec, pattern, "output")]
+    pairs = derive.pairs(spec.n_shape)
+    outputs = [(f"i4[{j}]", integrals.i4(key), False) for j, key in enumerate(pattern.i4)]
+    outputs += [(f"i2[{a}]", integrals.i2[k, m], False) for a, (k, m) in enumerate(pairs)]
+    outputs += [(f"mass_shape[{a}]", integrals.mass[k, m], False)
+                for a, (k, m) in enumerate(pairs)]
+    outputs += [("volume[0]", integrals.volume, False)]
+    body: list = []
+    emit_cse(body, [(t, sp.sympify(x).subs(subs), acc) for t, x, acc in outputs],
+             Temporaries())
+    return Kernel("integrals_straight",
+                  "Closed-form integrals of the straight element (exact polynomial integration).",
+                  arrays, body)
+
+
+def _invariants_kernel(spec: ElementSpec, variant: str) -> Kernel:
+    pattern = derive.patterns(spec, variant)
+    n = spec.n_shape
+    npairs = len(derive.pairs(n))
+    i4_of = dict(zip(pattern.i4, refs("i4", len(pattern.i4)), strict=True))
+    i2 = sp.Matrix(n, n, lambda k, m: ref("i2", derive.pair_index(n)[(k, m)]))
+    mass = sp.Matrix(n, n, lambda k, m: ref("mass_shape", derive.pair_index(n)[(k, m)]))
+    integrals = derive.Integrals(ref("volume", 0), mass, i2,
+                                 lambda key: i4_of.get(key, sp.Integer(0)))
+    values = derive.invariant_values(spec, pattern, integrals)
+    material = dict(zip((derive.lam, derive.shear, derive.rho), refs("material", 3),
+                        strict=True))
+    arrays = [*_integral_arrays(spec, pattern, "batch"),
+              Array("material", 3, "shared", "Lame lambda (Pa), shear modulus G (Pa), "
+                    "density rho (kg/m^3)"),
+              Array("mass", npairs, "output", "shape-level mass matrix (kg), upper triangle"),
+              Array("k1", npairs, "output", "shape-level K1 of eq. 29 (N/m), upper triangle"),
+              Array("gram", len(pattern.gram), "output", "gram matrix Dm, gram-pattern order"),
+              Array("cij", len(pattern.cij), "output", "c^{kp}_{mq} of C^ij, cij-pattern order"),
+              Array("u0", 1, "output", "U0 of eqs. 40-41 (J)")]
+    outputs = [(f"{name}[{i}]", sp.sympify(v).subs(material), False)
+               for name, vals in values.items() for i, v in enumerate(vals)]
+    body: list = []
+    emit_cse(body, outputs, Temporaries())
+    return Kernel(f"invariants_{variant}",
+                  f"Stored invariants from integrals ({variant} storage pattern).", arrays, body)
+
+
+# --- quadrature: eq. 23 at every call ----------------------------------------------------------
+
+
+def quadrature_table_width(spec: ElementSpec) -> int:
+    """Doubles per quadrature point: nonzero shape gradients, then the weight."""
+    return len(derive.gradient_pattern(spec)) + 1
+
+
+def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Kernel:
+    """Gauss quadrature of the St. Venant-Kirchhoff energy, force or Jacobian at every call.
+
+    Per point: J0 = Q0^T dS, B = dS J0^-1, H = dQ^T B, E = (H + H^T + H^T H)/2 (exact at the
+    reference), S = lambda tr(E) I + 2 G E, F = I + H.
+    """
+    d, n = spec.dim, spec.n_shape
+    pattern = derive.gradient_pattern(spec)
+    width_ = quadrature_table_width(spec)
+    arrays = [*_coordinates(spec, True),
+              Array("material", 2, "shared", "Lame lambda and shear modulus G (Pa)"),
+              Array("table", width_, "table",
+                    "per Gauss point: nonzero ds/dx (gradient-pattern order), then weight (m^3)"),
+              _output(spec, quantity)]
+    temps = Temporaries()
+    body: list = []
+    q, q0, dq = _translate(spec, body, temps, with_reference=True)
+    lam_, g_ = refs("material", 2)
+    tab = refs("tab", width_)
+    ds = sp.zeros(n, d)
+    for j, (k, c) in enumerate(pattern):
+        ds[k, c] = tab[j]
+    Q = sp.Matrix(n, d, q)
+    Q0 = sp.Matrix(n, d, q0)
+    dQ = sp.Matrix(n, d, dq)
+    point: list = []
+    j0 = sp.Matrix(d, d, _materialize(point, temps, list(Q0.T * ds)))
+    det = _materialize(point, temps, [j0.det(method="berkowitz")])[0]
+    inv_det = _materialize(point, temps, [1 / det])[0]
+    j0_inv = sp.Matrix(d, d, _materialize(point, temps, list(j0.adjugate() * inv_det)))
+    b = sp.Matrix(n, d, _materialize(point, temps, list(ds * j0_inv)))
+    h = sp.Matrix(d, d, _materialize(point, temps, list(dQ.T * b)))
+    strain = sp.Matrix(d, d, _materialize(point, temps, list((h + h.T + h.T * h) / 2)))
+    trace = _materialize(point, temps, [strain.trace()])[0]
+    wdet = _materialize(point, temps, [tab[-1] * det])[0]
+    if quantity == "energy":
+        energy = wdet * (lam_ / 2 * trace**2 + g_ * sum(x * x for x in strain))
+        _store(point, "energy", [energy], accumulate=True)
+    else:
+        stress = sp.Matrix(d, d, _materialize(
+            point, temps, list(lam_ * trace * sp.eye(d) + 2 * g_ * strain)))
+        f = sp.eye(d) + h
+        if quantity == "force":
+            bs = sp.Matrix(n, d, _materialize(point, temps, list(b * stress)))
+            force = -wdet * (bs * f.T)
+            _store(point, "force", list(force), accumulate=True)
+        else:
+            a = sp.Matrix(n, d, _materialize(point, temps, list(b * f.T)))
+            bsb = _materialize(point, temps, [(b[k, :] * stress * b[p, :].T)[0]
+                                              for k, p in derive.pairs(n)])
+            bb = _materialize(point, temps, [(b[k, :] * b[p, :].T)[0]
+                                             for k, p in derive.pairs(n)])
+            ff = _materialize(point, temps, [(f[x, :] * f[yy, :].T)[0]
+                                             for x, yy in derive.pairs(d)])
+            pidx, didx = derive.pair_index(n), derive.pair_index(d)
+            upper = {}
+            for i, j in derive.pairs(spec.ndof):
+                (k, ca), (p, cb) = divmod(i, d), divmod(j, d)
+                value = (lam_ * a[k, ca] * a[p, cb] + g_ * a[k, cb] * a[p, ca]
+                         + g_ * bb[pidx[(k, p)]] * ff[didx[(ca, cb)]])
+                if ca == cb:
+                    value += bsb[pidx[(k, p)]]
+                upper[(i, j)] = -wdet * value
+            names = _materialize(point, temps, list(upper.values()))
+            _store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+    body.append(PointLoop("table", tuple(point), _default_points(spec)))
+    return Kernel(f"quadrature_{quantity}",
+                  f"Elastic {quantity} by Gauss quadrature at every call (no invariants).",
+                  arrays, body)
+
+
+def _default_points(spec: ElementSpec) -> int:
+    total = 1
+    for order in spec.quadrature:
+        total *= order
+    return total
+
+
+# --- cij: the paper's invariants ---------------------------------------------------------------
+
+
+def cij_sizes(spec: ElementSpec, variant: str) -> dict[str, int]:
+    """Rows and structural nonzeros of the two sparse operators of the cij method."""
+    d = spec.dim
+    pattern = derive.patterns(spec, variant)
+    k2 = sum(d * d if k < p else d * (d + 1) // 2 for k, p, _, _ in pattern.cij)
+    jac = sum(4 * d * d if k < p else 2 * d * d for k, p, _, _ in pattern.cij)
+    return {"k2_rows": len(derive.pairs(spec.ndof)), "k2_nnz": k2,
+            "jacobian_rows": spec.ndof**2, "jacobian_nnz": jac,
+            "products": len(derive.pairs(spec.ndof))}
+
+
+def cij_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
+    """The paper's method: (K2)_ij = e^T C^ij e, F = -(K2 + K1) e, eq. 38, eq. 39.
+
+    K2 (upper triangle) and the double sum of eq. 38 are sparse products of shared CSR
+    operators, assembled from the stored C^ij once per element set, with the vector of
+    coordinate products p_st = e_s e_t (s <= t).
+    """
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    sizes = cij_sizes(spec, variant)
+    npairs_dof = sizes["k2_rows"]
+    arrays = [*_coordinates(spec, False),
+              Array("k1", len(derive.pairs(n)), "shared", "shape-level K1, upper triangle"),
+              Array("u0", 1, "shared", "U0 (J)"),
+              Array("k2_matrix", npairs_dof, "csr",
+                    "maps coordinate products p to the upper triangle of K2"),
+              Array("products", npairs_dof, "local", "p_st = e_s e_t, s <= t"),
+              Array("k2", npairs_dof, "local", "upper triangle of K2(e)")]
+    if quantity == "jacobian":
+        arrays.append(Array("jacobian_matrix", ndof * ndof, "csr",
+                            "maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38"))
+        arrays.append(Array("second", ndof * ndof, "local", "the double sum of eq. 38"))
+    arrays.append(_output(spec, quantity))
+    temps = Temporaries()
+    body: list = []
+    q, _, _ = _translate(spec, body, temps, with_reference=False)
+    for a, (s, t) in enumerate(derive.pairs(ndof)):
+        body.append(Assign(f"products[{a}]", sp.sympify(q[s] * q[t])))
+    body.append(SparseProduct("k2", "k2_matrix", "products", npairs_dof, sizes["k2_nnz"]))
+    pidx_dof, pidx = derive.pair_index(ndof), derive.pair_index(n)
+    k1 = refs("k1", len(derive.pairs(n)))
+
+    def k1_entry(i: int, j: int):
+        (k, ca), (p, cb) = divmod(i, d), divmod(j, d)
+        return k1[pidx[(k, p)]] if ca == cb else 0
+
+    k2 = refs("k2", npairs_dof)
+    if quantity == "energy":
+        quartic = sum((1 if i == j else 2) * q[i] * k2[pidx_dof[(i, j)]] * q[j]
+                      for i, j in derive.pairs(ndof))
+        quadratic = sum((1 if i == j else 2) * q[i] * k1_entry(i, j) * q[j]
+                        for i, j in derive.pairs(ndof))
+        _store(body, "energy", [quartic / 4 + quadratic / 2 + ref("u0", 0)])
+        return Kernel("cij_energy", "Strain energy by eq. 39.", arrays, body)
+    stiffness = _materialize(body, temps, [k2[pidx_dof[(i, j)]] + k1_entry(i, j)
+                                           for i, j in derive.pairs(ndof)])
+    if quantity == "force":
+        force = [-sum(stiffness[pidx_dof[(i, j)]] * q[j] for j in range(ndof))
+                 for i in range(ndof)]
+        _store(body, "force", force)
+        return Kernel("cij_force", "Elastic force F = -(K2(e) + K1) e, eqs. 25-35.",
+                      arrays, body)
+    body.append(SparseProduct("second", "jacobian_matrix", "products", ndof * ndof,
+                              sizes["jacobian_nnz"]))
+    second = refs("second", ndof * ndof)
+    _store(body, "jacobian", [-stiffness[pidx_dof[(i, k)]] - second[i * ndof + k]
+                              for i in range(ndof) for k in range(ndof)])
+    return Kernel("cij_jacobian", "Elastic Jacobian by eq. 38.", arrays, body)
+
+
+# --- gram: U = g^T Dm g with g = DeltaG ----------------------------------------------------
+
+
+def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
+    """Gram form: g = DeltaG = Q0 dQ^T + dQ Q^T (upper), h = Dm g, U = g.h, F = -T' Q.
+
+    T'_kk = 4 h_kk, T'_kl = 2 h_kl.  Jacobian: -(2 Gamma^T Dm Gamma + T' kron I) with
+    Gamma = dg/de, built as W = Dm Gamma first.
+    """
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    pattern = derive.patterns(spec, variant)
+    arrays = [*_coordinates(spec, True),
+              Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
+              _output(spec, quantity)]
+    temps = Temporaries()
+    body: list = []
+    q, q0, dq = _translate(spec, body, temps, with_reference=True)
+    pairs = derive.pairs(n)
+    pidx = derive.pair_index(n)
+    node = lambda vec, k: [vec[k * d + c] for c in range(d)]  # noqa: E731
+    g = _materialize(body, temps, [
+        sum(a0 * b1 + a1 * b2 for a0, b1, a1, b2 in
+            zip(node(q0, k), node(dq, m), node(dq, k), node(q, m), strict=True))
+        for k, m in pairs])
+    dm = {}
+    for v, (a, b) in enumerate(pattern.gram):
+        dm[(a, b)] = dm[(b, a)] = ref("gram", v)
+    hvec = _materialize(body, temps, [
+        sum(dm[(a, b)] * g[b] for b in range(len(pairs)) if (a, b) in dm)
+        for a in range(len(pairs))])
+    if quantity == "energy":
+        _store(body, "energy", [sum(x * y for x, y in zip(g, hvec, strict=True))])
+        return Kernel("gram_energy", "Strain energy U = g^T Dm g.", arrays, body)
+
+    def tprime(k: int, m: int):
+        return (4 if k == m else 2) * hvec[pidx[(k, m)]]
+
+    if quantity == "force":
+        force = [-sum(tprime(k, m) * q[m * d + c] for m in range(n))
+                 for k in range(n) for c in range(d)]
+        _store(body, "force", force)
+        return Kernel("gram_force", "Elastic force F = -T' Q.", arrays, body)
+
+    def gamma(a: int, p: int, c: int):
+        """d g_a / d Q_pc."""
+        k, m = pairs[a]
+        if k == m == p:
+            return 2 * q[p * d + c]
+        if k == p:
+            return q[m * d + c]
+        if m == p:
+            return q[k * d + c]
+        return 0
+
+    w_exprs = {}
+    for a in range(len(pairs)):
+        for p in range(n):
+            for c in range(d):
+                w_exprs[(a, p, c)] = sum(
+                    dm[(a, b)] * gamma(b, p, c) for b in range(len(pairs))
+                    if (a, b) in dm and p in pairs[b])
+    w_names = dict(zip(w_exprs, _materialize(body, temps, list(w_exprs.values())), strict=True))
+    upper = {}
+    for i, j in derive.pairs(ndof):
+        (p, b), (qn, c) = divmod(i, d), divmod(j, d)
+        value = 2 * sum(gamma(a, p, b) * w_names[(a, qn, c)] for a in range(len(pairs))
+                        if p in pairs[a])
+        if b == c:
+            value += tprime(p, qn)
+        upper[(i, j)] = -value
+    names = _materialize(body, temps, list(upper.values()))
+    _store_symmetric(body, "jacobian", ndof, dict(zip(upper, names, strict=True)), False)
+    return Kernel("gram_jacobian", "Elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I).",
+                  arrays, body)
