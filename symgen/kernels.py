@@ -3,9 +3,11 @@
 Families (one generated module each, so a scene compiles only what it uses):
 
 * ``invariants``       - shape-function tables, closed-form straight integrals, and the map
-                         from integrals to stored invariants (both variants);
+                         from integrals to stored invariants (straight pattern);
+* ``invariants_general``  - the same map for the general (curved) pattern;
 * ``quadrature``       - Gauss quadrature of eq. 23 at every call (the paper's baseline);
-* ``cij_<variant>``    - the paper's invariants C^ij, K1, U0 (eqs. 27-41);
+* ``cij``              - the paper's invariants C^ij, K1, U0 (eqs. 27-41); the storage
+                         pattern only changes the sparse operators built at run time;
 * ``gram_<variant>``   - the compact gram tensor Dm with U = g^T Dm g, g = DeltaG.
 
 Each method family has ``force``, ``jacobian`` and ``energy`` kernels.  All translate the
@@ -27,15 +29,18 @@ QUANTITIES = ("force", "jacobian", "energy")
 
 def families(spec: ElementSpec) -> list[str]:
     """Names of every kernel family generated for an element."""
-    methods = ["quadrature"] + [f"{m}_{v}" for m in ("cij", "gram") for v in derive.VARIANTS]
-    return ["invariants", *methods]
+    return ["invariants", "invariants_general", "quadrature", "cij"] + [
+        f"gram_{v}" for v in derive.VARIANTS]
 
 
 def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     """All kernels of one family."""
     if family == "invariants":
         return invariant_kernels(spec)
+    if family == "invariants_general":
+        return [_invariants_kernel(spec, "general")]
     method, _, variant = family.partition("_")
+    variant = variant or "straight"
     builder = {"quadrature": quadrature_kernel, "cij": cij_kernel, "gram": gram_kernel}[method]
     return [builder(spec, quantity, variant) for quantity in QUANTITIES]
 
@@ -86,8 +91,8 @@ def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference
             if with_reference:
                 dq[i] = next(temps)
                 if k in spec.position_vectors:
-                    shift = (e[i] - e0[i]) - (e[first * d + c] - e0[first * d + c])
-                    body.append(Assign(dq[i].name, shift))
+                    # both operands are already relative to the first node: no large sums
+                    body.append(Assign(dq[i].name, q[i] - q0[i]))
                 else:
                     body.append(Assign(dq[i].name, e[i] - e0[i]))
     return q, q0, dq
@@ -129,11 +134,9 @@ def _store_symmetric(body: list, name: str, n: int, upper: dict, accumulate: boo
 
 
 def invariant_kernels(spec: ElementSpec) -> list[Kernel]:
-    """Shape tables, closed-form straight integrals and the integrals -> invariants maps."""
-    kernels = [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
-               _straight_integrals_kernel(spec)]
-    kernels += [_invariants_kernel(spec, variant) for variant in derive.VARIANTS]
-    return kernels
+    """Shape tables, closed-form straight integrals and the straight integrals -> invariants."""
+    return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
+            _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
 
 
 def _geometry_subs(name: str) -> dict:
@@ -300,7 +303,7 @@ def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Ke
             _store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_points(spec)))
-    return Kernel(f"quadrature_{quantity}",
+    return Kernel(quantity,
                   f"Elastic {quantity} by Gauss quadrature at every call (no invariants).",
                   arrays, body)
 
@@ -326,7 +329,7 @@ def cij_sizes(spec: ElementSpec, variant: str) -> dict[str, int]:
             "products": len(derive.pairs(spec.ndof))}
 
 
-def cij_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
+def cij_kernel(spec: ElementSpec, quantity: str, variant: str = "straight") -> Kernel:
     """The paper's method: (K2)_ij = e^T C^ij e, F = -(K2 + K1) e, eq. 38, eq. 39.
 
     K2 (upper triangle) and the double sum of eq. 38 are sparse products of shared CSR
@@ -368,21 +371,21 @@ def cij_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
         quadratic = sum((1 if i == j else 2) * q[i] * k1_entry(i, j) * q[j]
                         for i, j in derive.pairs(ndof))
         _store(body, "energy", [quartic / 4 + quadratic / 2 + ref("u0", 0)])
-        return Kernel("cij_energy", "Strain energy by eq. 39.", arrays, body)
+        return Kernel("energy", "Strain energy by eq. 39.", arrays, body)
     stiffness = _materialize(body, temps, [k2[pidx_dof[(i, j)]] + k1_entry(i, j)
                                            for i, j in derive.pairs(ndof)])
     if quantity == "force":
         force = [-sum(stiffness[pidx_dof[(i, j)]] * q[j] for j in range(ndof))
                  for i in range(ndof)]
         _store(body, "force", force)
-        return Kernel("cij_force", "Elastic force F = -(K2(e) + K1) e, eqs. 25-35.",
+        return Kernel("force", "Elastic force F = -(K2(e) + K1) e, eqs. 25-35.",
                       arrays, body)
     body.append(SparseProduct("second", "jacobian_matrix", "products", ndof * ndof,
                               sizes["jacobian_nnz"]))
     second = refs("second", ndof * ndof)
     _store(body, "jacobian", [-stiffness[pidx_dof[(i, k)]] - second[i * ndof + k]
                               for i in range(ndof) for k in range(ndof)])
-    return Kernel("cij_jacobian", "Elastic Jacobian by eq. 38.", arrays, body)
+    return Kernel("jacobian", "Elastic Jacobian by eq. 38.", arrays, body)
 
 
 # --- gram: U = g^T Dm g with g = DeltaG ----------------------------------------------------
@@ -417,7 +420,7 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
         for a in range(len(pairs))])
     if quantity == "energy":
         _store(body, "energy", [sum(x * y for x, y in zip(g, hvec, strict=True))])
-        return Kernel("gram_energy", "Strain energy U = g^T Dm g.", arrays, body)
+        return Kernel("energy", "Strain energy U = g^T Dm g.", arrays, body)
 
     def tprime(k: int, m: int):
         return (4 if k == m else 2) * hvec[pidx[(k, m)]]
@@ -426,7 +429,7 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
         force = [-sum(tprime(k, m) * q[m * d + c] for m in range(n))
                  for k in range(n) for c in range(d)]
         _store(body, "force", force)
-        return Kernel("gram_force", "Elastic force F = -T' Q.", arrays, body)
+        return Kernel("force", "Elastic force F = -T' Q.", arrays, body)
 
     def gamma(a: int, p: int, c: int):
         """d g_a / d Q_pc."""
@@ -457,5 +460,5 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
         upper[(i, j)] = -value
     names = _materialize(body, temps, list(upper.values()))
     _store_symmetric(body, "jacobian", ndof, dict(zip(upper, names, strict=True)), False)
-    return Kernel("gram_jacobian", "Elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I).",
+    return Kernel("jacobian", "Elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I).",
                   arrays, body)

@@ -1,0 +1,166 @@
+"""``runtime.Element``: one ANCF element, its invariants and its generated kernels."""
+
+from __future__ import annotations
+
+import numbers
+import time
+
+import numpy as np
+
+from runtime import invariants as inv
+from runtime.kernels import BACKENDS, element_kind, kernel_family
+
+METHODS = ("gram", "cij", "quadrature")
+
+
+def lame(E: float, nu: float) -> tuple[float, float]:
+    """Lame lambda and shear modulus G (Pa) from Young's modulus (Pa) and Poisson's ratio."""
+    return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) \
+            or value <= 0:
+        raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
+    return float(value)
+
+
+class Element:
+    """An ANCF element of kind ``kind`` with a St. Venant-Kirchhoff material.
+
+    length, height, width in m; E in Pa; nu dimensionless in (-1, 0.5); rho in kg/m^3.
+    e0: reference coordinates (ndof,), default the straight element along x from the origin;
+    any rigid placement of a straight element uses the closed-form invariants, any other
+    (curved) reference uses Gauss quadrature of order ``quadrature`` (default: the kind's).
+    method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
+
+    ``timing`` records the seconds spent loading/compiling kernels and pre-processing.
+    """
+
+    def __init__(self, kind: str, length: float, height: float, width: float, E: float,
+                 nu: float, rho: float, e0=None, method: str = "gram", backend: str = "c",
+                 quadrature=None) -> None:
+        self.kind = element_kind(kind)
+        self.geometry = (_positive("length", length), _positive("height", height),
+                         _positive("width", width))
+        self.E, self.rho = _positive("E", E), _positive("rho", rho)
+        if isinstance(nu, bool) or not isinstance(nu, numbers.Real) or not -1 < nu < 0.5:
+            raise ValueError(f"nu: expected Poisson's ratio in (-1, 0.5), got {nu!r}")
+        self.nu = float(nu)
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
+        if backend not in BACKENDS:
+            raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
+        self.method, self.backend = method, backend
+        self.quadrature = self._orders(quadrature)
+        self.e0 = (self.kind.straight_reference(self.geometry[0]) if e0 is None
+                   else self._coordinates(e0, "e0", batch=False)[0])
+        self.straight = inv.is_straight(self.kind, self.e0, self.geometry[0])
+        self.variant = "straight" if self.straight else "general"
+        self.lam, self.shear = lame(self.E, self.nu)
+        self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
+        builders = self._family("invariants")
+        mapping = builders if self.straight else self._family("invariants_general")
+        start = time.perf_counter()
+        if self.straight:
+            integrals = inv.straight_integrals(self.kind, builders, self.geometry)
+        else:
+            integrals = inv.pattern_integrals(self.kind, self.variant, inv.numeric_integrals(
+                self.kind, builders, self.geometry, self.e0, self.quadrature))
+        self.invariants = inv.stored_invariants(mapping, self.variant, integrals,
+                                                (self.lam, self.shear, self.rho))
+        self._inputs = self._method_inputs(builders)
+        self.timing["preprocess_s"] += time.perf_counter() - start
+        family = {"gram": f"gram_{self.variant}"}.get(method, method)
+        self._kernels = self._family(family)
+        self.family = family
+
+    # --- construction helpers ------------------------------------------------------------
+
+    def _family(self, family: str):
+        kernels = kernel_family(self.kind.name, family, self.backend)
+        self.timing["compile_s"] += kernels.compile_s
+        self.timing["load_s"] += kernels.load_s
+        return kernels
+
+    def _orders(self, quadrature) -> tuple[int, ...]:
+        if quadrature is None:
+            return self.kind.quadrature
+        orders = tuple(quadrature) if np.iterable(quadrature) else ()
+        if len(orders) != self.kind.dim or not all(
+                isinstance(o, numbers.Integral) and 1 <= o <= 64 for o in orders):
+            raise ValueError(f"quadrature: expected {self.kind.dim} Gauss orders between 1 "
+                             f"and 64 (e.g. {self.kind.quadrature}), got {quadrature!r}")
+        return tuple(int(o) for o in orders)
+
+    def _method_inputs(self, builders) -> dict:
+        stored = self.invariants
+        if self.method == "gram":
+            return {"gram": stored["gram"]}
+        if self.method == "cij":
+            k2, jacobian = inv.cij_operators(self.kind, self.variant, stored["cij"])
+            return {"k1": stored["k1"], "u0": stored["u0"], "k2_matrix": k2,
+                    "jacobian_matrix": jacobian}
+        return {"material": np.array([self.lam, self.shear]),
+                "table": inv.quadrature_table(self.kind, builders, self.geometry,
+                                              self.quadrature)}
+
+    def _coordinates(self, e, name: str = "e", batch: bool = True) -> np.ndarray:
+        ndof = self.kind.ndof
+        try:
+            array = np.asarray(e, dtype=float)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{name}: expected numbers, shape ({ndof},)"
+                             f"{f' or (m, {ndof})' if batch else ''}: {error}") from None
+        if array.ndim == 1 and array.shape[0] == ndof:
+            array = array[None, :]
+        elif not (batch and array.ndim == 2 and array.shape[1] == ndof and array.shape[0] > 0):
+            expected = f"({ndof},) or (m, {ndof})" if batch else f"({ndof},)"
+            raise ValueError(f"{name}: expected shape {expected} for {self.kind.name}, got "
+                             f"{array.shape}")
+        if not np.isfinite(array).all():
+            raise ValueError(f"{name}: contains NaN or infinite values")
+        return np.ascontiguousarray(array)
+
+    # --- public API ----------------------------------------------------------------------
+
+    @property
+    def ndof(self) -> int:
+        """Number of element coordinates."""
+        return self.kind.ndof
+
+    def _run(self, kernel: str, e):
+        coordinates = self._coordinates(e)
+        inputs = dict(self._inputs, e=coordinates, e0=self.e0[None, :])
+        result = self._kernels(kernel, inputs)[kernel]
+        return result, np.ndim(e) == 1
+
+    def elastic_force(self, e) -> np.ndarray:
+        """Elastic force -dU/de (N): shape (ndof,) for one e, (m, ndof) for a batch."""
+        force, single = self._run("force", e)
+        return force[0] if single else force
+
+    def elastic_jacobian(self, e) -> np.ndarray:
+        """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch."""
+        jacobian, single = self._run("jacobian", e)
+        jacobian = jacobian.reshape(-1, self.ndof, self.ndof)
+        return jacobian[0] if single else jacobian
+
+    def strain_energy(self, e):
+        """Strain energy U (J): a float for one e, an (m,) array for a batch."""
+        energy, single = self._run("energy", e)
+        return float(energy[0, 0]) if single else energy[:, 0].copy()
+
+    def mass_matrix(self) -> np.ndarray:
+        """Constant consistent mass matrix (kg), (ndof, ndof): int rho S^T S dV0."""
+        n = self.kind.n_shape
+        shape_mass = np.zeros((n, n))
+        rows, cols = np.triu_indices(n)
+        shape_mass[rows, cols] = shape_mass[cols, rows] = self.invariants["mass"]
+        return np.kron(shape_mass, np.eye(self.kind.dim))
+
+    def __repr__(self) -> str:
+        length, height, width = self.geometry
+        return (f"Element({self.kind.name!r}, length={length}, height={height}, width={width}, "
+                f"E={self.E}, nu={self.nu}, rho={self.rho}, method={self.method!r}, "
+                f"backend={self.backend!r}, {'straight' if self.straight else 'curved'})")

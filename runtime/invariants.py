@@ -1,0 +1,183 @@
+"""Pre-processing: the invariants of one element reference, closed form or by quadrature.
+
+Closed form (straight references, any rigid placement): the generated ``integrals_straight``
+kernel.  Quadrature (any reference, curved included): Gauss-Legendre over the local box with
+the generated shape-function tables.  Both feed the generated ``invariants_<variant>`` map,
+so the two paths differ only in how the four integrals (volume, mass, int P, int P P) are
+obtained.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse
+
+from runtime.kernels import ElementKind, KernelFamily, csr
+
+
+@dataclass(frozen=True)
+class Integrals:
+    """The four integrals of a reference: volume (m^3), mass and i2 (n x n), i4 (n^4)."""
+
+    volume: float
+    mass: np.ndarray
+    i2: np.ndarray
+    i4: np.ndarray
+
+
+def gauss_rule(kind: ElementKind, geometry: tuple[float, float, float],
+               orders: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Tensor Gauss-Legendre points (p, dim) in local box coordinates and weights (p,) in m^3.
+
+    In 2D the weights include the thickness ``width``.
+    """
+    length, height, width = geometry
+    spans = [(0.0, length), (-height / 2, height / 2), (-width / 2, width / 2)][: kind.dim]
+    axes, weights = [], []
+    for order, (low, high) in zip(orders, spans, strict=True):
+        x, w = np.polynomial.legendre.leggauss(order)
+        axes.append(low + (x + 1) * (high - low) / 2)
+        weights.append(w * (high - low) / 2)
+    points = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+    weight = np.prod([g.ravel() for g in np.meshgrid(*weights, indexing="ij")], axis=0)
+    if kind.dim == 2:
+        weight = weight * width
+    return points, weight
+
+
+def shape_gradient_table(kind: ElementKind, family: KernelFamily, geometry,
+                         points: np.ndarray) -> np.ndarray:
+    """Structurally nonzero local shape gradients at ``points``: (p, pattern length)."""
+    return family("shape_gradients", {"point": points, "geometry": np.asarray(geometry,
+                                                                               float)})["gradients"]
+
+
+def full_gradients(kind: ElementKind, table: np.ndarray) -> np.ndarray:
+    """Expand a gradient table (p, pattern) into ds_k/dx_alpha arrays (p, n, dim)."""
+    grads = np.zeros((table.shape[0], kind.n_shape, kind.dim))
+    for j, (k, c) in enumerate(kind.meta["gradient_pattern"]):
+        grads[:, k, c] = table[:, j]
+    return grads
+
+
+def quadrature_table(kind: ElementKind, family: KernelFamily, geometry,
+                     orders: tuple[int, ...]) -> np.ndarray:
+    """Per-point table of the quadrature kernels: nonzero gradients, then the weight."""
+    points, weights = gauss_rule(kind, geometry, orders)
+    table = shape_gradient_table(kind, family, geometry, points)
+    return np.ascontiguousarray(np.column_stack([table, weights]))
+
+
+def reference_mapping(kind: ElementKind, e0: np.ndarray, grads: np.ndarray):
+    """J0 = dr0/dx (p, dim, dim) at the points and its determinant (p,)."""
+    q0 = e0.reshape(kind.n_shape, kind.dim)
+    j0 = np.einsum("ka,pkb->pab", q0, grads)
+    return j0, np.linalg.det(j0)
+
+
+def numeric_integrals(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
+                      orders: tuple[int, ...]) -> Integrals:
+    """The four integrals of any reference ``e0`` by Gauss quadrature of order ``orders``.
+
+    Raises ValueError when the reference mapping is degenerate or inverted (det J0 <= 0).
+    """
+    points, weights = gauss_rule(kind, geometry, orders)
+    grads = full_gradients(kind, shape_gradient_table(kind, family, geometry, points))
+    values = family("shape_values", {"point": points,
+                                     "geometry": np.asarray(geometry, float)})["values"]
+    j0, det = reference_mapping(kind, e0, grads)
+    scale = np.abs(j0).max()
+    bad = np.flatnonzero(~(det > 1e-12 * scale**kind.dim))
+    if bad.size:
+        where = points[bad[0]]
+        raise ValueError(
+            f"e0: the reference mapping is degenerate or inverted (det J0 = {det[bad[0]]:.3g} "
+            f"<= 0 at local point {np.array2string(where, precision=4)}); expected an e0 whose "
+            "gradients span a right-handed frame at every quadrature point")
+    b = np.einsum("pka,pab->pkb", grads, np.linalg.inv(j0))
+    p_matrix = np.einsum("pka,pla->pkl", b, b)
+    wdet = weights * det
+    return Integrals(
+        volume=float(wdet.sum()),
+        mass=np.einsum("p,pk,pl->kl", wdet, values, values),
+        i2=np.einsum("p,pkl->kl", wdet, p_matrix),
+        i4=np.einsum("p,pkl,pmn->klmn", wdet, p_matrix, p_matrix, optimize=True),
+    )
+
+
+def straight_integrals(kind: ElementKind, family: KernelFamily, geometry) -> dict:
+    """Closed-form integrals of the straight reference, in the straight storage pattern."""
+    return family("integrals_straight", {"geometry": np.asarray(geometry, float)[None, :]})
+
+
+def _upper(matrix: np.ndarray) -> np.ndarray:
+    return matrix[np.triu_indices(matrix.shape[0])]
+
+
+def pattern_integrals(kind: ElementKind, variant: str, integrals: Integrals) -> dict:
+    """Numeric integrals arranged as the inputs of ``invariants_<variant>``."""
+    rows, cols = np.triu_indices(kind.n_shape)
+    keys = kind.pattern(variant, "i4")
+    i4 = integrals.i4[rows[keys[:, 0]], cols[keys[:, 0]], rows[keys[:, 1]], cols[keys[:, 1]]]
+    return {"i4": i4[None, :], "i2": _upper(integrals.i2)[None, :],
+            "mass_shape": _upper(integrals.mass)[None, :],
+            "volume": np.array([[integrals.volume]])}
+
+
+def stored_invariants(family: KernelFamily, variant: str, integrals: dict,
+                      material: tuple[float, float, float]) -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij and U0 arrays (1-D) from integrals (as ``pattern_integrals``)."""
+    inputs = dict(integrals, material=np.asarray(material, float))
+    out = family(f"invariants_{variant}", inputs)
+    return {name: value[0] for name, value in out.items()}
+
+
+def is_straight(kind: ElementKind, e0: np.ndarray, length: float, rtol: float = 1e-12) -> bool:
+    """Whether ``e0`` is a rigid placement of the straight reference (closed forms apply).
+
+    Compares Gram matrices Q0 Q0^T after translating to the first node: they are invariant
+    under rotation, so any rotated straight beam qualifies.
+    """
+    def gram(e):
+        q = e.reshape(kind.n_shape, kind.dim).copy()
+        first = kind.position_vectors[0]
+        q[list(kind.position_vectors)] -= q[first]
+        return q @ q.T
+
+    reference = gram(kind.straight_reference(length))
+    return bool(np.allclose(gram(e0), reference, rtol=0, atol=rtol * np.abs(reference).max()))
+
+
+def cij_operators(kind: ElementKind, variant: str, cij: np.ndarray):
+    """Sparse operators of the cij kernels from the stored c^{kp}_{mq} values.
+
+    Returns (k2, jacobian): K2 upper triangle = k2 @ p and the double sum of eq. 38 =
+    jacobian @ p, with p the coordinate products e_s e_t (s <= t) in row-major order.
+    C^{(k,a),(p,b)} holds c^{kp}_{mq} at ((m,a), (q,b)).
+    """
+    d, ndof = kind.dim, kind.ndof
+    pattern = kind.pattern(variant, "cij")
+    pair = np.full((ndof, ndof), -1)
+    rows, cols = np.triu_indices(ndof)
+    pair[rows, cols] = pair[cols, rows] = np.arange(rows.size)
+    a, b = np.meshgrid(np.arange(d), np.arange(d), indexing="ij")
+    a, b = a.ravel(), b.ravel()
+    k, p, m, q = (pattern[:, None, j] for j in range(4))
+    i, j = k * d + a, p * d + b              # C^ij with i = (k,a), j = (p,b)
+    s, t = m * d + a, q * d + b              # its nonzero at (s, t)
+    value = np.broadcast_to(cij[:, None], i.shape)
+    keep = i <= j
+    i, j, s, t, value = (x[keep] for x in (i, j, s, t, value))
+    k2 = scipy.sparse.coo_matrix((value, (pair[i, j], pair[s, t])),
+                                 shape=(rows.size, rows.size))
+    # eq. 38: row i gets C_st p_jt at column s and C_st p_js at column t; the mirrored
+    # pair (j, i) uses the same C (K2 is symmetric), except on the diagonal i == j.
+    mirror = i != j
+    jr = np.concatenate([i * ndof + s, i * ndof + t, (j * ndof + s)[mirror],
+                         (j * ndof + t)[mirror]])
+    jc = np.concatenate([pair[j, t], pair[j, s], pair[i, t][mirror], pair[i, s][mirror]])
+    jv = np.concatenate([value, value, value[mirror], value[mirror]])
+    jacobian = scipy.sparse.coo_matrix((jv, (jr, jc)), shape=(ndof * ndof, rows.size))
+    return csr(k2), csr(jacobian)

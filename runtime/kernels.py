@@ -1,0 +1,162 @@
+"""Load generated kernels (NumPy modules, or C through the cffi JIT) and call them uniformly.
+
+Everything about an element the runtime needs is in ``generated/<kind>/element.json``; SymPy
+is never imported here.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import time
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse
+
+from runtime import jit
+
+BACKENDS = ("c", "numpy")
+
+
+def generated_dir() -> Path:
+    """The folder of the generated kernels (inside the installed package)."""
+    return Path(str(resources.files("generated")))
+
+
+def known_kinds() -> list[str]:
+    """Element kinds with generated kernels, sorted."""
+    return sorted(p.parent.name for p in generated_dir().glob("*/element.json"))
+
+
+@dataclass(frozen=True)
+class ElementKind:
+    """Metadata of one generated element kind (see ``symgen.emit.element_metadata``)."""
+
+    name: str
+    dim: int
+    n_shape: int
+    ndof: int
+    position_vectors: tuple[int, ...]
+    quadrature: tuple[int, ...]
+    meta: dict = field(repr=False, compare=False)
+
+    def straight_reference(self, length: float) -> np.ndarray:
+        """Coordinates e0 (ndof,) of the straight element along x from the origin."""
+        coeffs = np.array(self.meta["straight_reference"], dtype=float)
+        return coeffs[:, 0] * length + coeffs[:, 1]
+
+    def pattern(self, variant: str, name: str) -> np.ndarray:
+        """Storage pattern ``name`` (i4, gram, cij) of ``variant`` as an int array."""
+        return np.array(self.meta["patterns"][variant][name], dtype=np.int64)
+
+    def operations(self, family: str, kernel: str) -> int:
+        """Floating-point operations per element counted from the generated code."""
+        return self.meta["families"][family][kernel]["operations"]
+
+
+@cache
+def element_kind(name: str) -> ElementKind:
+    """The generated element kind ``name``; ValueError naming the known kinds otherwise."""
+    if not isinstance(name, str) or name not in known_kinds():
+        raise ValueError(f"kind: unknown element kind {name!r}; known kinds: "
+                         f"{', '.join(known_kinds())}")
+    meta = json.loads((generated_dir() / name / "element.json").read_text())
+    return ElementKind(meta["name"], meta["dim"], meta["n_shape"], meta["ndof"],
+                       tuple(meta["position_vectors"]), tuple(meta["quadrature"]), meta)
+
+
+class KernelFamily:
+    """The kernels of one family of one element kind, in one backend.
+
+    ``compile_s`` is the time spent compiling (C, first use on this machine) and ``load_s``
+    the time to load; both are zero for cached NumPy modules.
+    """
+
+    def __init__(self, kind: ElementKind, family: str, backend: str) -> None:
+        if backend not in BACKENDS:
+            raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
+        if family not in kind.meta["families"]:
+            raise ValueError(f"unknown kernel family {family!r} for {kind.name}")
+        self.kind, self.family, self.backend = kind, family, backend
+        self.signatures = kind.meta["families"][family]
+        folder = generated_dir() / kind.name
+        start = time.perf_counter()
+        self.compile_s = 0.0
+        if backend == "c":
+            compiled = jit.compile_module(f"{kind.name}_{family}",
+                                          (folder / f"{family}.c").read_text(),
+                                          (folder / f"{family}.h").read_text())
+            self.compile_s = compiled.seconds if compiled.compiled else 0.0
+            self._module = compiled.module
+        else:
+            spec = importlib.util.spec_from_file_location(
+                f"ancf_generated_{kind.name}_{family}", folder / f"{family}.py")
+            self._module = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(self._module)
+        self.load_s = time.perf_counter() - start - self.compile_s
+
+    def __call__(self, kernel: str, inputs: dict) -> dict[str, np.ndarray]:
+        """Run ``kernel`` on a batch.
+
+        inputs: batch arrays as (m, size) or (1, size) (broadcast), shared arrays (size,),
+        sparse operators as scipy CSR matrices, the table as (points, width).
+        Returns each output as an (m, size) array.
+        """
+        arrays = self.signatures[kernel]["arrays"]
+        batch = [a for a in arrays if a["role"] == "batch"]
+        m = max(inputs[a["name"]].shape[0] for a in batch)
+        if self.backend == "numpy":
+            args = [inputs[a["name"]] for a in arrays if a["role"] not in ("output", "local")]
+            result = getattr(self._module, kernel)(*args)
+            result = result if isinstance(result, tuple) else (result,)
+            outputs = [a["name"] for a in arrays if a["role"] == "output"]
+            return dict(zip(outputs, result, strict=True))
+        return self._call_c(kernel, arrays, m, inputs)
+
+    def _call_c(self, kernel: str, arrays: list, m: int, inputs: dict) -> dict:
+        ffi = self._module.ffi
+        keep, args, outputs = [], [m], {}
+
+        def pointer(array, ctype):
+            array = np.ascontiguousarray(array, dtype=np.float64 if ctype == "double" else
+                                         np.int32)
+            keep.append(array)
+            return ffi.from_buffer(f"{ctype}[]", array)
+
+        for a in arrays:
+            name, role = a["name"], a["role"]
+            if role == "batch":
+                value = inputs[name]
+                args += [pointer(value, "double"), 0 if value.shape[0] == 1 else a["size"]]
+            elif role == "shared":
+                args.append(pointer(inputs[name], "double"))
+            elif role == "csr":
+                matrix = inputs[name]
+                args += [pointer(matrix.indptr, "int"), pointer(matrix.indices, "int"),
+                         pointer(matrix.data, "double")]
+            elif role == "table":
+                args += [inputs[name].shape[0], pointer(inputs[name], "double")]
+            elif role == "output":
+                outputs[name] = np.empty((m, a["size"]))
+                args.append(ffi.from_buffer("double[]", outputs[name]))
+        function = getattr(self._module.lib, f"{self.kind.name}_{self.family}_{kernel}")
+        function(*args)
+        return outputs
+
+
+@cache
+def kernel_family(kind: str, family: str, backend: str) -> KernelFamily:
+    """Loaded (and, for C, compiled once per machine) kernel family; memoised per process."""
+    return KernelFamily(element_kind(kind), family, backend)
+
+
+def csr(matrix) -> scipy.sparse.csr_matrix:
+    """A canonical CSR matrix (sorted indices, duplicates summed) for the kernels."""
+    matrix = scipy.sparse.csr_matrix(matrix)
+    matrix.sum_duplicates()
+    matrix.sort_indices()
+    return matrix
