@@ -76,6 +76,13 @@ def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference
     e, e0 = refs("e", spec.ndof), refs("e0", spec.ndof)
     first = spec.position_vectors[0]
     q, q0, dq = list(e), list(e0), [None] * spec.ndof
+    # displacement of the first node: positions' displacements are taken relative to it as
+    # (e_i - e0_i) - (e_f - e0_f), differences of nearby numbers (exact, whatever the offset)
+    first_shift = [None] * d
+    if with_reference:
+        for c in range(d):
+            first_shift[c] = next(temps)
+            body.append(Assign(first_shift[c].name, e[first * d + c] - e0[first * d + c]))
     for k in range(spec.n_shape):
         for c in range(d):
             i = k * d + c
@@ -91,8 +98,9 @@ def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference
             if with_reference:
                 dq[i] = next(temps)
                 if k in spec.position_vectors:
-                    # both operands are already relative to the first node: no large sums
-                    body.append(Assign(dq[i].name, q[i] - q0[i]))
+                    shift = next(temps)
+                    body.append(Assign(shift.name, e[i] - e0[i]))
+                    body.append(Assign(dq[i].name, shift - first_shift[c]))
                 else:
                     body.append(Assign(dq[i].name, e[i] - e0[i]))
     return q, q0, dq
