@@ -129,20 +129,27 @@ class Element:
         """Number of element coordinates."""
         return self.kind.ndof
 
-    def _run(self, kernel: str, e):
+    def _run(self, kernel: str, e, out=None):
         coordinates = self._coordinates(e)
         inputs = dict(self._inputs, e=coordinates, e0=self.e0[None, :])
-        result = self._kernels(kernel, inputs)[kernel]
+        if out is not None:
+            if not isinstance(out, np.ndarray):
+                raise ValueError("out: expected a numpy array")
+            out = {kernel: out.reshape(coordinates.shape[0], -1)}
+        result = self._kernels(kernel, inputs, out)[kernel]
         return result, np.ndim(e) == 1
 
-    def elastic_force(self, e) -> np.ndarray:
-        """Elastic force -dU/de (N): shape (ndof,) for one e, (m, ndof) for a batch."""
-        force, single = self._run("force", e)
+    def elastic_force(self, e, out: np.ndarray | None = None) -> np.ndarray:
+        """Elastic force -dU/de (N): shape (ndof,) for one e, (m, ndof) for a batch.
+
+        out: optional C-contiguous float64 array of the result's shape, filled and returned.
+        """
+        force, single = self._run("force", e, out)
         return force[0] if single else force
 
-    def elastic_jacobian(self, e) -> np.ndarray:
-        """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch."""
-        jacobian, single = self._run("jacobian", e)
+    def elastic_jacobian(self, e, out: np.ndarray | None = None) -> np.ndarray:
+        """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch (``out`` as above)."""
+        jacobian, single = self._run("jacobian", e, out)
         jacobian = jacobian.reshape(-1, self.ndof, self.ndof)
         return jacobian[0] if single else jacobian
 

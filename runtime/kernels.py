@@ -99,13 +99,16 @@ class KernelFamily:
             spec.loader.exec_module(self._module)
         self.load_s = time.perf_counter() - start - self.compile_s
 
-    def __call__(self, kernel: str, inputs: dict) -> dict[str, np.ndarray]:
+    def __call__(self, kernel: str, inputs: dict, out: dict | None = None) -> dict:
         """Run ``kernel`` on a batch.
 
         inputs: batch arrays as (m, size) or (1, size) (broadcast), shared arrays (size,),
         sparse operators as scipy CSR matrices, the table as (points, width).
+        out: optional preallocated C-contiguous float64 (m, size) arrays, by output name
+        (reusing them avoids page-faulting fresh memory on large batches).
         Returns each output as an (m, size) array.
         """
+        out = out or {}
         arrays = self.signatures[kernel]["arrays"]
         batch = [a for a in arrays if a["role"] == "batch"]
         m = max(inputs[a["name"]].shape[0] for a in batch)
@@ -114,10 +117,14 @@ class KernelFamily:
             result = getattr(self._module, kernel)(*args)
             result = result if isinstance(result, tuple) else (result,)
             outputs = [a["name"] for a in arrays if a["role"] == "output"]
-            return dict(zip(outputs, result, strict=True))
-        return self._call_c(kernel, arrays, m, inputs)
+            result = dict(zip(outputs, result, strict=True))
+            for name, target in out.items():
+                np.copyto(target, result[name])
+                result[name] = target
+            return result
+        return self._call_c(kernel, arrays, m, inputs, out)
 
-    def _call_c(self, kernel: str, arrays: list, m: int, inputs: dict) -> dict:
+    def _call_c(self, kernel: str, arrays: list, m: int, inputs: dict, out: dict) -> dict:
         ffi = self._module.ffi
         keep, args, outputs = [], [m], {}
 
@@ -141,7 +148,13 @@ class KernelFamily:
             elif role == "table":
                 args += [inputs[name].shape[0], pointer(inputs[name], "double")]
             elif role == "output":
-                outputs[name] = np.empty((m, a["size"]))
+                outputs[name] = out.get(name)
+                if outputs[name] is None:
+                    outputs[name] = np.empty((m, a["size"]))
+                elif (outputs[name].shape != (m, a["size"]) or outputs[name].dtype != np.float64
+                      or not outputs[name].flags.c_contiguous):
+                    raise ValueError(f"out: expected a C-contiguous float64 array of shape "
+                                     f"{(m, a['size'])} for {name}")
                 args.append(ffi.from_buffer("double[]", outputs[name]))
         function = getattr(self._module.lib, f"{self.kind.name}_{self.family}_{kernel}")
         function(*args)

@@ -21,8 +21,17 @@ import sympy as sp
 
 from symgen import derive
 from symgen.element import ElementSpec, height, length, width
-from symgen.ir import Array, Assign, Kernel, PointLoop, SparseProduct, Temporaries, emit_cse
-from symgen.ir import ref, refs
+from symgen.ir import (
+    Array,
+    Assign,
+    Kernel,
+    PointLoop,
+    SparseProduct,
+    Temporaries,
+    emit_cse,
+    ref,
+    refs,
+)
 
 QUANTITIES = ("force", "jacobian", "energy")
 
@@ -260,13 +269,12 @@ def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Ke
               _output(spec, quantity)]
     temps = Temporaries()
     body: list = []
-    q, q0, dq = _translate(spec, body, temps, with_reference=True)
+    _, q0, dq = _translate(spec, body, temps, with_reference=True)
     lam_, g_ = refs("material", 2)
     tab = refs("tab", width_)
     ds = sp.zeros(n, d)
     for j, (k, c) in enumerate(pattern):
         ds[k, c] = tab[j]
-    Q = sp.Matrix(n, d, q)
     Q0 = sp.Matrix(n, d, q0)
     dQ = sp.Matrix(n, d, dq)
     point: list = []

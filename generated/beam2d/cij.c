@@ -19,12 +19,13 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    Operations per element: 2991. */
 void beam2d_cij_force(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, double *force_out)
 {
+  vd e[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
     vd products[78];
     vd k2[78];
     vd force[12];
@@ -189,12 +190,13 @@ void beam2d_cij_force(long m, const double *e_in, long e_stride, const double *k
    Operations per element: 12635. */
 void beam2d_cij_jacobian(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, const int *jacobian_matrix_indptr, const int *jacobian_matrix_indices, const double *jacobian_matrix_data, double *jacobian_out)
 {
+  vd e[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
     vd products[78];
     vd k2[78];
     vd second[144];
@@ -496,12 +498,13 @@ void beam2d_cij_jacobian(long m, const double *e_in, long e_stride, const double
    Operations per element: 3041. */
 void beam2d_cij_energy(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, double *energy_out)
 {
+  vd e[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
     vd products[78];
     vd k2[78];
     vd energy[1];

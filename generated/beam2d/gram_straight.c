@@ -16,15 +16,17 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    Operations per element: 584. */
 void beam2d_gram_straight_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *force_out)
 {
+  vd e[12];
+  vd e0[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd force[12];
     for (int i = 0; i < 12; i++) force[i] = (vd){0};
     const vd t0 = e[0] - e0[0];
@@ -108,15 +110,17 @@ void beam2d_gram_straight_force(long m, const double *e_in, long e_stride, const
    Operations per element: 2146. */
 void beam2d_gram_straight_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *jacobian_out)
 {
+  vd e[12];
+  vd e0[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd jacobian[144];
     for (int i = 0; i < 144; i++) jacobian[i] = (vd){0};
     const vd t0 = e[0] - e0[0];
@@ -813,15 +817,17 @@ void beam2d_gram_straight_jacobian(long m, const double *e_in, long e_stride, co
    Operations per element: 445. */
 void beam2d_gram_straight_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *energy_out)
 {
+  vd e[12];
+  vd e0[12];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[12];
-    for (int i = 0; i < 12; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 12; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd energy[1];
     for (int i = 0; i < 1; i++) energy[i] = (vd){0};
     const vd t0 = e[0] - e0[0];

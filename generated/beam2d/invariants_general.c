@@ -22,21 +22,25 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    Operations per element: 1558. */
 void beam2d_invariants_general_invariants_general(long m, const double *i4_in, long i4_stride, const double *i2_in, long i2_stride, const double *mass_shape_in, long mass_shape_stride, const double *volume_in, long volume_stride, const double *material, double *mass_out, double *k1_out, double *gram_out, double *cij_out, double *u0_out)
 {
+  vd i4[231];
+  vd i2[21];
+  vd mass_shape[21];
+  vd volume[1];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd i4[231];
-    for (int i = 0; i < 231; i++)
-      for (int j = 0; j < ANCF_LANES; j++) i4[i][j] = i4_in[lane[j] * i4_stride + i];
-    vd i2[21];
-    for (int i = 0; i < 21; i++)
-      for (int j = 0; j < ANCF_LANES; j++) i2[i][j] = i2_in[lane[j] * i2_stride + i];
-    vd mass_shape[21];
-    for (int i = 0; i < 21; i++)
-      for (int j = 0; j < ANCF_LANES; j++) mass_shape[i][j] = mass_shape_in[lane[j] * mass_shape_stride + i];
-    vd volume[1];
-    for (int i = 0; i < 1; i++)
-      for (int j = 0; j < ANCF_LANES; j++) volume[i][j] = volume_in[lane[j] * volume_stride + i];
+    if (first == 0 || i4_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 231; i++)
+        for (int j = 0; j < ANCF_LANES; j++) i4[i][j] = i4_in[lane[j] * i4_stride + i];
+    if (first == 0 || i2_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 21; i++)
+        for (int j = 0; j < ANCF_LANES; j++) i2[i][j] = i2_in[lane[j] * i2_stride + i];
+    if (first == 0 || mass_shape_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 21; i++)
+        for (int j = 0; j < ANCF_LANES; j++) mass_shape[i][j] = mass_shape_in[lane[j] * mass_shape_stride + i];
+    if (first == 0 || volume_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 1; i++)
+        for (int j = 0; j < ANCF_LANES; j++) volume[i][j] = volume_in[lane[j] * volume_stride + i];
     vd mass[21];
     for (int i = 0; i < 21; i++) mass[i] = (vd){0};
     vd k1[21];

@@ -15,12 +15,13 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    Operations per element: 29. */
 void beam3d_invariants_shape_values(long m, const double *point_in, long point_stride, const double *geometry, double *values_out)
 {
+  vd point[3];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd point[3];
-    for (int i = 0; i < 3; i++)
-      for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
+    if (first == 0 || point_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
     vd values[8];
     for (int i = 0; i < 8; i++) values[i] = (vd){0};
     const vd t0 = (1.0/(geometry[0]*geometry[0]))*(point[0]*point[0]);
@@ -53,12 +54,13 @@ void beam3d_invariants_shape_values(long m, const double *point_in, long point_s
    Operations per element: 25. */
 void beam3d_invariants_shape_gradients(long m, const double *point_in, long point_stride, const double *geometry, double *gradients_out)
 {
+  vd point[3];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd point[3];
-    for (int i = 0; i < 3; i++)
-      for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
+    if (first == 0 || point_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
     vd gradients[12];
     for (int i = 0; i < 12; i++) gradients[i] = (vd){0};
     const vd t0 = (point[0]*point[0]);
@@ -97,12 +99,13 @@ void beam3d_invariants_shape_gradients(long m, const double *point_in, long poin
    Operations per element: 188. */
 void beam3d_invariants_integrals_straight(long m, const double *geometry_in, long geometry_stride, double *i4_out, double *i2_out, double *mass_shape_out, double *volume_out)
 {
+  vd geometry[3];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd geometry[3];
-    for (int i = 0; i < 3; i++)
-      for (int j = 0; j < ANCF_LANES; j++) geometry[i][j] = geometry_in[lane[j] * geometry_stride + i];
+    if (first == 0 || geometry_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < ANCF_LANES; j++) geometry[i][j] = geometry_in[lane[j] * geometry_stride + i];
     vd i4[211];
     for (int i = 0; i < 211; i++) i4[i] = (vd){0};
     vd i2[36];
@@ -555,21 +558,25 @@ void beam3d_invariants_integrals_straight(long m, const double *geometry_in, lon
    Operations per element: 1462. */
 void beam3d_invariants_invariants_straight(long m, const double *i4_in, long i4_stride, const double *i2_in, long i2_stride, const double *mass_shape_in, long mass_shape_stride, const double *volume_in, long volume_stride, const double *material, double *mass_out, double *k1_out, double *gram_out, double *cij_out, double *u0_out)
 {
+  vd i4[211];
+  vd i2[36];
+  vd mass_shape[36];
+  vd volume[1];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd i4[211];
-    for (int i = 0; i < 211; i++)
-      for (int j = 0; j < ANCF_LANES; j++) i4[i][j] = i4_in[lane[j] * i4_stride + i];
-    vd i2[36];
-    for (int i = 0; i < 36; i++)
-      for (int j = 0; j < ANCF_LANES; j++) i2[i][j] = i2_in[lane[j] * i2_stride + i];
-    vd mass_shape[36];
-    for (int i = 0; i < 36; i++)
-      for (int j = 0; j < ANCF_LANES; j++) mass_shape[i][j] = mass_shape_in[lane[j] * mass_shape_stride + i];
-    vd volume[1];
-    for (int i = 0; i < 1; i++)
-      for (int j = 0; j < ANCF_LANES; j++) volume[i][j] = volume_in[lane[j] * volume_stride + i];
+    if (first == 0 || i4_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 211; i++)
+        for (int j = 0; j < ANCF_LANES; j++) i4[i][j] = i4_in[lane[j] * i4_stride + i];
+    if (first == 0 || i2_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 36; i++)
+        for (int j = 0; j < ANCF_LANES; j++) i2[i][j] = i2_in[lane[j] * i2_stride + i];
+    if (first == 0 || mass_shape_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 36; i++)
+        for (int j = 0; j < ANCF_LANES; j++) mass_shape[i][j] = mass_shape_in[lane[j] * mass_shape_stride + i];
+    if (first == 0 || volume_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 1; i++)
+        for (int j = 0; j < ANCF_LANES; j++) volume[i][j] = volume_in[lane[j] * volume_stride + i];
     vd mass[36];
     for (int i = 0; i < 36; i++) mass[i] = (vd){0};
     vd k1[36];

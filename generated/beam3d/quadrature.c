@@ -17,15 +17,17 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    Operations per element: 29553. */
 void beam3d_quadrature_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *force_out)
 {
+  vd e[24];
+  vd e0[24];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd force[24];
     for (int i = 0; i < 24; i++) force[i] = (vd){0};
     const vd t0 = e[0] - e0[0];
@@ -204,15 +206,17 @@ void beam3d_quadrature_force(long m, const double *e_in, long e_stride, const do
    Operations per element: 156993. */
 void beam3d_quadrature_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *jacobian_out)
 {
+  vd e[24];
+  vd e0[24];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd jacobian[576];
     for (int i = 0; i < 576; i++) jacobian[i] = (vd){0};
     const vd t0 = e[0] - e0[0];
@@ -1539,15 +1543,17 @@ void beam3d_quadrature_jacobian(long m, const double *e_in, long e_stride, const
    Operations per element: 15963. */
 void beam3d_quadrature_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *energy_out)
 {
+  vd e[24];
+  vd e0[24];
   for (long first = 0; first < m; first += ANCF_LANES) {
     long lane[ANCF_LANES];
     for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
-    vd e[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
-    vd e0[24];
-    for (int i = 0; i < 24; i++)
-      for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
+    if (first == 0 || e_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e[i][j] = e_in[lane[j] * e_stride + i];
+    if (first == 0 || e0_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 24; i++)
+        for (int j = 0; j < ANCF_LANES; j++) e0[i][j] = e0_in[lane[j] * e0_stride + i];
     vd energy[1];
     for (int i = 0; i < 1; i++) energy[i] = (vd){0};
     const vd t0 = e[0] - e0[0];
