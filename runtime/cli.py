@@ -1,0 +1,155 @@
+"""The ``ancf`` command line: generate, invariants, bench."""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+METHOD_FAMILIES = {
+    "invariants": ["invariants", "invariants_general"],
+    "quadrature": ["quadrature"],
+    "cij": ["cij"],
+    "gram": ["gram_straight", "gram_general"],
+}
+
+
+def _orders(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated Gauss orders such as 5,3,3, got {text!r}") from None
+
+
+def _generate_into(elements: list[str], backends: list[str], methods: list[str] | None,
+                   out: Path) -> list[Path]:
+    from symgen import emit
+    from symgen.elements import get
+
+    families = None
+    if methods:
+        families = [f for m in methods for f in METHOD_FAMILIES[m]]
+    written = []
+    for name in elements:
+        written += emit.generate(get(name), out, backends=backends, families=families)
+    return written
+
+
+def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:
+    """Unified diff between freshly generated kernels and ``folder`` ('' when identical)."""
+    from runtime.kernels import generated_dir
+    from symgen.elements import registry
+
+    folder = folder or generated_dir()
+    elements = elements or list(registry())
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = _generate_into(elements, ["c", "numpy"], None, Path(tmp))
+        chunks = []
+        for path in sorted(fresh):
+            relative = path.relative_to(tmp)
+            old = folder / relative
+            new_text = path.read_text()
+            old_text = old.read_text() if old.exists() else ""
+            if new_text != old_text:
+                diff = difflib.unified_diff(old_text.splitlines(), new_text.splitlines(),
+                                            f"checked-in/{relative}", f"regenerated/{relative}",
+                                            lineterm="", n=1)
+                chunks.append("\n".join(list(diff)[:200]))
+        return "\n".join(chunks)
+
+
+def cmd_generate(args) -> int:
+    from runtime.kernels import generated_dir
+    from symgen.elements import registry
+
+    known = list(registry())
+    elements = args.element or known
+    for name in elements:
+        if name not in known:
+            print(f"ancf generate: unknown element {name!r}; known: {', '.join(known)}",
+                  file=sys.stderr)
+            return 2
+    out = Path(args.out) if args.out else generated_dir()
+    if args.check:
+        diff = generation_diff(elements, out)
+        if diff:
+            print(diff)
+            print(f"\ngenerated kernels in {out} differ from what symgen produces; update them "
+                  f"with: ancf generate{''.join(' --element ' + e for e in args.element or [])}")
+            return 1
+        print(f"generated kernels in {out} are up to date")
+        return 0
+    start = time.perf_counter()
+    written = _generate_into(elements, args.backend or ["c", "numpy"], args.method, out)
+    for path in written:
+        print(path)
+    print(f"generated {len(written)} files in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+def cmd_invariants(args) -> int:
+    from runtime.invariant_report import compare, report
+
+    print(report(compare(args.element, args.reference, args.quadrature, args.backend)))
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from runtime import bench
+
+    print(bench.run(args.element, batch=args.batch, methods=args.method or bench.METHODS,
+                    backends=args.backend or bench.BACKENDS))
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    """The argument parser of ``ancf``."""
+    from runtime.element import METHODS
+    from runtime.kernels import BACKENDS
+
+    main = argparse.ArgumentParser(prog="ancf", description=__doc__)
+    sub = main.add_subparsers(dest="command", required=True)
+
+    gen = sub.add_parser("generate", help="regenerate kernels from symgen into generated/")
+    gen.add_argument("--element", action="append", help="element kind (repeatable; default all)")
+    gen.add_argument("--backend", action="append", choices=["c", "numpy"])
+    gen.add_argument("--method", action="append", choices=list(METHOD_FAMILIES))
+    gen.add_argument("--out", help="output folder (default: the package's generated/)")
+    gen.add_argument("--check", action="store_true",
+                     help="compare with the output folder instead of writing; exit 1 on a diff")
+    gen.set_defaults(run=cmd_generate)
+
+    invariants = sub.add_parser("invariants", help="symbolic vs quadrature invariants")
+    invariants.add_argument("--element", default="beam3d")
+    invariants.add_argument("--reference", choices=["straight", "curved"], default="straight")
+    invariants.add_argument("--quadrature", type=_orders, help="Gauss orders, e.g. 5,3,3")
+    invariants.add_argument("--backend", choices=list(BACKENDS), default="numpy")
+    invariants.set_defaults(run=cmd_invariants)
+
+    bench = sub.add_parser("bench", help="benchmarks")
+    bench_sub = bench.add_subparsers(dest="what", required=True)
+    kernels = bench_sub.add_parser("kernels", help="per-element kernel cost, every method")
+    kernels.add_argument("--element", action="append", help="element kind (default all)")
+    kernels.add_argument("--batch", type=int, default=10_000)
+    kernels.add_argument("--method", action="append", choices=list(METHODS))
+    kernels.add_argument("--backend", action="append", choices=list(BACKENDS))
+    kernels.set_defaults(run=cmd_bench)
+    return main
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``ancf`` console script."""
+    args = parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except ValueError as error:
+        print(f"ancf {args.command}: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
