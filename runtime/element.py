@@ -72,8 +72,11 @@ class Element:
         self._inputs = self._method_inputs(builders)
         self.timing["preprocess_s"] += time.perf_counter() - start
         family = {"gram": f"gram_{self.variant}"}.get(method, method)
-        self._kernels = self._family(family)
+        kernels = self._family(family)
         self.family = family
+        fixed = dict(self._inputs, e0=self.e0[None, :])
+        self._bound = {name: kernels.bind(name, fixed) for name in ("force", "jacobian",
+                                                                     "energy")}
 
     # --- construction helpers ------------------------------------------------------------
 
@@ -131,12 +134,11 @@ class Element:
 
     def _run(self, kernel: str, e, out=None):
         coordinates = self._coordinates(e)
-        inputs = dict(self._inputs, e=coordinates, e0=self.e0[None, :])
         if out is not None:
             if not isinstance(out, np.ndarray):
                 raise ValueError("out: expected a numpy array")
             out = {kernel: out.reshape(coordinates.shape[0], -1)}
-        result = self._kernels(kernel, inputs, out)[kernel]
+        result = self._bound[kernel]({"e": coordinates}, out)[kernel]
         return result, np.ndim(e) == 1
 
     def elastic_force(self, e, out: np.ndarray | None = None) -> np.ndarray:

@@ -108,56 +108,98 @@ class KernelFamily:
         (reusing them avoids page-faulting fresh memory on large batches).
         Returns each output as an (m, size) array.
         """
-        out = out or {}
         arrays = self.signatures[kernel]["arrays"]
-        batch = [a for a in arrays if a["role"] == "batch"]
-        m = max(inputs[a["name"]].shape[0] for a in batch)
-        if self.backend == "numpy":
-            args = [inputs[a["name"]] for a in arrays if a["role"] not in ("output", "local")]
-            result = getattr(self._module, kernel)(*args)
-            result = result if isinstance(result, tuple) else (result,)
-            outputs = [a["name"] for a in arrays if a["role"] == "output"]
-            result = dict(zip(outputs, result, strict=True))
-            for name, target in out.items():
-                np.copyto(target, result[name])
-                result[name] = target
-            return result
-        return self._call_c(kernel, arrays, m, inputs, out)
+        varying = [a["name"] for a in arrays if a["role"] == "batch" and a["name"] in inputs]
+        fixed = {k: v for k, v in inputs.items() if k not in varying[:1]}
+        return self.bind(kernel, fixed)({varying[0]: inputs[varying[0]]}, out)
 
-    def _call_c(self, kernel: str, arrays: list, m: int, inputs: dict, out: dict) -> dict:
-        ffi = self._module.ffi
-        keep, args, outputs = [], [m], {}
+    def bind(self, kernel: str, fixed: dict) -> BoundKernel:
+        """``kernel`` with every input but the per-call batch arrays converted once."""
+        return BoundKernel(self, kernel, fixed)
 
-        def pointer(array, ctype):
-            array = np.ascontiguousarray(array, dtype=np.float64 if ctype == "double" else
-                                         np.int32)
-            keep.append(array)
-            return ffi.from_buffer(f"{ctype}[]", array)
 
-        for a in arrays:
+class BoundKernel:
+    """A kernel whose shared inputs are prepared once; call it with the batch arrays.
+
+    Calling it costs a few microseconds of Python on top of the kernel itself, which matters
+    when a simulation calls it thousands of times on small batches.
+    """
+
+    def __init__(self, family: KernelFamily, kernel: str, fixed: dict) -> None:
+        self.family, self.kernel = family, kernel
+        self.arrays = family.signatures[kernel]["arrays"]
+        self.outputs = [(a["name"], a["size"]) for a in self.arrays if a["role"] == "output"]
+        self.varying = [a["name"] for a in self.arrays
+                        if a["role"] == "batch" and a["name"] not in fixed]
+        self._keep: list = []
+        if family.backend == "numpy":
+            self._function = getattr(family._module, kernel)
+            self._fixed = fixed
+            return
+        ffi = family._module.ffi
+        self._function = getattr(family._module.lib, f"{family.kind.name}_{family.family}_"
+                                 f"{kernel}")
+        self._slots: list = []  # fixed cffi arguments, or the name of a per-call input
+        for a in self.arrays:
             name, role = a["name"], a["role"]
-            if role == "batch":
-                value = inputs[name]
-                args += [pointer(value, "double"), 0 if value.shape[0] == 1 else a["size"]]
+            if role == "batch" and name in fixed:
+                self._slots += [self._pointer(ffi, fixed[name], "double"),
+                                0 if fixed[name].shape[0] == 1 else a["size"]]
+            elif role == "batch":
+                self._slots += [("batch", name, a["size"])]
             elif role == "shared":
-                args.append(pointer(inputs[name], "double"))
+                self._slots.append(self._pointer(ffi, fixed[name], "double"))
             elif role == "csr":
-                matrix = inputs[name]
-                args += [pointer(matrix.indptr, "int"), pointer(matrix.indices, "int"),
-                         pointer(matrix.data, "double")]
+                matrix = fixed[name]
+                self._slots += [self._pointer(ffi, matrix.indptr, "int"),
+                                self._pointer(ffi, matrix.indices, "int"),
+                                self._pointer(ffi, matrix.data, "double")]
             elif role == "table":
-                args += [inputs[name].shape[0], pointer(inputs[name], "double")]
+                self._slots += [fixed[name].shape[0], self._pointer(ffi, fixed[name], "double")]
             elif role == "output":
-                outputs[name] = out.get(name)
-                if outputs[name] is None:
-                    outputs[name] = np.empty((m, a["size"]))
-                elif (outputs[name].shape != (m, a["size"]) or outputs[name].dtype != np.float64
-                      or not outputs[name].flags.c_contiguous):
-                    raise ValueError(f"out: expected a C-contiguous float64 array of shape "
-                                     f"{(m, a['size'])} for {name}")
-                args.append(ffi.from_buffer("double[]", outputs[name]))
-        function = getattr(self._module.lib, f"{self.kind.name}_{self.family}_{kernel}")
-        function(*args)
+                self._slots.append(("output", name, a["size"]))
+
+    def _pointer(self, ffi, array, ctype: str):
+        array = np.ascontiguousarray(array, dtype=np.float64 if ctype == "double" else np.int32)
+        self._keep.append(array)
+        return ffi.from_buffer(f"{ctype}[]", array)
+
+    def __call__(self, batch: dict, out: dict | None = None) -> dict[str, np.ndarray]:
+        """Run on ``batch`` ({name: (m, size) C-contiguous float64}); see KernelFamily."""
+        out = out or {}
+        m = max(batch[name].shape[0] for name in self.varying)
+        outputs = {}
+        for name, size in self.outputs:
+            target = out.get(name)
+            if target is None:
+                target = np.empty((m, size))
+            elif (target.shape != (m, size) or target.dtype != np.float64
+                  or not target.flags.c_contiguous):
+                raise ValueError(f"out: expected a C-contiguous float64 array of shape "
+                                 f"{(m, size)} for {name}")
+            outputs[name] = target
+        if self.family.backend == "numpy":
+            args = [batch[a["name"]] if a["name"] in batch else self._fixed[a["name"]]
+                    for a in self.arrays if a["role"] not in ("output", "local")]
+            result = self._function(*args)
+            result = result if isinstance(result, tuple) else (result,)
+            for (name, _), value in zip(self.outputs, result, strict=True):
+                np.copyto(outputs[name], value)
+            return outputs
+        ffi = self.family._module.ffi
+        args = [m]
+        for slot in self._slots:
+            if isinstance(slot, tuple):
+                role, name, size = slot
+                if role == "batch":
+                    value = batch[name]
+                    args += [ffi.from_buffer("double[]", value),
+                             0 if value.shape[0] == 1 else size]
+                else:
+                    args.append(ffi.from_buffer("double[]", outputs[name]))
+            else:
+                args.append(slot)
+        self._function(*args)
         return outputs
 
 
