@@ -63,6 +63,7 @@ class Element:
         mapping = builders if self.straight else self._family("invariants_general")
         start = time.perf_counter()
         if self.straight:
+            inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
             integrals = inv.straight_integrals(self.kind, builders, self.geometry)
         else:
             integrals = inv.pattern_integrals(self.kind, self.variant, inv.numeric_integrals(

@@ -77,16 +77,14 @@ def reference_mapping(kind: ElementKind, e0: np.ndarray, grads: np.ndarray):
     return j0, np.linalg.det(j0)
 
 
-def numeric_integrals(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
-                      orders: tuple[int, ...]) -> Integrals:
-    """The four integrals of any reference ``e0`` by Gauss quadrature of order ``orders``.
+def checked_reference(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
+                      orders: tuple[int, ...]):
+    """Gauss points, weights, local gradients (p, n, dim), J0 and det J0 of reference ``e0``.
 
-    Raises ValueError when the reference mapping is degenerate or inverted (det J0 <= 0).
+    Raises ValueError when the mapping is degenerate or inverted (det J0 <= 0) at a point.
     """
     points, weights = gauss_rule(kind, geometry, orders)
     grads = full_gradients(kind, shape_gradient_table(kind, family, geometry, points))
-    values = family("shape_values", {"point": points,
-                                     "geometry": np.asarray(geometry, float)})["values"]
     j0, det = reference_mapping(kind, e0, grads)
     scale = np.abs(j0).max()
     bad = np.flatnonzero(~(det > 1e-12 * scale**kind.dim))
@@ -96,6 +94,18 @@ def numeric_integrals(kind: ElementKind, family: KernelFamily, geometry, e0: np.
             f"e0: the reference mapping is degenerate or inverted (det J0 = {det[bad[0]]:.3g} "
             f"<= 0 at local point {np.array2string(where, precision=4)}); expected an e0 whose "
             "gradients span a right-handed frame at every quadrature point")
+    return points, weights, grads, j0, det
+
+
+def numeric_integrals(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
+                      orders: tuple[int, ...]) -> Integrals:
+    """The four integrals of any reference ``e0`` by Gauss quadrature of order ``orders``.
+
+    Raises ValueError when the reference mapping is degenerate or inverted (det J0 <= 0).
+    """
+    points, weights, grads, j0, det = checked_reference(kind, family, geometry, e0, orders)
+    values = family("shape_values", {"point": points,
+                                     "geometry": np.asarray(geometry, float)})["values"]
     b = np.einsum("pka,pab->pkb", grads, np.linalg.inv(j0))
     p_matrix = np.einsum("pka,pla->pkl", b, b)
     wdet = weights * det
@@ -138,7 +148,8 @@ def is_straight(kind: ElementKind, e0: np.ndarray, length: float, rtol: float = 
     """Whether ``e0`` is a rigid placement of the straight reference (closed forms apply).
 
     Compares Gram matrices Q0 Q0^T after translating to the first node: they are invariant
-    under rotation, so any rotated straight beam qualifies.
+    under rotation, so any rotated straight beam qualifies.  They are invariant under
+    reflection too: the orientation is checked separately (``checked_reference``).
     """
     def gram(e):
         q = e.reshape(kind.n_shape, kind.dim).copy()

@@ -74,24 +74,35 @@ def _coordinates(spec: ElementSpec, with_reference: bool) -> list[Array]:
     return arrays
 
 
+def _two_difference(body: list, temps: Temporaries, a, c):
+    """s = fl(a - c) and its exact rounding error (Knuth's TwoSum with binary steps only)."""
+    steps = []
+    for expr in (a - c, None, None, None, None, None):
+        steps.append(next(temps))
+        if expr is not None:
+            body.append(Assign(steps[-1].name, expr))
+    s, bv, av, da, db, err = steps
+    body.append(Assign(bv.name, s - a))
+    body.append(Assign(av.name, s - bv))
+    body.append(Assign(da.name, a - av))
+    body.append(Assign(db.name, c + bv))
+    body.append(Assign(err.name, da - db))
+    return s, err
+
+
 def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference: bool):
     """Positions relative to the element's first node.
 
     Returns (q, q0, dq), each a list of ndof expressions: translated current coordinates,
     translated reference, and their difference (None entries when no reference).  The first
-    node's position becomes exactly zero.
+    node's position becomes exactly zero.  Position differences carry their rounding errors
+    (TwoSum), so dq is accurate to its own last bit whether the element sits far from the
+    origin, far from its reference, or both.
     """
     d = spec.dim
     e, e0 = refs("e", spec.ndof), refs("e0", spec.ndof)
     first = spec.position_vectors[0]
     q, q0, dq = list(e), list(e0), [None] * spec.ndof
-    # displacement of the first node: positions' displacements are taken relative to it as
-    # (e_i - e0_i) - (e_f - e0_f), differences of nearby numbers (exact, whatever the offset)
-    first_shift = [None] * d
-    if with_reference:
-        for c in range(d):
-            first_shift[c] = next(temps)
-            body.append(Assign(first_shift[c].name, e[first * d + c] - e0[first * d + c]))
     for k in range(spec.n_shape):
         for c in range(d):
             i = k * d + c
@@ -99,19 +110,16 @@ def _translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference
                 q[i] = q0[i] = dq[i] = sp.Integer(0)
                 continue
             if k in spec.position_vectors:
-                q[i] = next(temps)
-                body.append(Assign(q[i].name, e[i] - e[first * d + c]))
+                q[i], error = _two_difference(body, temps, e[i], e[first * d + c])
                 if with_reference:
-                    q0[i] = next(temps)
-                    body.append(Assign(q0[i].name, e0[i] - e0[first * d + c]))
-            if with_reference:
+                    q0[i], error0 = _two_difference(body, temps, e0[i], e0[first * d + c])
+                    coarse, fine, dq[i] = next(temps), next(temps), next(temps)
+                    body.append(Assign(coarse.name, q[i] - q0[i]))
+                    body.append(Assign(fine.name, error - error0))
+                    body.append(Assign(dq[i].name, coarse + fine))
+            elif with_reference:
                 dq[i] = next(temps)
-                if k in spec.position_vectors:
-                    shift = next(temps)
-                    body.append(Assign(shift.name, e[i] - e0[i]))
-                    body.append(Assign(dq[i].name, shift - first_shift[c]))
-                else:
-                    body.append(Assign(dq[i].name, e[i] - e0[i]))
+                body.append(Assign(dq[i].name, e[i] - e0[i]))
     return q, q0, dq
 
 
