@@ -76,8 +76,7 @@ class Element:
         kernels = self._family(family)
         self.family = family
         fixed = dict(self._inputs, e0=self.e0[None, :])
-        self._bound = {name: kernels.bind(name, fixed) for name in ("force", "jacobian",
-                                                                     "energy")}
+        self._bound = {name: kernels.bind(name, fixed) for name in kernels.signatures}
 
     # --- construction helpers ------------------------------------------------------------
 
@@ -133,32 +132,43 @@ class Element:
         """Number of element coordinates."""
         return self.kind.ndof
 
-    def _run(self, kernel: str, e, out=None):
+    def _run(self, kernel: str, e, out: dict | None = None) -> tuple[dict, bool]:
         coordinates = self._coordinates(e)
-        if out is not None:
-            if not isinstance(out, np.ndarray):
-                raise ValueError("out: expected a numpy array")
-            out = {kernel: out.reshape(coordinates.shape[0], -1)}
-        result = self._bound[kernel]({"e": coordinates}, out)[kernel]
-        return result, np.ndim(e) == 1
+        buffers = {}
+        for name, target in (out or {}).items():
+            if target is not None:
+                if not isinstance(target, np.ndarray):
+                    raise ValueError("out: expected a numpy array")
+                buffers[name] = target.reshape(coordinates.shape[0], -1)
+        return self._bound[kernel]({"e": coordinates}, buffers), np.ndim(e) == 1
 
     def elastic_force(self, e, out: np.ndarray | None = None) -> np.ndarray:
         """Elastic force -dU/de (N): shape (ndof,) for one e, (m, ndof) for a batch.
 
         out: optional C-contiguous float64 array of the result's shape, filled and returned.
         """
-        force, single = self._run("force", e, out)
-        return force[0] if single else force
+        result, single = self._run("force", e, {"force": out})
+        return result["force"][0] if single else result["force"]
 
     def elastic_jacobian(self, e, out: np.ndarray | None = None) -> np.ndarray:
         """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch (``out`` as above)."""
-        jacobian, single = self._run("jacobian", e, out)
-        jacobian = jacobian.reshape(-1, self.ndof, self.ndof)
+        result, single = self._run("jacobian", e, {"jacobian": out})
+        jacobian = result["jacobian"].reshape(-1, self.ndof, self.ndof)
         return jacobian[0] if single else jacobian
+
+    def elastic_force_and_jacobian(self, e, out_force: np.ndarray | None = None,
+                                   out_jacobian: np.ndarray | None = None):
+        """(force, Jacobian) in one kernel pass, which shares their common part (what a
+        Newton iteration needs); shapes and ``out_*`` buffers as the two methods above."""
+        result, single = self._run("force_jacobian", e,
+                                   {"force": out_force, "jacobian": out_jacobian})
+        force, jacobian = result["force"], result["jacobian"].reshape(-1, self.ndof, self.ndof)
+        return (force[0], jacobian[0]) if single else (force, jacobian)
 
     def strain_energy(self, e):
         """Strain energy U (J): a float for one e, an (m,) array for a batch."""
-        energy, single = self._run("energy", e)
+        result, single = self._run("energy", e)
+        energy = result["energy"]
         return float(energy[0, 0]) if single else energy[:, 0].copy()
 
     def mass_matrix(self) -> np.ndarray:

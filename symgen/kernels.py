@@ -34,6 +34,13 @@ from symgen.ir import (
 )
 
 QUANTITIES = ("force", "jacobian", "energy")
+#: The kernels of every method family: each computes the listed quantities in one pass
+#: (a Newton iteration needs force and Jacobian together and shares their common part).
+KERNELS = (("force",), ("jacobian",), ("energy",), ("force", "jacobian"))
+
+
+def _kernel_name(quantities) -> str:
+    return "_".join(quantities)
 
 
 def families(spec: ElementSpec) -> list[str]:
@@ -51,7 +58,7 @@ def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     method, _, variant = family.partition("_")
     variant = variant or "straight"
     builder = {"quadrature": quadrature_kernel, "cij": cij_kernel, "gram": gram_kernel}[method]
-    return [builder(spec, quantity, variant) for quantity in QUANTITIES]
+    return [builder(spec, quantities, variant) for quantities in KERNELS]
 
 
 # --- common pieces -----------------------------------------------------------------------------
@@ -261,7 +268,7 @@ def quadrature_table_width(spec: ElementSpec) -> int:
     return len(derive.gradient_pattern(spec)) + 1
 
 
-def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Kernel:
+def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kernel:
     """Gauss quadrature of the St. Venant-Kirchhoff energy, force or Jacobian at every call.
 
     Per point: J0 = Q0^T dS, B = dS J0^-1, H = dQ^T B, E = (H + H^T + H^T H)/2 (exact at the
@@ -274,7 +281,7 @@ def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Ke
               Array("material", 2, "shared", "Lame lambda and shear modulus G (Pa)"),
               Array("table", width_, "table",
                     "per Gauss point: nonzero ds/dx (gradient-pattern order), then weight (m^3)"),
-              _output(spec, quantity)]
+              *[_output(spec, quantity) for quantity in quantities]]
     temps = Temporaries()
     body: list = []
     _, q0, dq = _translate(spec, body, temps, with_reference=True)
@@ -295,18 +302,18 @@ def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Ke
     strain = sp.Matrix(d, d, _materialize(point, temps, list((h + h.T + h.T * h) / 2)))
     trace = _materialize(point, temps, [strain.trace()])[0]
     wdet = _materialize(point, temps, [tab[-1] * det])[0]
-    if quantity == "energy":
+    if "energy" in quantities:
         energy = wdet * (lam_ / 2 * trace**2 + g_ * sum(x * x for x in strain))
         _store(point, "energy", [energy], accumulate=True)
-    else:
+    if "force" in quantities or "jacobian" in quantities:
         stress = sp.Matrix(d, d, _materialize(
             point, temps, list(lam_ * trace * sp.eye(d) + 2 * g_ * strain)))
         f = sp.eye(d) + h
-        if quantity == "force":
+        if "force" in quantities:
             bs = sp.Matrix(n, d, _materialize(point, temps, list(b * stress)))
             force = -wdet * (bs * f.T)
             _store(point, "force", list(force), accumulate=True)
-        else:
+        if "jacobian" in quantities:
             a = sp.Matrix(n, d, _materialize(point, temps, list(b * f.T)))
             bsb = _materialize(point, temps, [(b[k, :] * stress * b[p, :].T)[0]
                                               for k, p in derive.pairs(n)])
@@ -327,9 +334,8 @@ def quadrature_kernel(spec: ElementSpec, quantity: str, variant: str = "") -> Ke
             _store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_points(spec)))
-    return Kernel(quantity,
-                  f"Elastic {quantity} by Gauss quadrature at every call (no invariants).",
-                  arrays, body)
+    return Kernel(_kernel_name(quantities), f"Elastic {' and '.join(quantities)} by Gauss "
+                  "quadrature at every call (no invariants).", arrays, body)
 
 
 def _default_points(spec: ElementSpec) -> int:
@@ -353,7 +359,7 @@ def cij_sizes(spec: ElementSpec, variant: str) -> dict[str, int]:
             "products": len(derive.pairs(spec.ndof))}
 
 
-def cij_kernel(spec: ElementSpec, quantity: str, variant: str = "straight") -> Kernel:
+def cij_kernel(spec: ElementSpec, quantities, variant: str = "straight") -> Kernel:
     """The paper's method: (K2)_ij = e^T C^ij e, F = -(K2 + K1) e, eq. 38, eq. 39.
 
     K2 (upper triangle) and the double sum of eq. 38 are sparse products of shared CSR
@@ -370,11 +376,11 @@ def cij_kernel(spec: ElementSpec, quantity: str, variant: str = "straight") -> K
                     "maps coordinate products p to the upper triangle of K2"),
               Array("products", npairs_dof, "local", "p_st = e_s e_t, s <= t"),
               Array("k2", npairs_dof, "local", "upper triangle of K2(e)")]
-    if quantity == "jacobian":
+    if "jacobian" in quantities:
         arrays.append(Array("jacobian_matrix", ndof * ndof, "csr",
                             "maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38"))
         arrays.append(Array("second", ndof * ndof, "local", "the double sum of eq. 38"))
-    arrays.append(_output(spec, quantity))
+    arrays += [_output(spec, quantity) for quantity in quantities]
     temps = Temporaries()
     body: list = []
     q, _, _ = _translate(spec, body, temps, with_reference=False)
@@ -389,33 +395,38 @@ def cij_kernel(spec: ElementSpec, quantity: str, variant: str = "straight") -> K
         return k1[pidx[(k, p)]] if ca == cb else 0
 
     k2 = refs("k2", npairs_dof)
-    if quantity == "energy":
+    doc = {"energy": "strain energy by eq. 39", "force": "elastic force F = -(K2(e) + K1) e, "
+           "eqs. 25-35", "jacobian": "elastic Jacobian by eq. 38"}
+    kernel = Kernel(_kernel_name(quantities),
+                    "; ".join(doc[q] for q in quantities).capitalize() + ".", arrays, body)
+    if "energy" in quantities:
         quartic = sum((1 if i == j else 2) * q[i] * k2[pidx_dof[(i, j)]] * q[j]
                       for i, j in derive.pairs(ndof))
         quadratic = sum((1 if i == j else 2) * q[i] * k1_entry(i, j) * q[j]
                         for i, j in derive.pairs(ndof))
         _store(body, "energy", [quartic / 4 + quadratic / 2 + ref("u0", 0)])
-        return Kernel("energy", "Strain energy by eq. 39.", arrays, body)
+        if quantities == ("energy",):
+            return kernel
     stiffness = _materialize(body, temps, [k2[pidx_dof[(i, j)]] + k1_entry(i, j)
                                            for i, j in derive.pairs(ndof)])
-    if quantity == "force":
+    if "force" in quantities:
         force = [-sum(stiffness[pidx_dof[(i, j)]] * q[j] for j in range(ndof))
                  for i in range(ndof)]
         _store(body, "force", force)
-        return Kernel("force", "Elastic force F = -(K2(e) + K1) e, eqs. 25-35.",
-                      arrays, body)
+    if "jacobian" not in quantities:
+        return kernel
     body.append(SparseProduct("second", "jacobian_matrix", "products", ndof * ndof,
                               sizes["jacobian_nnz"]))
     second = refs("second", ndof * ndof)
     _store(body, "jacobian", [-stiffness[pidx_dof[(i, k)]] - second[i * ndof + k]
                               for i in range(ndof) for k in range(ndof)])
-    return Kernel("jacobian", "Elastic Jacobian by eq. 38.", arrays, body)
+    return kernel
 
 
 # --- gram: U = g^T Dm g with g = DeltaG ----------------------------------------------------
 
 
-def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
+def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     """Gram form: g = DeltaG = Q0 dQ^T + dQ Q^T (upper), h = Dm g, U = g.h, F = -T' Q.
 
     T'_kk = 4 h_kk, T'_kl = 2 h_kl.  Jacobian: -(2 Gamma^T Dm Gamma + T' kron I) with
@@ -425,7 +436,9 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
     pattern = derive.patterns(spec, variant)
     arrays = [*_coordinates(spec, True),
               Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
-              _output(spec, quantity)]
+              *[_output(spec, quantity) for quantity in quantities]]
+    doc = {"energy": "strain energy U = g^T Dm g", "force": "elastic force F = -T' Q",
+           "jacobian": "elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I)"}
     temps = Temporaries()
     body: list = []
     q, q0, dq = _translate(spec, body, temps, with_reference=True)
@@ -442,18 +455,20 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
     hvec = _materialize(body, temps, [
         sum(dm[(a, b)] * g[b] for b in range(len(pairs)) if (a, b) in dm)
         for a in range(len(pairs))])
-    if quantity == "energy":
+    kernel = Kernel(_kernel_name(quantities),
+                    "; ".join(doc[q] for q in quantities).capitalize() + ".", arrays, body)
+    if "energy" in quantities:
         _store(body, "energy", [sum(x * y for x, y in zip(g, hvec, strict=True))])
-        return Kernel("energy", "Strain energy U = g^T Dm g.", arrays, body)
 
     def tprime(k: int, m: int):
         return (4 if k == m else 2) * hvec[pidx[(k, m)]]
 
-    if quantity == "force":
+    if "force" in quantities:
         force = [-sum(tprime(k, m) * q[m * d + c] for m in range(n))
                  for k in range(n) for c in range(d)]
         _store(body, "force", force)
-        return Kernel("force", "Elastic force F = -T' Q.", arrays, body)
+    if "jacobian" not in quantities:
+        return kernel
 
     def gamma(a: int, p: int, c: int):
         """d g_a / d Q_pc."""
@@ -484,5 +499,4 @@ def gram_kernel(spec: ElementSpec, quantity: str, variant: str) -> Kernel:
         upper[(i, j)] = -value
     names = _materialize(body, temps, list(upper.values()))
     _store_symmetric(body, "jacobian", ndof, dict(zip(upper, names, strict=True)), False)
-    return Kernel("jacobian", "Elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I).",
-                  arrays, body)
+    return kernel

@@ -202,6 +202,30 @@ def test_batch_equals_stacked_single_results(kind, method, backend, shape):
     assert rel_diff(np.array([s[2] for s in singles]), energy) <= 1e-14
 
 
+@all_kinds
+@all_methods
+@all_backends
+@all_shapes
+def test_combined_force_and_jacobian_kernel(kind, method, backend, shape):
+    """The one-pass force + Jacobian kernel gives what the separate kernels give, into the
+    caller's buffers when asked."""
+    el = element(kind, method, backend, curved(shape))
+    batch = large_rotation_batch(kind, shape)
+    force, jacobian, _ = results(kind, method, backend, shape)
+    out_force, out_jacobian = np.full_like(force, np.nan), np.full_like(jacobian, np.nan)
+    both = el.elastic_force_and_jacobian(batch, out_force=out_force, out_jacobian=out_jacobian)
+    assert np.shares_memory(both[0], out_force) and rel_diff(out_force, force) <= 1e-14
+    assert rel_diff(out_jacobian, jacobian) <= 1e-14
+    single_force, single_jacobian = el.elastic_force_and_jacobian(batch[0])
+    assert single_force.shape == (el.ndof,) and single_jacobian.shape == (el.ndof, el.ndof)
+    assert rel_diff(single_jacobian, jacobian[0]) <= 1e-14
+    buffer = np.zeros(el.ndof)
+    assert el.elastic_force(batch[0], out=buffer) is not None
+    assert rel_diff(buffer, force[0]) <= 1e-14
+    with pytest.raises(ValueError, match="out"):
+        el.elastic_force(batch, out=np.zeros((len(batch), el.ndof), dtype=np.float32))
+
+
 # --- the independent mpmath reference --------------------------------------------------------
 
 

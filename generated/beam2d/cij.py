@@ -5,7 +5,7 @@ import numpy as np
 
 
 def force(e_in, k1, u0, k2_matrix):
-    """Elastic force F = -(K2(e) + K1) e, eqs. 25-35.
+    """Elastic force f = -(k2(e) + k1) e, eqs. 25-35.
 
     e (batch, 12): element coordinates e, node-major
     k1 (shared, 21): shape-level K1, upper triangle
@@ -171,7 +171,7 @@ def force(e_in, k1, u0, k2_matrix):
 
 
 def jacobian(e_in, k1, u0, k2_matrix, jacobian_matrix):
-    """Elastic Jacobian by eq. 38.
+    """Elastic jacobian by eq. 38.
 
     e (batch, 12): element coordinates e, node-major
     k1 (shared, 21): shape-level K1, upper triangle
@@ -583,3 +583,319 @@ def energy(e_in, k1, u0, k2_matrix):
     energy[0] = u0[0] + 0.5*k1[11]*(e[4]*e[4]) + 0.5*k1[11]*(e[5]*e[5]) + 0.5*k1[15]*(t0*t0) + 0.5*k1[15]*(t6*t6) + 0.5*k1[18]*(e[8]*e[8]) + 0.5*k1[18]*(e[9]*e[9]) + 0.5*k1[20]*(e[10]*e[10]) + 0.5*k1[20]*(e[11]*e[11]) + 0.5*k1[6]*(e[2]*e[2]) + 0.5*k1[6]*(e[3]*e[3]) + 0.25*k2[23]*(e[2]*e[2]) + 0.25*k2[33]*(e[3]*e[3]) + 0.25*k2[42]*(e[4]*e[4]) + 0.25*k2[50]*(e[5]*e[5]) + 0.25*k2[57]*(t0*t0) + 0.25*k2[63]*(t6*t6) + 0.25*k2[68]*(e[8]*e[8]) + 0.25*k2[72]*(e[9]*e[9]) + 0.25*k2[75]*(e[10]*e[10]) + 0.25*k2[77]*(e[11]*e[11]) + e[10]*e[2]*k1[10] + e[10]*e[4]*k1[14] + e[10]*e[8]*k1[19] + e[10]*k1[17]*t0 + e[11]*e[3]*k1[10] + e[11]*e[5]*k1[14] + e[11]*e[9]*k1[19] + e[11]*k1[17]*t6 + e[2]*e[4]*k1[7] + e[2]*e[8]*k1[9] + e[2]*k1[8]*t0 + e[3]*e[5]*k1[7] + e[3]*e[9]*k1[9] + e[3]*k1[8]*t6 + e[4]*e[8]*k1[13] + e[4]*k1[12]*t0 + e[5]*e[9]*k1[13] + e[5]*k1[12]*t6 + e[8]*k1[16]*t0 + e[9]*k1[16]*t6 + 0.5*e[10]*e[11]*k2[76] + 0.5*e[10]*e[2]*k2[31] + 0.5*e[10]*e[3]*k2[40] + 0.5*e[10]*e[4]*k2[48] + 0.5*e[10]*e[5]*k2[55] + 0.5*e[10]*e[8]*k2[70] + 0.5*e[10]*e[9]*k2[73] + 0.5*e[10]*k2[61]*t0 + 0.5*e[10]*k2[66]*t6 + 0.5*e[11]*e[2]*k2[32] + 0.5*e[11]*e[3]*k2[41] + 0.5*e[11]*e[4]*k2[49] + 0.5*e[11]*e[5]*k2[56] + 0.5*e[11]*e[8]*k2[71] + 0.5*e[11]*e[9]*k2[74] + 0.5*e[11]*k2[62]*t0 + 0.5*e[11]*k2[67]*t6 + 0.5*e[2]*e[3]*k2[24] + 0.5*e[2]*e[4]*k2[25] + 0.5*e[2]*e[5]*k2[26] + 0.5*e[2]*e[8]*k2[29] + 0.5*e[2]*e[9]*k2[30] + 0.5*e[2]*k2[27]*t0 + 0.5*e[2]*k2[28]*t6 + 0.5*e[3]*e[4]*k2[34] + 0.5*e[3]*e[5]*k2[35] + 0.5*e[3]*e[8]*k2[38] + 0.5*e[3]*e[9]*k2[39] + 0.5*e[3]*k2[36]*t0 + 0.5*e[3]*k2[37]*t6 + 0.5*e[4]*e[5]*k2[43] + 0.5*e[4]*e[8]*k2[46] + 0.5*e[4]*e[9]*k2[47] + 0.5*e[4]*k2[44]*t0 + 0.5*e[4]*k2[45]*t6 + 0.5*e[5]*e[8]*k2[53] + 0.5*e[5]*e[9]*k2[54] + 0.5*e[5]*k2[51]*t0 + 0.5*e[5]*k2[52]*t6 + 0.5*e[8]*e[9]*k2[69] + 0.5*e[8]*k2[59]*t0 + 0.5*e[8]*k2[64]*t6 + 0.5*e[9]*k2[60]*t0 + 0.5*e[9]*k2[65]*t6 + 0.5*k2[58]*t0*t6
 
     return energy.T
+
+
+def force_jacobian(e_in, k1, u0, k2_matrix, jacobian_matrix):
+    """Elastic force f = -(k2(e) + k1) e, eqs. 25-35; elastic jacobian by eq. 38.
+
+    e (batch, 12): element coordinates e, node-major
+    k1 (shared, 21): shape-level K1, upper triangle
+    u0 (shared, 1): U0 (J)
+    k2_matrix (csr, 78): maps coordinate products p to the upper triangle of K2
+    products (local, 78): p_st = e_s e_t, s <= t
+    k2 (local, 78): upper triangle of K2(e)
+    jacobian_matrix (csr, 144): maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38
+    second (local, 144): the double sum of eq. 38
+    force (output, 12): elastic force -dU/de (N), per element
+    jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
+    Operations per element: 12873.
+    """
+    e = np.ascontiguousarray(e_in.T)
+    m = e.shape[1]
+    products = np.empty((78, m))
+    k2 = np.empty((78, m))
+    second = np.empty((144, m))
+    force = np.zeros((12, m))
+    jacobian = np.zeros((144, m))
+    t0 = e[6] - e[0]
+    t1 = t0 - e[6]
+    t2 = t0 - t1
+    t3 = e[6] - t2
+    t4 = e[0] + t1
+    t5 = t3 - t4
+    t6 = e[7] - e[1]
+    t7 = t6 - e[7]
+    t8 = t6 - t7
+    t9 = e[7] - t8
+    t10 = e[1] + t7
+    t11 = t9 - t10
+    products[0] = 0.0
+    products[1] = 0.0
+    products[2] = 0.0
+    products[3] = 0.0
+    products[4] = 0.0
+    products[5] = 0.0
+    products[6] = 0.0
+    products[7] = 0.0
+    products[8] = 0.0
+    products[9] = 0.0
+    products[10] = 0.0
+    products[11] = 0.0
+    products[12] = 0.0
+    products[13] = 0.0
+    products[14] = 0.0
+    products[15] = 0.0
+    products[16] = 0.0
+    products[17] = 0.0
+    products[18] = 0.0
+    products[19] = 0.0
+    products[20] = 0.0
+    products[21] = 0.0
+    products[22] = 0.0
+    products[23] = (e[2]*e[2])
+    products[24] = e[2]*e[3]
+    products[25] = e[2]*e[4]
+    products[26] = e[2]*e[5]
+    products[27] = e[2]*t0
+    products[28] = e[2]*t6
+    products[29] = e[2]*e[8]
+    products[30] = e[2]*e[9]
+    products[31] = e[10]*e[2]
+    products[32] = e[11]*e[2]
+    products[33] = (e[3]*e[3])
+    products[34] = e[3]*e[4]
+    products[35] = e[3]*e[5]
+    products[36] = e[3]*t0
+    products[37] = e[3]*t6
+    products[38] = e[3]*e[8]
+    products[39] = e[3]*e[9]
+    products[40] = e[10]*e[3]
+    products[41] = e[11]*e[3]
+    products[42] = (e[4]*e[4])
+    products[43] = e[4]*e[5]
+    products[44] = e[4]*t0
+    products[45] = e[4]*t6
+    products[46] = e[4]*e[8]
+    products[47] = e[4]*e[9]
+    products[48] = e[10]*e[4]
+    products[49] = e[11]*e[4]
+    products[50] = (e[5]*e[5])
+    products[51] = e[5]*t0
+    products[52] = e[5]*t6
+    products[53] = e[5]*e[8]
+    products[54] = e[5]*e[9]
+    products[55] = e[10]*e[5]
+    products[56] = e[11]*e[5]
+    products[57] = (t0*t0)
+    products[58] = t0*t6
+    products[59] = e[8]*t0
+    products[60] = e[9]*t0
+    products[61] = e[10]*t0
+    products[62] = e[11]*t0
+    products[63] = (t6*t6)
+    products[64] = e[8]*t6
+    products[65] = e[9]*t6
+    products[66] = e[10]*t6
+    products[67] = e[11]*t6
+    products[68] = (e[8]*e[8])
+    products[69] = e[8]*e[9]
+    products[70] = e[10]*e[8]
+    products[71] = e[11]*e[8]
+    products[72] = (e[9]*e[9])
+    products[73] = e[10]*e[9]
+    products[74] = e[11]*e[9]
+    products[75] = (e[10]*e[10])
+    products[76] = e[10]*e[11]
+    products[77] = (e[11]*e[11])
+    k2 = k2_matrix @ products
+    t12 = k1[0] + k2[0]
+    t13 = k1[1] + k2[2]
+    t14 = k1[2] + k2[4]
+    t15 = k1[3] + k2[6]
+    t16 = k1[4] + k2[8]
+    t17 = k1[5] + k2[10]
+    t18 = k1[0] + k2[12]
+    t19 = k1[1] + k2[14]
+    t20 = k1[2] + k2[16]
+    t21 = k1[3] + k2[18]
+    t22 = k1[4] + k2[20]
+    t23 = k1[5] + k2[22]
+    t24 = k1[6] + k2[23]
+    t25 = k1[7] + k2[25]
+    t26 = k1[8] + k2[27]
+    t27 = k1[9] + k2[29]
+    t28 = k1[10] + k2[31]
+    t29 = k1[6] + k2[33]
+    t30 = k1[7] + k2[35]
+    t31 = k1[8] + k2[37]
+    t32 = k1[9] + k2[39]
+    t33 = k1[10] + k2[41]
+    t34 = k1[11] + k2[42]
+    t35 = k1[12] + k2[44]
+    t36 = k1[13] + k2[46]
+    t37 = k1[14] + k2[48]
+    t38 = k1[11] + k2[50]
+    t39 = k1[12] + k2[52]
+    t40 = k1[13] + k2[54]
+    t41 = k1[14] + k2[56]
+    t42 = k1[15] + k2[57]
+    t43 = k1[16] + k2[59]
+    t44 = k1[17] + k2[61]
+    t45 = k1[15] + k2[63]
+    t46 = k1[16] + k2[65]
+    t47 = k1[17] + k2[67]
+    t48 = k1[18] + k2[68]
+    t49 = k1[19] + k2[70]
+    t50 = k1[18] + k2[72]
+    t51 = k1[19] + k2[74]
+    t52 = k1[20] + k2[75]
+    t53 = k1[20] + k2[77]
+    force[0] = -e[10]*t17 - e[11]*k2[11] - e[2]*t13 - e[3]*k2[3] - e[4]*t14 - e[5]*k2[5] - e[8]*t16 - e[9]*k2[9] - k2[7]*t6 - t0*t15
+    force[1] = -e[10]*k2[21] - e[11]*t23 - e[2]*k2[13] - e[3]*t19 - e[4]*k2[15] - e[5]*t20 - e[8]*k2[19] - e[9]*t22 - k2[17]*t0 - t21*t6
+    force[2] = -e[10]*t28 - e[11]*k2[32] - e[2]*t24 - e[3]*k2[24] - e[4]*t25 - e[5]*k2[26] - e[8]*t27 - e[9]*k2[30] - k2[28]*t6 - t0*t26
+    force[3] = -e[10]*k2[40] - e[11]*t33 - e[2]*k2[24] - e[3]*t29 - e[4]*k2[34] - e[5]*t30 - e[8]*k2[38] - e[9]*t32 - k2[36]*t0 - t31*t6
+    force[4] = -e[10]*t37 - e[11]*k2[49] - e[2]*t25 - e[3]*k2[34] - e[4]*t34 - e[5]*k2[43] - e[8]*t36 - e[9]*k2[47] - k2[45]*t6 - t0*t35
+    force[5] = -e[10]*k2[55] - e[11]*t41 - e[2]*k2[26] - e[3]*t30 - e[4]*k2[43] - e[5]*t38 - e[8]*k2[53] - e[9]*t40 - k2[51]*t0 - t39*t6
+    force[6] = -e[10]*t44 - e[11]*k2[62] - e[2]*t26 - e[3]*k2[36] - e[4]*t35 - e[5]*k2[51] - e[8]*t43 - e[9]*k2[60] - k2[58]*t6 - t0*t42
+    force[7] = -e[10]*k2[66] - e[11]*t47 - e[2]*k2[28] - e[3]*t31 - e[4]*k2[45] - e[5]*t39 - e[8]*k2[64] - e[9]*t46 - k2[58]*t0 - t45*t6
+    force[8] = -e[10]*t49 - e[11]*k2[71] - e[2]*t27 - e[3]*k2[38] - e[4]*t36 - e[5]*k2[53] - e[8]*t48 - e[9]*k2[69] - k2[64]*t6 - t0*t43
+    force[9] = -e[10]*k2[73] - e[11]*t51 - e[2]*k2[30] - e[3]*t32 - e[4]*k2[47] - e[5]*t40 - e[8]*k2[69] - e[9]*t50 - k2[60]*t0 - t46*t6
+    force[10] = -e[10]*t52 - e[11]*k2[76] - e[2]*t28 - e[3]*k2[40] - e[4]*t37 - e[5]*k2[55] - e[8]*t49 - e[9]*k2[73] - k2[66]*t6 - t0*t44
+    force[11] = -e[10]*k2[76] - e[11]*t53 - e[2]*k2[32] - e[3]*t33 - e[4]*k2[49] - e[5]*t41 - e[8]*k2[71] - e[9]*t51 - k2[62]*t0 - t47*t6
+    second = jacobian_matrix @ products
+    jacobian[0] = -second[0] - t12
+    jacobian[1] = -k2[1] - second[1]
+    jacobian[2] = -second[2] - t13
+    jacobian[3] = -k2[3] - second[3]
+    jacobian[4] = -second[4] - t14
+    jacobian[5] = -k2[5] - second[5]
+    jacobian[6] = -second[6] - t15
+    jacobian[7] = -k2[7] - second[7]
+    jacobian[8] = -second[8] - t16
+    jacobian[9] = -k2[9] - second[9]
+    jacobian[10] = -second[10] - t17
+    jacobian[11] = -k2[11] - second[11]
+    jacobian[12] = -k2[1] - second[12]
+    jacobian[13] = -second[13] - t18
+    jacobian[14] = -k2[13] - second[14]
+    jacobian[15] = -second[15] - t19
+    jacobian[16] = -k2[15] - second[16]
+    jacobian[17] = -second[17] - t20
+    jacobian[18] = -k2[17] - second[18]
+    jacobian[19] = -second[19] - t21
+    jacobian[20] = -k2[19] - second[20]
+    jacobian[21] = -second[21] - t22
+    jacobian[22] = -k2[21] - second[22]
+    jacobian[23] = -second[23] - t23
+    jacobian[24] = -second[24] - t13
+    jacobian[25] = -k2[13] - second[25]
+    jacobian[26] = -second[26] - t24
+    jacobian[27] = -k2[24] - second[27]
+    jacobian[28] = -second[28] - t25
+    jacobian[29] = -k2[26] - second[29]
+    jacobian[30] = -second[30] - t26
+    jacobian[31] = -k2[28] - second[31]
+    jacobian[32] = -second[32] - t27
+    jacobian[33] = -k2[30] - second[33]
+    jacobian[34] = -second[34] - t28
+    jacobian[35] = -k2[32] - second[35]
+    jacobian[36] = -k2[3] - second[36]
+    jacobian[37] = -second[37] - t19
+    jacobian[38] = -k2[24] - second[38]
+    jacobian[39] = -second[39] - t29
+    jacobian[40] = -k2[34] - second[40]
+    jacobian[41] = -second[41] - t30
+    jacobian[42] = -k2[36] - second[42]
+    jacobian[43] = -second[43] - t31
+    jacobian[44] = -k2[38] - second[44]
+    jacobian[45] = -second[45] - t32
+    jacobian[46] = -k2[40] - second[46]
+    jacobian[47] = -second[47] - t33
+    jacobian[48] = -second[48] - t14
+    jacobian[49] = -k2[15] - second[49]
+    jacobian[50] = -second[50] - t25
+    jacobian[51] = -k2[34] - second[51]
+    jacobian[52] = -second[52] - t34
+    jacobian[53] = -k2[43] - second[53]
+    jacobian[54] = -second[54] - t35
+    jacobian[55] = -k2[45] - second[55]
+    jacobian[56] = -second[56] - t36
+    jacobian[57] = -k2[47] - second[57]
+    jacobian[58] = -second[58] - t37
+    jacobian[59] = -k2[49] - second[59]
+    jacobian[60] = -k2[5] - second[60]
+    jacobian[61] = -second[61] - t20
+    jacobian[62] = -k2[26] - second[62]
+    jacobian[63] = -second[63] - t30
+    jacobian[64] = -k2[43] - second[64]
+    jacobian[65] = -second[65] - t38
+    jacobian[66] = -k2[51] - second[66]
+    jacobian[67] = -second[67] - t39
+    jacobian[68] = -k2[53] - second[68]
+    jacobian[69] = -second[69] - t40
+    jacobian[70] = -k2[55] - second[70]
+    jacobian[71] = -second[71] - t41
+    jacobian[72] = -second[72] - t15
+    jacobian[73] = -k2[17] - second[73]
+    jacobian[74] = -second[74] - t26
+    jacobian[75] = -k2[36] - second[75]
+    jacobian[76] = -second[76] - t35
+    jacobian[77] = -k2[51] - second[77]
+    jacobian[78] = -second[78] - t42
+    jacobian[79] = -k2[58] - second[79]
+    jacobian[80] = -second[80] - t43
+    jacobian[81] = -k2[60] - second[81]
+    jacobian[82] = -second[82] - t44
+    jacobian[83] = -k2[62] - second[83]
+    jacobian[84] = -k2[7] - second[84]
+    jacobian[85] = -second[85] - t21
+    jacobian[86] = -k2[28] - second[86]
+    jacobian[87] = -second[87] - t31
+    jacobian[88] = -k2[45] - second[88]
+    jacobian[89] = -second[89] - t39
+    jacobian[90] = -k2[58] - second[90]
+    jacobian[91] = -second[91] - t45
+    jacobian[92] = -k2[64] - second[92]
+    jacobian[93] = -second[93] - t46
+    jacobian[94] = -k2[66] - second[94]
+    jacobian[95] = -second[95] - t47
+    jacobian[96] = -second[96] - t16
+    jacobian[97] = -k2[19] - second[97]
+    jacobian[98] = -second[98] - t27
+    jacobian[99] = -k2[38] - second[99]
+    jacobian[100] = -second[100] - t36
+    jacobian[101] = -k2[53] - second[101]
+    jacobian[102] = -second[102] - t43
+    jacobian[103] = -k2[64] - second[103]
+    jacobian[104] = -second[104] - t48
+    jacobian[105] = -k2[69] - second[105]
+    jacobian[106] = -second[106] - t49
+    jacobian[107] = -k2[71] - second[107]
+    jacobian[108] = -k2[9] - second[108]
+    jacobian[109] = -second[109] - t22
+    jacobian[110] = -k2[30] - second[110]
+    jacobian[111] = -second[111] - t32
+    jacobian[112] = -k2[47] - second[112]
+    jacobian[113] = -second[113] - t40
+    jacobian[114] = -k2[60] - second[114]
+    jacobian[115] = -second[115] - t46
+    jacobian[116] = -k2[69] - second[116]
+    jacobian[117] = -second[117] - t50
+    jacobian[118] = -k2[73] - second[118]
+    jacobian[119] = -second[119] - t51
+    jacobian[120] = -second[120] - t17
+    jacobian[121] = -k2[21] - second[121]
+    jacobian[122] = -second[122] - t28
+    jacobian[123] = -k2[40] - second[123]
+    jacobian[124] = -second[124] - t37
+    jacobian[125] = -k2[55] - second[125]
+    jacobian[126] = -second[126] - t44
+    jacobian[127] = -k2[66] - second[127]
+    jacobian[128] = -second[128] - t49
+    jacobian[129] = -k2[73] - second[129]
+    jacobian[130] = -second[130] - t52
+    jacobian[131] = -k2[76] - second[131]
+    jacobian[132] = -k2[11] - second[132]
+    jacobian[133] = -second[133] - t23
+    jacobian[134] = -k2[32] - second[134]
+    jacobian[135] = -second[135] - t33
+    jacobian[136] = -k2[49] - second[136]
+    jacobian[137] = -second[137] - t41
+    jacobian[138] = -k2[62] - second[138]
+    jacobian[139] = -second[139] - t47
+    jacobian[140] = -k2[71] - second[140]
+    jacobian[141] = -second[141] - t51
+    jacobian[142] = -k2[76] - second[142]
+    jacobian[143] = -second[143] - t53
+
+    return force.T, jacobian.T

@@ -2,3 +2,4 @@
 void beam2d_quadrature_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *force_out);
 void beam2d_quadrature_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *jacobian_out);
 void beam2d_quadrature_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *energy_out);
+void beam2d_quadrature_force_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *material, long npoints, const double *table_in, double *force_out, double *jacobian_out);

@@ -2,3 +2,4 @@
 void beam3d_gram_straight_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *force_out);
 void beam3d_gram_straight_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *jacobian_out);
 void beam3d_gram_straight_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *energy_out);
+void beam3d_gram_straight_force_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, const double *gram, double *force_out, double *jacobian_out);
