@@ -1,4 +1,4 @@
-"""The ``ancf`` command line: generate, invariants, bench."""
+"""The ``ancf`` command line: generate, invariants, run, bench."""
 
 from __future__ import annotations
 
@@ -106,6 +106,23 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_run(args) -> int:
+    from runtime.run import run
+
+    summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet)
+    if code == 2:
+        print(f"ancf run: {summary['message']}", file=sys.stderr)
+    elif code == 1:
+        print(f"ancf run: {summary['message']} (results up to then in {args.out})",
+              file=sys.stderr)
+    elif not args.quiet:
+        timing = summary["timing"]
+        print(f"{summary['scene']}: ok, total {timing['total_s']:.2f} s (compile "
+              f"{timing['compile_s']:.2f}, preprocess {timing['preprocess_s']:.3f}, simulate "
+              f"{timing['simulate_s']:.2f}); results in {args.out}")
+    return code
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.element import METHODS
@@ -129,6 +146,14 @@ def parser() -> argparse.ArgumentParser:
     invariants.add_argument("--quadrature", type=_orders, help="Gauss orders, e.g. 5,3,3")
     invariants.add_argument("--backend", choices=list(BACKENDS), default="numpy")
     invariants.set_defaults(run=cmd_invariants)
+
+    run = sub.add_parser("run", help="run a scene: static, modal and dynamic analyses")
+    run.add_argument("scene", help="scene TOML file")
+    run.add_argument("--out", required=True, help="results folder")
+    run.add_argument("--method", choices=list(METHODS), help="override the scene's [solver]")
+    run.add_argument("--backend", choices=list(BACKENDS), help="override the scene's [solver]")
+    run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
+    run.set_defaults(run=cmd_run)
 
     bench = sub.add_parser("bench", help="benchmarks")
     bench_sub = bench.add_subparsers(dest="what", required=True)

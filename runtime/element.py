@@ -75,6 +75,7 @@ class Element:
         family = {"gram": f"gram_{self.variant}"}.get(method, method)
         kernels = self._family(family)
         self.family = family
+        self._method_kernels = kernels
         fixed = dict(self._inputs, e0=self.e0[None, :])
         self._bound = {name: kernels.bind(name, fixed) for name in kernels.signatures}
 
@@ -170,6 +171,16 @@ class Element:
         result, single = self._run("energy", e)
         energy = result["energy"]
         return float(energy[0, 0]) if single else energy[:, 0].copy()
+
+    def group_kernel(self, kernel: str):
+        """``kernel`` (force, jacobian, energy, force_jacobian) for a group of elements that
+        share this element's invariants but each have their own reference: call it with
+        ``{"e": (m, ndof), "e0": (m, ndof)}`` (C-contiguous float64) and optional ``out``.
+
+        Valid for rigid placements of this element's reference (invariants are rotation
+        and translation invariant), e.g. the elements of a uniformly meshed line or arc.
+        """
+        return self._method_kernels.bind(kernel, dict(self._inputs))
 
     def mass_matrix(self) -> np.ndarray:
         """Constant consistent mass matrix (kg), (ndof, ndof): int rho S^T S dV0."""

@@ -1,0 +1,373 @@
+"""A scene turned into a model: meshed bodies, global coordinates, assembly, constraints.
+
+Coordinates are node-major over the whole model: node ``i`` of a body owns ``per_node``
+consecutive coordinates (its nodal vectors r, r_x, r_y[, r_z], each a dim-vector); element
+``j`` of a body uses nodes ``j`` and ``j + 1``.  Coordinates are split into *free* ones
+(unknowns), *fixed* ones (clamp, pin) and *prescribed* ones (driven by a hub rotation);
+joints between bodies are linear constraints ``A q = 0`` with Lagrange multipliers.
+Element quantities are evaluated for a whole body in one batched kernel call and scattered
+with precomputed index maps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse
+
+from runtime import geometry
+from runtime.element import Element
+from runtime.kernels import element_kind
+from runtime.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
+from runtime.scene import NodeRef, Scene
+
+
+@dataclass
+class BodyMesh:
+    """One body: its element group, reference coordinates and index maps."""
+
+    name: str
+    element: Element
+    first_node: int          # global index of the body's node 0
+    nodes: int
+    reference: np.ndarray    # (nodes * per_node,) reference coordinates of the body
+    element_dofs: np.ndarray  # (elements, ndof) global coordinate indices
+    element_e0: np.ndarray   # (elements, ndof) reference coordinates of every element
+
+    _kernels: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def elements(self) -> int:
+        return self.element_dofs.shape[0]
+
+    def kernel(self, name: str):
+        """The group kernel ``name`` of this body's elements (bound once, then reused)."""
+        if name not in self._kernels:
+            self._kernels[name] = self.element.group_kernel(name)
+        return self._kernels[name]
+
+
+def _mesh_body(body, element_factory) -> tuple[np.ndarray, Element, np.ndarray]:
+    """(element references (m, ndof), Element of the first element, node references)."""
+    kind = element_kind(body.element)
+    m = body.elements
+    if body.arc is not None:
+        arc = body.arc
+        step = np.radians(arc.angle_deg) / m
+        start = np.radians(arc.start_angle_deg)
+        e0s = np.array([geometry.arc_reference(kind, arc.center, arc.radius, start + j * step,
+                                               step) for j in range(m)])
+        length = arc.radius * abs(step)
+    else:
+        start, end = np.asarray(body.start, float), np.asarray(body.end, float)
+        points = [start + (end - start) * j / m for j in range(m + 1)]
+        e0s = np.array([geometry.straight_reference(kind, points[j], points[j + 1])
+                        for j in range(m)])
+        length = float(np.linalg.norm(end - start)) / m
+    per_node = kind.ndof // 2
+    nodes = np.concatenate([e0s[:, :per_node].ravel(), e0s[-1, per_node:]])
+    return e0s, element_factory(kind.name, length, e0s[0]), nodes
+
+
+class Model:
+    """Bodies, mass matrix, loads and constraints of a scene (see the module docstring)."""
+
+    def __init__(self, scene: Scene, method: str | None = None, backend: str | None = None):
+        self.scene = scene
+        self.method = method or scene.solver.method
+        self.backend = backend or scene.solver.backend
+        self.timing = {"compile_s": 0.0, "preprocess_s": 0.0}
+        start = time.perf_counter()
+        self.bodies: dict[str, BodyMesh] = {}
+        self.dim = None
+        offset_nodes = 0
+        for body in scene.bodies:
+            material = scene.materials[body.material]
+
+            def make(kind, length, e0, body=body, material=material):
+                return Element(kind, length, body.height, body.width, material.E, material.nu,
+                               material.rho, e0=e0, method=self.method, backend=self.backend,
+                               quadrature=body.quadrature)
+
+            e0s, element, nodes = _mesh_body(body, make)
+            kind = element.kind
+            if self.dim is None:
+                self.dim = kind.dim
+            elif kind.dim != self.dim:
+                raise ValueError(f"body {body.name!r}: all bodies must have the same dimension")
+            per_node = kind.ndof // 2
+            dofs = (offset_nodes * per_node + np.arange(body.elements)[:, None] * per_node
+                    + np.arange(kind.ndof)[None, :])
+            self.bodies[body.name] = BodyMesh(body.name, element, offset_nodes, body.elements + 1,
+                                              nodes, dofs, np.ascontiguousarray(e0s))
+            self.timing["compile_s"] += element.timing["compile_s"]
+            offset_nodes += body.elements + 1
+        first = next(iter(self.bodies.values())).element.kind
+        self.per_node = first.ndof // 2
+        self.vectors = first.meta["vectors"]
+        self.size = offset_nodes * self.per_node
+        self.reference = np.concatenate([b.reference for b in self.bodies.values()])
+        self._build_mass()
+        self._build_constraints()
+        self._build_maps()
+        self.timing["preprocess_s"] = time.perf_counter() - start - self.timing["compile_s"]
+
+    # --- indexing ------------------------------------------------------------------------
+
+    def node_index(self, ref: NodeRef) -> int:
+        """Global node index of a scene node reference."""
+        body = self.bodies[ref.body]
+        index = ref.index if ref.index >= 0 else body.nodes + ref.index
+        return body.first_node + index
+
+    def node_dofs(self, node: int, vector: str | None = None) -> np.ndarray:
+        """Coordinates of a node (all, or one nodal vector such as "r")."""
+        start = node * self.per_node
+        if vector is None:
+            return np.arange(start, start + self.per_node)
+        k = self.vectors.index(vector)
+        return np.arange(start + k * self.dim, start + (k + 1) * self.dim)
+
+    # --- mass, constraints, index maps -------------------------------------------------
+
+    def _build_mass(self) -> None:
+        rows, cols, vals = [], [], []
+        for body in self.bodies.values():
+            mass = body.element.mass_matrix()
+            ndof = mass.shape[0]
+            dofs = body.element_dofs
+            rows.append(np.repeat(dofs, ndof, axis=1).ravel())
+            cols.append(np.tile(dofs, (1, ndof)).ravel())
+            vals.append(np.broadcast_to(mass.ravel(), (dofs.shape[0], ndof * ndof)).ravel())
+        self.mass = scipy.sparse.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(self.size, self.size))
+        self.mass.sum_duplicates()
+
+    def _build_constraints(self) -> None:
+        fixed = np.zeros(self.size, bool)
+        self.hubs = []  # (node, law, axis, reference gradients (k, dim))
+        joint_rows = []
+        for c in self.scene.constraints:
+            if c.type == "clamp":
+                fixed[self.node_dofs(self.node_index(c.node))] = True
+            elif c.type == "pin":
+                fixed[self.node_dofs(self.node_index(c.node), "r")] = True
+            elif c.type == "prescribed_rotation":
+                node = self.node_index(c.node)
+                self.hubs.append((node, c.angle, np.asarray(c.axis or (0, 0, 1), float)))
+            elif c.type in ("spherical", "revolute"):
+                if c.type == "revolute" and self.dim != 2:
+                    raise ValueError("constraint revolute: only planar (2D) models have "
+                                     "revolute joints; use spherical in 3D")
+                a, b = (self.node_dofs(self.node_index(n), "r") for n in c.nodes)
+                for i, j in zip(a, b, strict=True):
+                    joint_rows.append((i, j))
+        prescribed = np.zeros(self.size, bool)
+        for node, _, _ in self.hubs:
+            prescribed[self.node_dofs(node)] = True
+        fixed &= ~prescribed
+        self.fixed = np.flatnonzero(fixed)
+        self.prescribed = np.flatnonzero(prescribed)
+        self.free = np.flatnonzero(~fixed & ~prescribed)
+        joints = scipy.sparse.lil_matrix((len(joint_rows), self.size))
+        for row, (i, j) in enumerate(joint_rows):
+            joints[row, i], joints[row, j] = 1.0, -1.0
+        self.joints = joints.tocsr()                       # A, with A q = 0
+        self.joints_free = self.joints[:, self.free]
+        self.joints_prescribed = self.joints[:, self.prescribed]
+        self.mass_ff = self.mass[self.free][:, self.free].tocsc()
+        self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
+        # operators applied at every Newton iteration: dense while small (no sparse overhead)
+        small = self.free.size <= DENSE_LIMIT
+        self.mass_ff_op = self.mass_ff.toarray() if small else self.mass_ff
+        self.mass_fp_op = self.mass_fp.toarray() if small else self.mass_fp
+
+    def _build_maps(self) -> None:
+        """Scatter maps from element Jacobians to the free-free CSR matrix.
+
+        Each element entry (i, j) with both coordinates free lands in one CSR slot; the
+        slots come from one sort of all flat indices row * nf + col (canonical CSR order).
+        """
+        position = np.full(self.size, -1)
+        position[self.free] = np.arange(self.free.size)
+        nf = self.free.size
+        keeps, flats = [], []
+        for body in self.bodies.values():
+            dofs = body.element_dofs
+            ndof = dofs.shape[1]
+            r = position[np.repeat(dofs, ndof, axis=1)]
+            c = position[np.tile(dofs, (1, ndof))]
+            keep = (r >= 0) & (c >= 0)
+            keeps.append(keep.ravel())
+            flats.append((r.astype(np.int64) * nf + c)[keep])
+        unique, slots = np.unique(np.concatenate(flats), return_inverse=True)
+        rows, cols = unique // nf, unique % nf
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=nf))])
+        self.pattern = scipy.sparse.csr_matrix(
+            (np.ones(unique.size), cols.astype(np.int32), indptr.astype(np.int32)),
+            shape=(nf, nf))
+        bounds = np.cumsum([0] + [f.size for f in flats])
+        self._jac_targets = [(keep, slots[bounds[i]:bounds[i + 1]])
+                             for i, keep in enumerate(keeps)]
+        # banded (upper) storage of LAPACK: entry (i, j), i <= j, at [u + i - j, j]
+        self.bandwidth = int(np.abs(rows - cols).max(initial=0))
+        upper = rows <= cols
+        self._band_slots = np.flatnonzero(upper)
+        self._band_index = (self.bandwidth + rows[upper] - cols[upper]) * nf + cols[upper]
+        self.mass_banded = self.banded(self.mass_ff[rows, cols].A1)
+
+    def banded(self, data: np.ndarray) -> np.ndarray:
+        """Upper banded storage ((bandwidth + 1, nf), LAPACK layout) of a free-free matrix
+        given by its data in ``pattern`` order (e.g. Jacobian data from internal_forces)."""
+        nf = self.free.size
+        band = np.zeros((self.bandwidth + 1) * nf)
+        band[self._band_index] = data[self._band_slots]
+        return band.reshape(self.bandwidth + 1, nf)
+
+    # --- states ------------------------------------------------------------------------
+
+    def prescribed_state(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Values, rates and accelerations (each (prescribed,)) of prescribed coordinates."""
+        if not self.hubs:
+            empty = np.zeros(0)
+            return empty, empty, empty
+        q = np.empty(self.size)
+        v = np.zeros(self.size)
+        a = np.zeros(self.size)
+        for node, law, axis in self.hubs:
+            theta, rate, acc = law.value(t), law.rate(t), law.acceleration(t)
+            rot, d_rot, dd_rot = _rotation(self.dim, axis, theta)
+            dofs = self.node_dofs(node).reshape(-1, self.dim)
+            reference = self.reference[dofs]
+            for k, name in enumerate(self.vectors):
+                if name == "r":
+                    q[dofs[k]], v[dofs[k]], a[dofs[k]] = reference[k], 0.0, 0.0
+                else:
+                    q[dofs[k]] = rot @ reference[k]
+                    v[dofs[k]] = rate * (d_rot @ reference[k])
+                    a[dofs[k]] = acc * (d_rot @ reference[k]) + rate**2 * (dd_rot @ reference[k])
+        p = self.prescribed
+        return q[p], v[p], a[p]
+
+    def full(self, q_free: np.ndarray, q_prescribed: np.ndarray,
+             fixed_values: np.ndarray | None = None) -> np.ndarray:
+        """Global vector from free and prescribed parts (fixed at reference or given)."""
+        q = self.reference.copy() if fixed_values is None else fixed_values.copy()
+        q[self.free] = q_free
+        q[self.prescribed] = q_prescribed
+        return q
+
+    # --- element quantities ------------------------------------------------------------
+
+    def internal_forces(self, q: np.ndarray, jacobian: bool = True):
+        """Elastic force (size,) and, if asked, the free-free Jacobian data in CSR order.
+
+        One batched kernel call per body; results scattered with precomputed maps.
+        """
+        force = np.zeros(self.size)
+        data = np.zeros(self.pattern.nnz) if jacobian else None
+        for body, (keep, slots) in zip(self.bodies.values(), self._jac_targets, strict=True):
+            e = np.ascontiguousarray(q[body.element_dofs])
+            kernel = body.kernel("force_jacobian" if jacobian else "force")
+            out = kernel({"e": e, "e0": body.element_e0})
+            force += np.bincount(body.element_dofs.ravel(), out["force"].ravel(), self.size)
+            if jacobian:
+                data += np.bincount(slots, out["jacobian"].ravel()[keep], self.pattern.nnz)
+        return force, data
+
+    def jacobian_matrix(self, data: np.ndarray) -> scipy.sparse.csr_matrix:
+        """Free-free elastic Jacobian from ``internal_forces`` data."""
+        return scipy.sparse.csr_matrix((data, self.pattern.indices, self.pattern.indptr),
+                                       shape=self.pattern.shape)
+
+    def solve(self, mass_coef: float, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
+              rhs_constraints: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Solve [[c_m M + c_j J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free
+        coordinates (J from ``internal_forces`` data).  Without joints the matrix is banded
+        and symmetric: banded Cholesky, O(n b^2), linear in the number of elements."""
+        if self.joints.shape[0]:
+            matrix = jacobian_coef * self.jacobian_matrix(data)
+            if mass_coef:
+                matrix = matrix + mass_coef * self.mass_ff
+            return SaddleSolver(matrix, self.joints_free).solve(rhs, rhs_constraints)
+        band = jacobian_coef * self.banded(data)
+        if mass_coef:
+            band += mass_coef * self.mass_banded
+        return solve_symmetric_banded(band, rhs), np.zeros(0)
+
+    def strain_energy(self, q: np.ndarray, body: str | None = None) -> float:
+        """Strain energy (J) of one body or of the whole model."""
+        total = 0.0
+        for mesh in self.bodies.values():
+            if body is None or mesh.name == body:
+                e = np.ascontiguousarray(q[mesh.element_dofs])
+                out = mesh.kernel("energy")({"e": e, "e0": mesh.element_e0})
+                total += float(out["energy"].sum())
+        return total
+
+    def kinetic_energy(self, v: np.ndarray, body: str | None = None) -> float:
+        """Kinetic energy 1/2 v^T M v (J) of one body or of the whole model."""
+        if body is not None:
+            mask = np.zeros(self.size)
+            mesh = self.bodies[body]
+            mask[mesh.first_node * self.per_node:(mesh.first_node + mesh.nodes)
+                 * self.per_node] = 1.0
+            v = v * mask
+        return 0.5 * float(v @ (self.mass @ v))
+
+    def nominal_loads(self) -> list[tuple[object, np.ndarray]]:
+        """(time law, generalised force (size,) at unit law value) of every load."""
+        if not hasattr(self, "_nominal_loads"):
+            self._nominal_loads = []
+            for load in self.scene.loads:
+                vector = np.zeros(self.size)
+                if load.type == "point_force":
+                    vector[self.node_dofs(self.node_index(load.node), "r")] = load.vector
+                else:  # gravity: the consistent force M u of a uniform acceleration
+                    vector = self.mass @ self._translation(np.asarray(load.vector))
+                self._nominal_loads.append((load.law, vector))
+        return self._nominal_loads
+
+    def external_forces(self, t: float) -> np.ndarray:
+        """Point forces and gravity at time t (N), (size,)."""
+        force = np.zeros(self.size)
+        for law, vector in self.nominal_loads():
+            force += law.value(t) * vector
+        return force
+
+    def gravity_potential(self, q: np.ndarray, t: float = 0.0) -> float:
+        """Potential energy (J) of the gravity loads relative to the reference: -F_g . (q - q0)."""
+        total = 0.0
+        for load, (law, force) in zip(self.scene.loads, self.nominal_loads(), strict=True):
+            if load.type == "gravity":
+                total -= law.value(t) * float(force @ (q - self.reference))
+        return total
+
+    def _translation(self, vector: np.ndarray) -> np.ndarray:
+        """Coordinates of a rigid translation by ``vector`` (positions moved, gradients 0):
+        M times it is the consistent generalised force of a uniform acceleration."""
+        u = np.zeros(self.size)
+        k = self.vectors.index("r")
+        starts = np.arange(0, self.size, self.per_node) + k * self.dim
+        for c in range(self.dim):
+            u[starts + c] = vector[c]
+        return u
+
+
+def _rotation(dim: int, axis: np.ndarray, theta: float):
+    """Rotation matrix R(theta) about ``axis`` (3D) or in the plane, and dR/dtheta, d2R."""
+    c, s = np.cos(theta), np.sin(theta)
+    if dim == 2:
+        rot = np.array([[c, -s], [s, c]])
+        d_rot = np.array([[-s, -c], [c, -s]])
+        return rot, d_rot, -rot
+    axis = axis / np.linalg.norm(axis)
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    outer = np.outer(axis, axis)
+    rot = c * np.eye(3) + s * cross + (1 - c) * outer
+    d_rot = -s * np.eye(3) + c * cross + s * outer
+    dd_rot = -c * np.eye(3) - s * cross + c * outer
+    return rot, d_rot, dd_rot

@@ -1,0 +1,116 @@
+"""``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from runtime import analysis, output
+from runtime.integrators import INTEGRATORS, Divergence
+from runtime.model import Model
+from runtime.scene import SceneError, load_scene
+from runtime.sensors import Sensors
+
+
+def run(scene_path: str | Path, out_dir: str | Path, method: str | None = None,
+        backend: str | None = None, quiet: bool = False) -> tuple[dict, int]:
+    """Run every analysis of a scene; returns (summary, exit code).
+
+    Exit code 0: ok; 1: a run diverged (results up to that point are written); 2: the scene
+    or the options are invalid.  summary.json is always written, atomically.
+    """
+    start = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    summary: dict = {"scene": str(scene_path), "status": "ok", "message": ""}
+    timing = {"generate_s": 0.0, "compile_s": 0.0, "preprocess_s": 0.0, "simulate_s": 0.0,
+              "total_s": 0.0}
+    summary["timing"] = timing
+    code = 0
+    try:
+        scene = load_scene(scene_path)
+        summary["title"] = scene.title
+        model = Model(scene, method, backend)
+    except (SceneError, ValueError) as error:
+        summary.update(status="failed", message=str(error))
+        timing["total_s"] = time.perf_counter() - start
+        output.write_json_atomic(out / "summary.json", summary)
+        return summary, 2
+    summary["method"], summary["backend"] = model.method, model.backend
+    timing["compile_s"] = model.timing["compile_s"]
+    timing["preprocess_s"] = model.timing["preprocess_s"]
+    sensors = Sensors(model)
+    simulate_start = time.perf_counter()
+    static_q = None
+    try:
+        if scene.static is not None:
+            result = analysis.solve_static(model, scene.static)
+            static_q = result.q
+            summary["static"] = {"sensors": sensors.values(result.q),
+                                 "iterations": result.iterations,
+                                 "load_steps": result.load_steps}
+        if scene.modal is not None:
+            about = model.reference
+            if scene.modal.about == "static":
+                about = static_q if static_q is not None else \
+                    analysis.solve_static(model, scene.static or _default_static()).q
+            omega = analysis.modal(model, about, scene.modal.modes)
+            summary["modal"] = {"about": scene.modal.about,
+                                "frequencies_rad_s": omega.tolist(),
+                                "frequencies_hz": (omega / (2 * np.pi)).tolist()}
+        if scene.dynamic is not None:
+            code = _dynamic(model, scene.dynamic, sensors, out, summary, quiet)
+    except analysis.ConvergenceError as error:
+        summary.update(status="diverged", message=str(error))
+        code = 1
+    timing["simulate_s"] = time.perf_counter() - simulate_start
+    summary["kernels"] = sorted({f"{b.element.kind.name}/{f}/{model.backend}"
+                                 for b in model.bodies.values()
+                                 for f in ("invariants", b.element.family)})
+    timing["total_s"] = time.perf_counter() - start
+    output.write_json_atomic(out / "summary.json", summary)
+    return summary, code
+
+
+def _default_static():
+    from runtime.scene import Static
+
+    return Static()
+
+
+def _dynamic(model: Model, settings, sensors: Sensors, out: Path, summary: dict,
+             quiet: bool) -> int:
+    integrator = INTEGRATORS[settings.integrator](model, settings, model.reference)
+    csv_path = out / "timeseries.csv"
+    final: dict = {}
+    progress = output.Progress(settings.t_end, enabled=False if quiet else None)
+    code = 0
+    with output.TimeSeriesWriter(csv_path, sensors.names) as writer:
+
+        def observe(t, q, v):
+            values = sensors.values(q, v, t)
+            writer.write(t, [values[name] for name in sensors.names])
+            final.clear()
+            final.update(values)
+            final["t"] = t
+
+        try:
+            integrator.run(settings.t_end, settings.step, observe, progress)
+        except Divergence as error:
+            summary.update(status="diverged", message=str(error))
+            code = 1
+        finally:
+            progress.close()
+    counters = integrator.counters
+    summary["dynamic"] = {
+        "t_end": settings.t_end, "step": settings.step, "integrator": settings.integrator,
+        "t_reached": final.get("t", 0.0), "steps": counters.steps,
+        "newton_iterations": counters.newton_iterations,
+        "force_evaluations": counters.force_evaluations,
+        "jacobian_evaluations": counters.jacobian_evaluations,
+        "sensors_final": {k: v for k, v in final.items() if k != "t"},
+    }
+    output.plot_timeseries(csv_path, out, sensors.energy_names)
+    return code
