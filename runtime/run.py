@@ -12,6 +12,7 @@ from runtime.integrators import INTEGRATORS, Divergence
 from runtime.model import Model
 from runtime.scene import SceneError, load_scene
 from runtime.sensors import Sensors
+from runtime.signal import dominant_frequency
 
 
 def run(scene_path: str | Path, out_dir: str | Path, method: str | None = None,
@@ -65,7 +66,8 @@ def run(scene_path: str | Path, out_dir: str | Path, method: str | None = None,
     except analysis.ConvergenceError as error:
         summary.update(status="diverged", message=str(error))
         code = 1
-    timing["simulate_s"] = time.perf_counter() - simulate_start
+    # plots are outputs, not simulation: their time is reported apart (and in total_s)
+    timing["simulate_s"] = time.perf_counter() - simulate_start - timing.get("plot_s", 0.0)
     summary["kernels"] = sorted({f"{b.element.kind.name}/{f}/{model.backend}"
                                  for b in model.bodies.values()
                                  for f in ("invariants", b.element.family)})
@@ -112,5 +114,12 @@ def _dynamic(model: Model, settings, sensors: Sensors, out: Path, summary: dict,
         "jacobian_evaluations": counters.jacobian_evaluations,
         "sensors_final": {k: v for k, v in final.items() if k != "t"},
     }
+    if settings.frequency_of is not None and code == 0:
+        data = np.genfromtxt(csv_path, delimiter=",", names=True)
+        keep = data["t"] >= settings.frequency_after
+        summary["dynamic"]["response_frequency_rad_s"] = dominant_frequency(
+            data["t"][keep], data[settings.frequency_of][keep])
+    plot_start = time.perf_counter()
     output.plot_timeseries(csv_path, out, sensors.energy_names)
+    summary["timing"]["plot_s"] = time.perf_counter() - plot_start
     return code

@@ -213,6 +213,8 @@ class Dynamic:
     rho_inf: float = 0.8
     tolerance: float = 1e-10
     max_iterations: int = 20
+    frequency_of: str | None = None    # sensor whose oscillation frequency is measured ...
+    frequency_after: float = 0.0       # ... from this time (s) to t_end
 
 
 @dataclass(frozen=True)
@@ -538,7 +540,11 @@ def _dynamic(data: Any) -> Dynamic:
         "t_end": positive, "step": positive,
         "integrator": lambda v, p: _choice(v, p, INTEGRATORS, "integrator"),
         "output_every": positive, "rho_inf": _number, "tolerance": positive,
-        "max_iterations": _count}, required=("t_end", "step"))
+        "max_iterations": _count, "frequency_of": _string,
+        "frequency_after": lambda v, p: _number(v, p)}, required=("t_end", "step"))
+    if not 0.0 <= fields.get("frequency_after", 0.0) < fields["t_end"]:
+        raise SceneError(f"{path}.frequency_after: expected a time in [0, t_end), got "
+                         f"{fields['frequency_after']!r}")
     if fields["step"] > fields["t_end"]:
         raise SceneError(f"{path}.step: expected a step of at most t_end = {fields['t_end']!r} "
                          f"s, got {fields['step']!r}")
@@ -603,6 +609,10 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
     static = _static(analysis["static"]) if "static" in analysis else None
     modal = _modal(analysis["modal"]) if "modal" in analysis else None
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
+    if dynamic is not None and dynamic.frequency_of is not None and \
+            dynamic.frequency_of not in {s.name for s in sensors}:
+        raise SceneError(f"analysis.dynamic.frequency_of: no sensor called "
+                         f"{_show(dynamic.frequency_of)}; expected one of the [[sensor]] names")
     solver = _solver(data.get("solver", {}))
     return Scene(title, materials, tuple(bodies), constraints, loads, tuple(sensors), static,
                  modal, dynamic, solver, source)
