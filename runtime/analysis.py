@@ -8,7 +8,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
 
-from runtime.linear import DENSE_LIMIT
+from runtime.linear import DENSE_LIMIT, single_threaded_blas
 from runtime.model import Model
 
 
@@ -53,6 +53,12 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
 
 
 def solve_static(model: Model, settings) -> StaticResult:
+    """Equilibrium under every load at its nominal value (see ``_solve_static``)."""
+    with single_threaded_blas():
+        return _solve_static(model, settings)
+
+
+def _solve_static(model: Model, settings) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
@@ -81,6 +87,11 @@ def solve_static(model: Model, settings) -> StaticResult:
 def modal(model: Model, q: np.ndarray, modes: int) -> np.ndarray:
     """Lowest ``modes`` angular frequencies (rad/s) linearised about ``q`` (fixed and
     prescribed coordinates held, joints enforced through their null space)."""
+    with single_threaded_blas():
+        return _modal(model, q, modes)
+
+
+def _modal(model: Model, q: np.ndarray, modes: int) -> np.ndarray:
     _, data = model.internal_forces(q)
     stiffness = -model.jacobian_matrix(data)
     mass = model.mass_ff

@@ -126,3 +126,52 @@ def run(kinds=None, batch: int = 10_000, methods=METHODS, backends=BACKENDS) -> 
         rows = measure(kind, batches=(1, batch), methods=methods, backends=backends)
         parts.append(table(kind, rows))
     return "\n".join(parts)
+
+
+def step_cost(elements: int, steps: int = 5, method: str = "gram", backend: str = "c",
+              scene: str | None = None) -> dict:
+    """Seconds per trapezoidal step of the cantilever scene meshed with ``elements`` beam3d
+    elements (same element length as the 10-element scene, so the beam grows with them)."""
+    import copy
+    import tomllib
+    from pathlib import Path
+
+    from runtime.integrators import Trapezoidal
+    from runtime.linear import single_threaded_blas
+    from runtime.model import Model
+    from runtime.scene import parse_scene
+
+    path = Path(scene) if scene else Path(__file__).resolve().parent.parent / "scenes" / \
+        "cantilever.toml"
+    data = copy.deepcopy(tomllib.loads(path.read_text()))
+    body = data["body"][0]
+    body["end"] = [body["end"][0] * elements / body["elements"], *body["end"][1:]]
+    body["elements"] = elements
+    data["solver"] = {"method": method, "backend": backend}
+    start = time.perf_counter()
+    model = Model(parse_scene(data, str(path)))
+    build = time.perf_counter() - start
+    integrator = Trapezoidal(model, model.scene.dynamic, model.reference)
+    h = model.scene.dynamic.step
+    with single_threaded_blas():
+        state = integrator.initial_state()
+        start = time.perf_counter()
+        for n in range(1, steps + 1):
+            state = integrator.step(state, n * h, h)
+        per_step = (time.perf_counter() - start) / steps
+    return {"elements": elements, "coordinates": model.free.size, "build_s": build,
+            "step_s": per_step,
+            "newton_per_step": integrator.counters.newton_iterations / steps}
+
+
+def steps_table(sizes=(10, 100, 1000, 10_000), method: str = "gram", backend: str = "c") -> str:
+    """Markdown table of ``step_cost`` for several model sizes."""
+    lines = ["| beam3d elements | free coordinates | model build s | s per step | "
+             "Newton iterations per step | s per step per 1000 elements |",
+             "|---:|---:|---:|---:|---:|---:|"]
+    for size in sizes:
+        row = step_cost(size, method=method, backend=backend)
+        lines.append(f"| {size} | {row['coordinates']} | {row['build_s']:.3f} | "
+                     f"{row['step_s']:.4g} | {row['newton_per_step']:.1f} | "
+                     f"{row['step_s'] / size * 1000:.4g} |")
+    return "\n".join(lines) + "\n"

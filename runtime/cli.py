@@ -123,6 +123,14 @@ def cmd_run(args) -> int:
     return code
 
 
+def cmd_bench_steps(args) -> int:
+    from runtime import bench
+
+    print(bench.steps_table(tuple(args.elements or (10, 100, 1000, 10_000)), args.method,
+                            args.backend))
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.element import METHODS
@@ -163,6 +171,12 @@ def parser() -> argparse.ArgumentParser:
     kernels.add_argument("--method", action="append", choices=list(METHODS))
     kernels.add_argument("--backend", action="append", choices=list(BACKENDS))
     kernels.set_defaults(run=cmd_bench)
+    steps = bench_sub.add_parser("steps", help="cost of one dynamic step against model size")
+    steps.add_argument("--elements", type=int, action="append",
+                       help="beam3d elements (repeatable; default 10, 100, 1000, 10000)")
+    steps.add_argument("--method", choices=list(METHODS), default="gram")
+    steps.add_argument("--backend", choices=list(BACKENDS), default="c")
+    steps.set_defaults(run=cmd_bench_steps)
     return main
 
 

@@ -19,7 +19,7 @@ import scipy.linalg
 import scipy.sparse.linalg
 
 from runtime.analysis import length_scale
-from runtime.linear import DENSE_LIMIT, SaddleSolver
+from runtime.linear import DENSE_LIMIT, SaddleSolver, single_threaded_blas
 from runtime.model import Model
 
 
@@ -101,6 +101,10 @@ class Integrator:
     def run(self, t_end: float, step: float, observe, progress=None) -> State:
         """Integrate from rest at t = 0 to ``t_end``; ``observe(t, q_full, v_full)`` is called
         at t = 0 and every ``output_every`` seconds.  Raises Divergence."""
+        with single_threaded_blas():
+            return self._run(t_end, step, observe, progress)
+
+    def _run(self, t_end: float, step: float, observe, progress) -> State:
         state = self.initial_state()
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
