@@ -146,7 +146,8 @@ def plot_timeseries(csv_path: str | Path, out_dir: str | Path,
 
     def save(fig: Figure, name: str) -> None:
         FigureCanvasAgg(fig)
-        fig.tight_layout()
+        # fixed margins: tight_layout would render every figure twice
+        fig.subplots_adjust(left=0.16, right=0.97, bottom=0.12, top=0.92)
         target = out / name
         fig.savefig(target, dpi=100)
         written.append(target)
