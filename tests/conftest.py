@@ -4,18 +4,13 @@ of constructed elements (construction may compile C kernels, so each one is buil
 from __future__ import annotations
 
 import functools
-import sys
 import zlib
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-# tests/reference.py (the mpmath reference) is imported as a plain module
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from runtime import Element  # noqa: E402
+from runtime import Element
 
 KINDS = ["beam2d", "beam3d"]
 METHODS = ["gram", "cij", "quadrature"]

@@ -2,7 +2,8 @@
 independent mpmath reference, round-off robustness, invariants and input validation.
 
 Conventions and formulas come from DESIGN.md sections 3-5; expected values are computed here
-from first principles (or by tests/reference.py), never copied from the code under test.
+from first principles (or by the mpmath reference of runtime/studies/highprecision.py),
+never copied from the code under test.
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ import functools
 
 import numpy as np
 import pytest
-import reference
 from conftest import (
     BACKENDS,
     E_MODULUS,
@@ -39,6 +39,7 @@ from conftest import (
 from runtime import Element
 from runtime import invariants as inv
 from runtime.kernels import element_kind, kernel_family
+from runtime.studies import highprecision as reference
 
 EPS = np.finfo(float).eps
 VOLUME = LENGTH * HEIGHT * WIDTH

@@ -1,4 +1,4 @@
-"""Independent reference: direct Gauss quadrature of the St. Venant-Kirchhoff energy in mpmath.
+"""High-precision reference: direct Gauss quadrature of the St. Venant-Kirchhoff energy in mpmath.
 
 Shares no code with the generated kernels: shape functions are written out here from
 DESIGN.md section 3, and every operation runs in 50-digit arithmetic.

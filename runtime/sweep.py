@@ -1,0 +1,51 @@
+"""Independent cases of a study or benchmark, run in parallel with dask.distributed.
+
+By default a local cluster of processes (one per core, one thread each) is started for the
+sweep; ``scheduler`` connects to an existing cluster instead.  Workers share the C kernel
+cache safely (``runtime.jit`` compiles each kernel once, whatever the number of processes).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+
+
+class SchedulerError(ValueError):
+    """The requested dask scheduler cannot be reached."""
+
+
+def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None = None,
+              workers: int | None = None, serial: bool = False) -> list:
+    """``[function(**case) for case in cases]``, computed in parallel.
+
+    function: a module-level (picklable) function; cases: keyword arguments of each call.
+    scheduler: address of an existing dask scheduler (e.g. ``tcp://host:8786``); None starts
+    a local cluster with ``workers`` processes (default: the number of cores).
+    serial: run in this process instead (debugging, or a single case).
+    Results come back in the order of ``cases``; an exception in a case is raised here.
+    """
+    if not cases:
+        raise ValueError("sweep: no cases to run (the study declared no runs)")
+    if serial or (len(cases) == 1 and scheduler is None):
+        return [function(**case) for case in cases]
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as error:
+            raise SchedulerError(f"--scheduler {scheduler}: cannot connect to a dask scheduler "
+                                 f"there ({error})") from None
+        cluster = None
+    else:
+        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = [client.submit(function, pure=False, **case) for case in cases]
+        return client.gather(futures)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
