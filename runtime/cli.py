@@ -123,6 +123,17 @@ def cmd_run(args) -> int:
     return code
 
 
+def cmd_bench_paper(args) -> int:
+    from runtime.studies import paper
+
+    results = paper.bench_paper(args.quick, args.scheduler, args.workers, args.serial,
+                                args.backend)
+    paths = paper.write(results, args.out)
+    print(paths["md"].read_text())
+    print(f"written: {', '.join(str(p) for p in paths.values())}")
+    return 0
+
+
 def cmd_bench_steps(args) -> int:
     from runtime import bench
 
@@ -171,6 +182,14 @@ def parser() -> argparse.ArgumentParser:
     kernels.add_argument("--method", action="append", choices=list(METHODS))
     kernels.add_argument("--backend", action="append", choices=list(BACKENDS))
     kernels.set_defaults(run=cmd_bench)
+    paper = bench_sub.add_parser("paper", help="the paper's Tables I and II on this machine")
+    paper.add_argument("--out", default="results/paper", help="folder for paper.md/json/csv")
+    paper.add_argument("--scheduler", help="address of an existing dask scheduler")
+    paper.add_argument("--workers", type=int, help="local dask workers (default: cores)")
+    paper.add_argument("--serial", action="store_true", help="run in this process")
+    paper.add_argument("--quick", action="store_true", help="two short rows (smoke test)")
+    paper.add_argument("--backend", choices=list(BACKENDS), default="c")
+    paper.set_defaults(run=cmd_bench_paper)
     steps = bench_sub.add_parser("steps", help="cost of one dynamic step against model size")
     steps.add_argument("--elements", type=int, action="append",
                        help="beam3d elements (repeatable; default 10, 100, 1000, 10000)")
@@ -185,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         return args.run(args)
-    except ValueError as error:
+    except ValueError as error:  # includes scene, study and scheduler errors
         print(f"ancf {args.command}: {error}", file=sys.stderr)
         return 2
 

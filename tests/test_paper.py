@@ -1,0 +1,24 @@
+"""``ancf bench paper`` (quick form): the paper's rows computed, compared and written."""
+
+import json
+
+from runtime import cli
+from runtime.studies import paper
+
+
+def test_quick_paper_rows(tmp_path, capsys):
+    assert cli.main(["bench", "paper", "--quick", "--serial", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "### Table I" in out and "| 2 | 4 | quadrature |" in out
+    results = json.loads((tmp_path / "paper.json").read_text())["results"]
+    assert {r["method"] for r in results} == set(paper.METHODS)
+    for r in results:
+        # Table I, 2 elements: 1.065 cm (paper 1.07) and 17.07 rad/s, whatever the method
+        assert abs(r["delta_cm"] - 1.065) < 0.005
+        assert abs(r["omega_modal"] - 17.07) / 17.07 < 0.01
+        assert abs(r["omega_response"] - r["omega_modal"]) / r["omega_modal"] < 0.01
+    by_method = {r["method"]: r for r in results}
+    # the element kernels with invariants cost less than quadrature at every call
+    assert by_method["gram"]["kernel_s"] < by_method["quadrature"]["kernel_s"]
+    assert by_method["cij"]["kernel_s"] < by_method["quadrature"]["kernel_s"]
+    assert (tmp_path / "paper.csv").read_text().startswith("table,elements,t_end,method")
