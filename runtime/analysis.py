@@ -62,7 +62,8 @@ def _solve_static(model: Model, settings) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
-    halved (down to 1/1024 of the load) before the analysis gives up.
+    halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
+    lets the next grow again (doubling, up to the initial increment).
     """
     nominal = sum((vector for _, vector in model.nominal_loads()), np.zeros(model.size))
     q = model.reference.copy()
@@ -81,6 +82,7 @@ def _solve_static(model: Model, settings) -> StaticResult:
         q, multipliers, done = q_new, mu_new, target
         iterations += used
         steps += 1
+        increment = min(2 * increment, 1.0 / settings.load_steps)
     return StaticResult(q, multipliers, iterations, steps)
 
 

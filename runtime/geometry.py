@@ -23,7 +23,8 @@ def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray
 
 def straight_reference(kind: ElementKind, start, end) -> np.ndarray:
     """e0 of a straight element from ``start`` to ``end`` (m); local y lies in the x-y plane
-    (perpendicular to the axis), local z completes a right-handed frame."""
+    (perpendicular to the axis: +y for an element along +x), local z completes a right-handed
+    frame (+z for an element along +x)."""
     start, end = np.asarray(start, float), np.asarray(end, float)
     axis = end - start
     length = float(np.linalg.norm(axis))
@@ -33,11 +34,11 @@ def straight_reference(kind: ElementKind, start, end) -> np.ndarray:
     if kind.dim == 2:
         frame = np.column_stack([tangent, [-tangent[1], tangent[0]]])
     else:
+        # local y = z x tangent (in the x-y plane); for a near-vertical axis use x instead
         helper = np.array([0.0, 0.0, 1.0]) if abs(tangent[2]) < 0.9 else np.array([1.0, 0, 0])
-        binormal = np.cross(tangent, helper)
-        binormal = -binormal / np.linalg.norm(binormal)
-        normal = np.cross(binormal, tangent)
-        frame = np.column_stack([tangent, normal, binormal])
+        normal = np.cross(helper, tangent)
+        normal /= np.linalg.norm(normal)
+        frame = np.column_stack([tangent, normal, np.cross(tangent, normal)])
     return frame_reference(kind, np.stack([start, end]), np.stack([frame, frame]))
 
 

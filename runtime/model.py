@@ -342,12 +342,14 @@ class Model:
             force += law.value(t) * vector
         return force
 
-    def gravity_potential(self, q: np.ndarray, t: float = 0.0) -> float:
-        """Potential energy (J) of the gravity loads relative to the reference: -F_g . (q - q0)."""
+    def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
+        """Potential energy (J) of the gravity loads relative to the reference: -F_g . (q - q0),
+        at time t, or at the loads' nominal value when t is None (static analysis)."""
         total = 0.0
         for load, (law, force) in zip(self.scene.loads, self.nominal_loads(), strict=True):
             if load.type == "gravity":
-                total -= law.value(t) * float(force @ (q - self.reference))
+                scale = 1.0 if t is None else law.value(t)
+                total -= scale * float(force @ (q - self.reference))
         return total
 
     def _translation(self, vector: np.ndarray) -> np.ndarray:

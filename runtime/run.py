@@ -51,7 +51,7 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
         if scene.static is not None:
             result = analysis.solve_static(model, scene.static)
             static_q = result.q
-            summary["static"] = {"sensors": sensors.values(result.q),
+            summary["static"] = {"sensors": sensors.values(result.q, t=None),
                                  "iterations": result.iterations,
                                  "load_steps": result.load_steps}
         if scene.modal is not None:

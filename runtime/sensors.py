@@ -28,12 +28,13 @@ class Sensors:
         self.energy_names = [s.name for s in self.sensors if s.type in ENERGY_TYPES]
 
     def values(self, q: np.ndarray, v: np.ndarray | None = None,
-               t: float = 0.0) -> dict[str, float]:
-        """{sensor name: value} at coordinates q (and velocities v, zero if None), time t."""
+               t: float | None = 0.0) -> dict[str, float]:
+        """{sensor name: value} at coordinates q (and velocities v, zero if None), time t
+        (None: loads at their nominal value, as in the static analysis)."""
         v = np.zeros_like(q) if v is None else v
         return {s.name: self._value(s, q, v, t) for s in self.sensors}
 
-    def _value(self, sensor, q: np.ndarray, v: np.ndarray, t: float) -> float:
+    def _value(self, sensor, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         model = self.model
         if sensor.type == "strain_energy":
             return model.strain_energy(q, sensor.body)

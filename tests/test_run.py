@@ -1,0 +1,309 @@
+"""``ancf run``: summary.json, timeseries.csv and plots (DESIGN.md section 7), exit codes,
+overrides, bad scenes and diverging runs."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from scenes_small import cantilever, to_toml
+
+from runtime.cli import main
+from runtime.run import run
+
+ROOT = Path(__file__).resolve().parent.parent
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+SENSORS = [
+    {"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
+    {"name": "strain", "type": "strain_energy"},
+    {"name": "kinetic", "type": "kinetic_energy"},
+]
+ENERGIES = ("strain", "kinetic")
+
+# the keys DESIGN.md section 7 documents
+TOP_KEYS = {"scene", "status", "message", "static", "modal", "dynamic", "timing", "kernels"}
+STATIC_KEYS = {"sensors", "iterations"}
+MODAL_KEYS = {"frequencies_rad_s", "frequencies_hz"}
+DYNAMIC_KEYS = {"t_end", "steps", "newton_iterations", "force_evaluations",
+                "jacobian_evaluations", "sensors_final"}
+TIMING_KEYS = {"generate_s", "compile_s", "preprocess_s", "simulate_s", "total_s"}
+
+
+def small_scene(analyses=("static", "modal", "dynamic"), **changes) -> dict:
+    tables = {"static": {}, "modal": {"modes": 3},
+              "dynamic": {"t_end": 0.05, "step": 2.5e-3, "output_every": 5e-3}}
+    data = cantilever(elements=2, force=[0.0, -1000.0],
+                      law={"type": "cosine_ramp", "duration": 0.02}, sensors=SENSORS,
+                      analysis_tables={k: tables[k] for k in analyses})
+    data.update(changes)
+    return data
+
+
+def write(folder: Path, data: dict | str, name: str = "scene.toml") -> Path:
+    path = folder / name
+    path.write_text(data if isinstance(data, str) else to_toml(data))
+    return path
+
+
+def read_csv(path: Path) -> tuple[list[str], list[list[float]]]:
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], [[float(x) for x in row] for row in rows[1:]]
+
+
+def no_temporary_files(folder: Path) -> bool:
+    return not [name for name in os.listdir(folder) if name.endswith(".tmp")]
+
+
+@pytest.fixture(scope="module")
+def full_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("full")
+    scene = write(folder, small_scene())
+    out = folder / "out"
+    summary, code = run(scene, out, quiet=True)
+    return scene, out, summary, code
+
+
+# --------------------------------------------------------------------------- a full run
+
+def test_full_run_succeeds_and_writes_its_summary(full_run):
+    scene, out, summary, code = full_run
+    assert code == 0
+    assert summary["status"] == "ok"
+    assert isinstance(summary["message"], str)
+    assert summary["scene"] == str(scene)
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk == json.loads(json.dumps(summary))
+    assert no_temporary_files(out)
+
+
+def test_summary_holds_the_documented_keys(full_run):
+    _, out, _, _ = full_run
+    summary = json.loads((out / "summary.json").read_text())
+    assert TOP_KEYS <= set(summary)
+    assert STATIC_KEYS <= set(summary["static"])
+    assert MODAL_KEYS <= set(summary["modal"])
+    assert DYNAMIC_KEYS <= set(summary["dynamic"])
+    assert TIMING_KEYS <= set(summary["timing"])
+    names = [s["name"] for s in SENSORS]
+    assert set(summary["static"]["sensors"]) == set(names)
+    assert set(summary["dynamic"]["sensors_final"]) == set(names)
+    assert isinstance(summary["kernels"], list) and summary["kernels"]
+    assert all(isinstance(k, str) and k for k in summary["kernels"])
+
+
+def test_summary_values_are_consistent(full_run):
+    _, out, summary, _ = full_run
+    static = summary["static"]
+    assert isinstance(static["iterations"], int) and static["iterations"] >= 1
+    # tip deflection of the 1 m, 0.1 m square steel cantilever: P L^3 / 3EI = 0.19 mm,
+    # 2 elements are ~6 % stiff
+    assert -static["sensors"]["tip_y"] == pytest.approx(1000 / (3 * 2.1e11 * 0.1**4 / 12),
+                                                        rel=0.1)
+    assert static["sensors"]["kinetic"] == 0.0
+    modal = summary["modal"]
+    assert len(modal["frequencies_rad_s"]) == len(modal["frequencies_hz"]) == 3
+    assert all(w > 0 for w in modal["frequencies_rad_s"])
+    assert modal["frequencies_rad_s"] == sorted(modal["frequencies_rad_s"])
+    for w, f in zip(modal["frequencies_rad_s"], modal["frequencies_hz"], strict=True):
+        assert f == pytest.approx(w / (2 * math.pi), rel=1e-12)
+    dynamic = summary["dynamic"]
+    assert dynamic["t_end"] == 0.05
+    assert dynamic["steps"] == 20
+    assert dynamic["newton_iterations"] >= dynamic["steps"]
+    assert dynamic["force_evaluations"] >= dynamic["newton_iterations"]
+    assert 0 < dynamic["jacobian_evaluations"] <= dynamic["force_evaluations"]
+    timing = summary["timing"]
+    assert all(isinstance(timing[k], float) and timing[k] >= 0 for k in TIMING_KEYS)
+    assert timing["total_s"] >= timing["simulate_s"]
+    assert timing["total_s"] >= timing["preprocess_s"]
+
+
+def test_timeseries_has_t_then_one_column_per_sensor(full_run):
+    _, out, summary, _ = full_run
+    header, rows = read_csv(out / "timeseries.csv")
+    assert header == ["t"] + [s["name"] for s in SENSORS]
+    times = [row[0] for row in rows]
+    assert len(rows) == 11  # t = 0, 0.005, ..., 0.05
+    assert times[0] == 0.0 and times[-1] == pytest.approx(0.05)
+    assert all(b > a for a, b in zip(times, times[1:], strict=False))
+    assert rows[0][1:] == [0.0, 0.0, 0.0]  # at rest at the reference
+    final = dict(zip(header, rows[-1], strict=True))
+    for name, value in summary["dynamic"]["sensors_final"].items():
+        assert final[name] == value
+
+
+def test_one_plot_per_sensor_and_the_energies(full_run):
+    _, out, _, _ = full_run
+    expected = {f"{s['name']}.png" for s in SENSORS} | {"energies.png"}
+    found = {p.name for p in out.glob("*.png")}
+    assert expected <= found
+    for name in expected:
+        assert (out / name).read_bytes()[:8] == PNG_SIGNATURE
+
+
+@pytest.mark.parametrize("analyses, absent", [
+    (("static",), {"modal", "dynamic"}),
+    (("modal",), {"static", "dynamic"}),
+    (("static", "modal"), {"dynamic"}),
+])
+def test_keys_of_analyses_that_did_not_run_are_absent(analyses, absent, tmp_path):
+    summary, code = run(write(tmp_path, small_scene(analyses)), tmp_path / "out", quiet=True)
+    assert code == 0
+    on_disk = json.loads((tmp_path / "out" / "summary.json").read_text())
+    for key in absent:
+        assert key not in summary and key not in on_disk
+    for key in analyses:
+        assert key in on_disk
+    assert not (tmp_path / "out" / "timeseries.csv").exists()
+
+
+# --------------------------------------------------------------------------- the CLI
+
+def test_cli_module_runs_a_scene_quietly(tmp_path):
+    scene = write(tmp_path, small_scene(("static",)))
+    out = tmp_path / "cli"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    done = subprocess.run([sys.executable, "-m", "runtime.cli", "run", str(scene), "--out",
+                           str(out), "--quiet"], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == ""
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    assert summary["static"]["sensors"]["tip_y"] < 0
+
+
+def test_cli_method_and_backend_override_the_scene(tmp_path):
+    data = small_scene(("static",), solver={"method": "gram", "backend": "c"})
+    scene = write(tmp_path, data)
+    assert main(["run", str(scene), "--out", str(tmp_path / "default"), "--quiet"]) == 0
+    assert main(["run", str(scene), "--out", str(tmp_path / "override"), "--method", "cij",
+                 "--backend", "numpy", "--quiet"]) == 0
+    default = json.loads((tmp_path / "default" / "summary.json").read_text())
+    override = json.loads((tmp_path / "override" / "summary.json").read_text())
+    assert "beam2d/cij/numpy" in override["kernels"]
+    assert all(k.endswith("/numpy") for k in override["kernels"])
+    assert not any("cij" in k for k in default["kernels"])
+    assert all(k.endswith("/c") for k in default["kernels"])
+    # the same physics whichever way the force is evaluated
+    assert override["static"]["sensors"]["tip_y"] == pytest.approx(
+        default["static"]["sensors"]["tip_y"], rel=1e-9)
+
+
+def test_run_arguments_override_the_scene_solver(tmp_path):
+    scene = write(tmp_path, small_scene(("static",), solver={"method": "cij"}))
+    summary, code = run(scene, tmp_path / "out", method="quadrature", backend="numpy",
+                        quiet=True)
+    assert code == 0
+    assert "beam2d/quadrature/numpy" in summary["kernels"]
+    assert not any("cij" in k for k in summary["kernels"])
+
+
+def test_cli_prints_a_summary_line_unless_quiet(tmp_path, capsys):
+    scene = write(tmp_path, small_scene(("static",)))
+    assert main(["run", str(scene), "--out", str(tmp_path / "out")]) == 0
+    assert "ok" in capsys.readouterr().out
+
+
+# --------------------------------------------------------------------------- bad scenes
+
+def test_unknown_key_fails_with_exit_2_naming_the_key_path(tmp_path, capsys):
+    data = small_scene()
+    data["body"][0]["sectoin"] = data["body"][0].pop("section")
+    scene = write(tmp_path, data)
+    out = tmp_path / "out"
+    summary, code = run(scene, out, quiet=True)
+    assert code == 2
+    on_disk = json.loads((out / "summary.json").read_text())
+    for s in (summary, on_disk):
+        assert s["status"] == "failed"
+        assert "body[0].sectoin" in s["message"]
+        assert s["scene"] == str(scene)
+        assert not {"static", "modal", "dynamic"} & set(s)
+    assert no_temporary_files(out)
+    # the command line: exit 2 and the message on stderr
+    assert main(["run", str(scene), "--out", str(tmp_path / "cli"), "--quiet"]) == 2
+    assert "body[0].sectoin" in capsys.readouterr().err
+
+
+def test_unknown_top_level_key_and_toml_errors_fail(tmp_path):
+    summary, code = run(write(tmp_path, to_toml(small_scene()) + "\nsolverr = 1\n"),
+                        tmp_path / "a", quiet=True)
+    assert code == 2 and summary["status"] == "failed" and "solverr" in summary["message"]
+    summary, code = run(write(tmp_path, "title = \n", "broken.toml"), tmp_path / "b",
+                        quiet=True)
+    assert code == 2 and summary["status"] == "failed"
+    summary, code = run(tmp_path / "missing.toml", tmp_path / "c", quiet=True)
+    assert code == 2 and summary["status"] == "failed" and "missing.toml" in summary["message"]
+    assert (tmp_path / "c" / "summary.json").exists()
+
+
+def test_revolute_joint_in_a_3d_scene_fails_with_exit_2(tmp_path):
+    data = cantilever(elements=2, element="beam3d", analysis_tables={"static": {}})
+    second = dict(data["body"][0], name="other", start=[1.0, 0.0, 0.0], end=[2.0, 0.0, 0.0])
+    data["body"].append(second)
+    data["constraint"].append({"type": "revolute", "nodes": ["beam:-1", "other:0"]})
+    summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True)
+    assert code == 2
+    assert summary["status"] == "failed"
+    assert "revolute" in summary["message"]
+
+
+# --------------------------------------------------------------------------- divergence
+
+def diverging_scene() -> dict:
+    # quiet until t = 0.05 s, then a 1e12 N tip load: Newton cannot follow
+    return cantilever(elements=2, force=[0.0, -1e12], sensors=SENSORS,
+                      law={"type": "table", "points": [[0.0, 0.0], [0.05, 0.0], [0.06, 1.0]]},
+                      analysis_tables={"dynamic": {"t_end": 0.2, "step": 5e-3}})
+
+
+def test_diverging_run_keeps_what_it_computed(tmp_path, capsys):
+    scene = write(tmp_path, diverging_scene())
+    out = tmp_path / "out"
+    summary, code = run(scene, out, quiet=True)
+    assert code == 1
+    on_disk = json.loads((out / "summary.json").read_text())
+    for s in (summary, on_disk):
+        assert s["status"] == "diverged"
+        assert "t = " in s["message"]
+    when = float(re.search(r"t = ([0-9.eE+-]+)", summary["message"]).group(1))
+    assert 0.05 < when <= 0.2
+    header, rows = read_csv(out / "timeseries.csv")
+    assert header == ["t"] + [s["name"] for s in SENSORS]
+    times = [row[0] for row in rows]
+    # every step before the failure is there (output at every step), none after it
+    assert times[0] == 0.0
+    assert len(rows) >= 11  # 0 ... 0.05 s
+    assert times[-1] < when
+    assert times[-1] == pytest.approx(when - 5e-3)
+    assert all(math.isfinite(x) for row in rows for x in row)
+    dynamic = on_disk["dynamic"]
+    assert DYNAMIC_KEYS <= set(dynamic)
+    assert dynamic["steps"] == len(rows) - 1
+    assert dynamic["sensors_final"] == dict(zip(header[1:], rows[-1][1:], strict=True))
+    assert no_temporary_files(out)
+    # the command line: exit 1 and the message on stderr
+    assert main(["run", str(scene), "--out", str(tmp_path / "cli"), "--quiet"]) == 1
+    assert "t = " in capsys.readouterr().err
+
+
+def test_static_that_does_not_converge_is_reported_as_diverged(tmp_path):
+    data = small_scene(("static",))
+    data["analysis"]["static"] = {"max_iterations": 1}
+    summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True)
+    assert code == 1
+    assert summary["status"] == "diverged"
+    assert "static" in summary["message"]
+    assert "static" not in summary
+    assert no_temporary_files(tmp_path / "out")
