@@ -1,4 +1,4 @@
-"""The ``ancf`` command line: generate, invariants, run, bench."""
+"""The ``ancf`` command line: generate, invariants, run, bench, study, report."""
 
 from __future__ import annotations
 
@@ -134,6 +134,15 @@ def cmd_bench_paper(args) -> int:
     return 0
 
 
+def cmd_report(args) -> int:
+    from runtime.studies import report
+
+    path = report.build(args.out, quick=args.quick, scheduler=args.scheduler,
+                        workers=args.workers)
+    print(f"written: {path}")
+    return 0
+
+
 def cmd_bench_steps(args) -> int:
     from runtime import bench
 
@@ -173,6 +182,20 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--backend", choices=list(BACKENDS), help="override the scene's [solver]")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     run.set_defaults(run=cmd_run)
+
+    from runtime.studies import error_vs_time, stability
+
+    study = sub.add_parser("study", help="work-precision and stability studies")
+    study_sub = study.add_subparsers(dest="what", required=True)
+    error_vs_time.add_cli(study_sub)
+    stability.add_cli(study_sub)
+
+    report = sub.add_parser("report", help="measure everything and write docs/report.md")
+    report.add_argument("--out", default="docs", help="folder of report.md and its figures")
+    report.add_argument("--quick", action="store_true", help="small versions (smoke test)")
+    report.add_argument("--scheduler", help="address of an existing dask scheduler")
+    report.add_argument("--workers", type=int, help="local dask workers (default: cores)")
+    report.set_defaults(run=cmd_report)
 
     bench = sub.add_parser("bench", help="benchmarks")
     bench_sub = bench.add_subparsers(dest="what", required=True)

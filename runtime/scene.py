@@ -570,8 +570,10 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
     """
     if not isinstance(data, dict):
         raise SceneError(f"{source}: expected a table of scene keys, got {_show(data)}")
+    # [study] declares a work-precision sweep: read and validated by `ancf study
+    # error-vs-time` (runtime/studies/error_vs_time.py), ignored by runs
     _keys(data, "", (), ("title", "material", "body", "constraint", "load", "sensor",
-                         "analysis", "solver"))
+                         "analysis", "solver", "study"))
     default_title = Path(source).stem if source != "<scene>" else "untitled"
     title = _string(data.get("title", default_title), "title")
 

@@ -40,7 +40,7 @@ def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None =
         cluster = None
     else:
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+                               processes=True, dashboard_address=":0")
         client = Client(cluster)
     try:
         futures = [client.submit(function, pure=False, **case) for case in cases]

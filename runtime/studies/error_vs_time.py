@@ -79,7 +79,8 @@ STUDY_KEYS = ("elements", "step", "integrator", "method", "backend", "error", "s
               "reference", "t_end", "repeat", "targets")
 REFERENCE_KEYS = ("elements", "step", "integrator", "method")
 CSV_COLUMNS = ("elements", "step", "integrator", "method", "backend", "error", "simulate_s",
-               "total_s", "status", "measure", "value", "exact", "role", "message")
+               "total_s", "status", "measure", "value", "exact", "newton_iterations", "role",
+               "message")
 # first root of 1 + cos(x) cosh(x) = 0: omega_1 = BETA_L^2 sqrt(E I / (rho A L^4))
 BETA_L = 1.8751040687119611
 POSITION_SENSORS = ("displacement", "position")
@@ -641,6 +642,7 @@ def _rows(plan: Plan, runs: list[tuple], results: list[dict]) -> list[dict]:
                "backend": plan.backend, "error": math.nan, "simulate_s": result["simulate_s"],
                "total_s": result["total_s"], "status": result["status"],
                "measure": plan.measure, "value": math.nan, "exact": plan.exact,
+               "newton_iterations": _iterations(result["summary"]),
                "role": "reference" if is_reference else "sweep", "message": result["message"]}
         summary = result["summary"]
         if result["status"] == "ok" and not is_reference:
@@ -653,6 +655,14 @@ def _rows(plan: Plan, runs: list[tuple], results: list[dict]) -> list[dict]:
             row.update(value=float(np.abs(ref_y).max()))
         rows.append(row)
     return rows
+
+
+def _iterations(summary: dict) -> int | None:
+    """Newton iterations of a run (static or dynamic): a machine-independent measure of work."""
+    for key in ("dynamic", "static"):
+        if key in summary:
+            return summary[key].get("newton_iterations", summary[key].get("iterations"))
+    return None
 
 
 def _measure(plan: Plan, summary: dict, result: dict, ref_t, ref_y) -> tuple[float, float]:
@@ -868,8 +878,8 @@ def markdown(plan: Plan, rows: list[dict], wall: float, where: str) -> str:
     value_head = {"static_tip": "tip (m)", "frequency": "frequency (rad/s)",
                   "reference": "max diff"}[plan.measure]
     lines += [f"| elements | step (s) | integrator | method | {value_head} | error | "
-              "simulate (s) | total (s) | status |",
-              "| ---: | ---: | --- | --- | ---: | ---: | ---: | ---: | --- |"]
+              "Newton iterations | simulate (s) | total (s) | status |",
+              "| ---: | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"]
     order = sorted(rows, key=lambda r: (r["role"] != "sweep", r["method"], r["integrator"] or "",
                                         r["elements"], -(r["step"] or 0.0)))
     for r in order:
@@ -878,7 +888,8 @@ def markdown(plan: Plan, rows: list[dict], wall: float, where: str) -> str:
             status += f": {r['message'].splitlines()[0][:80]}"
         lines.append(f"| {r['elements']} | {_cell(r['step'], 'g')} | {_cell(r['integrator'])} "
                      f"| {r['method']} | {_cell(r['value'], '.6g')} | {_cell(r['error'], '.3e')}"
-                     f" | {_cell(r['simulate_s'])} | {_cell(r['total_s'])} | {status} |")
+                     f" | {_cell(r['newton_iterations'])} | {_cell(r['simulate_s'])} "
+                     f"| {_cell(r['total_s'])} | {status} |")
     lines += ["", "## Summary", "", summary_paragraph(plan, rows), ""]
     return "\n".join(lines)
 
