@@ -119,6 +119,23 @@ def test_reference_error_of_rotating_beam(tmp_path):
     assert "reference run (8 elements" in md
 
 
+def test_closed_form_follows_the_section_axes_of_a_rectangular_beam(tmp_path):
+    """A 0.2 m x 0.1 m beam along +y loaded along z bends across its width (local z = global
+    z), so I = h w^3 / 12, a quarter of w h^3 / 12; the model must agree."""
+    text = (CANTILEVER.read_text()
+            .replace("section = { height = 0.1, width = 0.1 }",
+                     "section = { height = 0.2, width = 0.1 }")
+            .replace("end = [5.0, 0.0, 0.0]", "end = [0.0, 5.0, 0.0]")
+            .replace("force = [0.0, -300.0, 0.0]", "force = [0.0, 0.0, -300.0]")
+            .replace('component = "y"', 'component = "z"'))
+    scene = tmp_path / "rectangular.toml"
+    scene.write_text(text)
+    rows = study(scene, tmp_path / "out", elements=[5], method=["gram"], repeat=1, serial=True)
+    weak = LOAD * LENGTH**3 / (3 * E_MODULUS * 0.2 * 0.1**3 / 12)       # 5.68 mm
+    assert rows[0]["exact"] == pytest.approx(-weak, rel=1e-12)
+    assert rows[0]["error"] < 0.02                      # 4x off if the axes were swapped
+
+
 def test_shipped_scenes_survive_the_toml_writer():
     for path in sorted(SCENES.glob("*.toml")):
         data = tomllib.loads(path.read_text())

@@ -84,6 +84,8 @@ CSV_COLUMNS = ("elements", "step", "integrator", "method", "backend", "error", "
 # first root of 1 + cos(x) cosh(x) = 0: omega_1 = BETA_L^2 sqrt(E I / (rho A L^4))
 BETA_L = 1.8751040687119611
 POSITION_SENSORS = ("displacement", "position")
+ANNOTATE_ALL = 30       # annotate every point of the plot up to this many
+CLOSE = 1.1             # times within this factor of the best are called a tie
 
 
 class StudyError(ValueError):
@@ -363,7 +365,8 @@ def plan_study(scene_path: str | Path, **overrides: Any) -> Plan:
         info = cantilever(scene, error_label, measure)
         plan.cantilever = info
         candidates = [s for s in scene.sensors if s.type == "displacement"
-                      and str(s.node) == info.tip and s.frame in (None, info.clamp)
+                      and str(s.node) == info.tip
+                      and (s.frame is None or str(s.frame) == info.clamp)
                       and _expected(info, s.component, s.frame is not None) != 0.0]
         if measure == "frequency" and dynamic is not None and dynamic.frequency_of \
                 and dynamic.frequency_of in {s.name for s in candidates}:
@@ -473,7 +476,7 @@ def dump_toml(data: dict) -> str:
 
 
 def _toml_key(key: str) -> str:
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key, ensure_ascii=False)
 
 
 def _toml_value(value: Any) -> str:
@@ -488,7 +491,7 @@ def _toml_value(value: Any) -> str:
             return "inf" if value > 0 else "-inf"
         return repr(value)
     if isinstance(value, str):
-        return json.dumps(value)
+        return json.dumps(value, ensure_ascii=False)
     if isinstance(value, dict):
         return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) \
             + "}"
@@ -601,7 +604,11 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
                 else "a run"
             raise StudyError(f"study: {what} with {n} elements is not a valid scene: "
                              f"{scene_error}") from None
-        cases.append({"scene_text": dump_toml(data), "repeat": plan.repeat,
+        try:
+            text = dump_toml(data)
+        except ValueError as failure:
+            raise StudyError(f"study: cannot hand the scene to a run: {failure}") from None
+        cases.append({"scene_text": text, "repeat": plan.repeat,
                       "series": None if plan.measure == "static_tip" else plan.sensor})
     if scheduler is not None:
         check_scheduler(scheduler)
@@ -745,12 +752,14 @@ def _describe_measure(plan: Plan) -> str:
 
 def plot(plan: Plan, rows: list[dict], path: Path) -> None:
     """error_vs_time.png: log-log error against simulate time, one line (the runs no faster
-    run beats) per method (and integrator), every point annotated with elements[, step]."""
+    run beats) per method (and integrator); points annotated with elements[, step] (every
+    point up to ANNOTATE_ALL points, else the points on the lines)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(7.5, 5.2))
+    fig = Figure(figsize=(9.5, 5.6))
     ax = fig.add_subplot()
     usable = _usable(rows)
+    annotate_all = len(usable) <= ANNOTATE_ALL
     labels = _unique([_label(r, plan) for r in rows if r["role"] == "sweep"])
     markers = "osD^vP*X"
     for k, label in enumerate(labels):
@@ -763,20 +772,22 @@ def plot(plan: Plan, rows: list[dict], path: Path) -> None:
         front = _front(points)
         ax.loglog([r["simulate_s"] for r in front], [r["error"] for r in front], "-",
                   marker=markers[k % len(markers)], color=color, lw=1.4, ms=5, label=label)
-        for r in points:
+        for r in points if annotate_all else front:
             ax.annotate(_point(r), (r["simulate_s"], r["error"]), textcoords="offset points",
                         xytext=(4, 3), fontsize=6, color=color)
     ax.set_xlabel("simulate time (s)")
     ax.set_ylabel(f"error ({plan.measure})")
     title = plan.scene.title if len(plan.scene.title) < 60 else plan.scene.title[:57] + "..."
     ax.set_title(f"{title}\n{plan.measure} error against run time; labels: elements"
-                 f"{'' if plan.measure == 'static_tip' else ', step (s)'}", fontsize=9)
+                 f"{'' if plan.measure == 'static_tip' else ', step (s)'}"
+                 f"{'' if annotate_all else ' (points on the lines)'}", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     if usable:
-        ax.legend(fontsize=8, title="line: best error for the time", title_fontsize=7)
+        ax.legend(fontsize=8, title="line: best error\nfor the time", title_fontsize=7,
+                  loc="upper left", bbox_to_anchor=(1.01, 1.0))
     else:
         ax.text(0.5, 0.5, "no run with a finite error", transform=ax.transAxes, ha="center")
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.11, top=0.88)
+    fig.subplots_adjust(left=0.09, right=0.75, bottom=0.1, top=0.89)
     fig.savefig(path, dpi=110)
 
 
@@ -797,6 +808,11 @@ def _run_words(row: dict, plan: Plan) -> str:
     if row["step"] is not None:
         words += f", step {row['step']:g} s, {row['integrator']}"
     return words
+
+
+def _join(words: list[str]) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
 def _level(target: float) -> str:
@@ -837,6 +853,11 @@ def summary_paragraph(plan: Plan, rows: list[dict]) -> str:
         missing = [label for label in labels if label not in fastest]
         if missing and len(fastest) > 1:
             text += f" ({', '.join(missing)} never reach it)"
+        close = [f"{label} ({t:.3g} s)" for label, t in sorted(fastest.items(), key=lambda x: x[1])
+                 if label != _label(best, plan) and t <= CLOSE * best["simulate_s"]]
+        if close:
+            text += (f"; {_join(close)} {'is' if len(close) == 1 else 'are'} within "
+                     f"{round(100 * (CLOSE - 1))} %, a tie within timing noise")
         findings.append((target, text))
     sentences = []
     for text, group in itertools.groupby(findings, key=lambda finding: finding[1]):
@@ -844,8 +865,7 @@ def summary_paragraph(plan: Plan, rows: list[dict]) -> str:
         if len(levels) == 1:
             sentences.append(f"for an error of {levels[0]} {text}")
         else:
-            joined = ", ".join(levels[:-1]) + " and " + levels[-1]
-            sentences.append(f"for errors of {joined} {text}")
+            sentences.append(f"for errors of {_join(levels)} {text}")
     paragraph = "; ".join(sentences)
     paragraph = paragraph[0].upper() + paragraph[1:] + "."
     if wins:
@@ -942,7 +962,10 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     what ``study_parser.add_subparsers()`` returned); the command runs ``args.run(args)``."""
     parser = subparsers.add_parser(
         "error-vs-time", help="work-precision study: error against run time",
-        description=__doc__.split("\n\n")[0])
+        description="Work-precision study: run every combination of mesh size, time step, "
+                    "integrator and elastic force method, measure each run's error (closed form "
+                    "or a reference run) and wall time; write error_vs_time.csv, .png and .md "
+                    "and print the Markdown.")
     parser.add_argument("scene", help="scene TOML file (may hold a [study] table)")
     parser.add_argument("--elements", metavar="N,N,...", help="mesh sizes, e.g. 2,5,10")
     parser.add_argument("--step", metavar="H,H,...", help="time steps in s, e.g. 1e-3,5e-4")
@@ -960,7 +983,8 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         help="end time in s (overrides [analysis.dynamic].t_end)")
     parser.add_argument("--repeat", type=int, help="runs per case; the fastest is kept")
     parser.add_argument("--targets", metavar="E,E,...",
-                        help="accuracies of the summary (default: decades of the errors)")
+                        help="accuracies of the summary (default: up to four levels 1e-k, "
+                             "3e-k between the errors)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     parser.add_argument("--workers", type=int, metavar="N",
