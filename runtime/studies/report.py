@@ -55,7 +55,7 @@ def machine() -> str:
 
 def _scenes(out: Path, figures: Path) -> str:
     lines = ["| scene | status | key results | steps | Newton iterations | compile s | "
-             "pre-processing s | simulation s | plots s | total s |",
+             "pre-processing s | simulation s | post-processing s | total s |",
              "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for name in SCENES:
         folder = out / "scenes" / name
@@ -75,7 +75,7 @@ def _scenes(out: Path, figures: Path) -> str:
             f"| {name} | {summary['status']} | {'; '.join(key)} | {dyn.get('steps', '-')} | "
             f"{dyn.get('newton_iterations', '-')} | {timing['compile_s']:.2f} | "
             f"{timing['preprocess_s']:.3f} | {timing['simulate_s']:.2f} | "
-            f"{timing.get('plot_s', 0):.2f} | {timing['total_s']:.2f} |")
+            f"{timing.get('postprocess_s', 0):.2f} | {timing['total_s']:.2f} |")
         for png in folder.glob("*.png"):
             shutil.copy(png, figures / f"{name}_{png.name}")
     return "\n".join(lines) + "\n"
