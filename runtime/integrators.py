@@ -120,6 +120,17 @@ class Integrator:
                 progress.update(t)
         return state
 
+    def residual(self, a: np.ndarray, force: np.ndarray, prescribed_acceleration: np.ndarray,
+                 multipliers: np.ndarray) -> np.ndarray:
+        """M_ff a + M_fp a_p + A^T lambda - F: the equations of motion of the free part."""
+        m = self.model
+        residual = m.mass_ff_op @ a - force
+        if prescribed_acceleration.size:
+            residual += m.mass_fp_op @ prescribed_acceleration
+        if m.joints_free.shape[0]:
+            residual += m.joints_free.T @ multipliers
+        return residual
+
     def converged(self, increment: np.ndarray) -> bool:
         return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
 
@@ -148,13 +159,8 @@ class Trapezoidal(Integrator):
             q = base_q + h * h / 4 * a
             force, jacobian = self.forces(q, t)
             self.counters.newton_iterations += 1
-            residual = m.mass_ff_op @ a - force
-            if ap.size:
-                residual += m.mass_fp_op @ ap
-            constraint = None
-            if joints.shape[0]:
-                residual += joints.T @ lam
-                constraint = joints @ a + m.joints_prescribed @ ap
+            residual = self.residual(a, force, ap, lam)
+            constraint = joints @ a + m.joints_prescribed @ ap if joints.shape[0] else None
             da, dlam = m.solve(1.0, -h * h / 4, jacobian, -residual,
                                None if constraint is None else -constraint)
             a += da
@@ -221,13 +227,8 @@ class GeneralizedAlpha(Integrator):
         for _ in range(self.settings.max_iterations):
             force, jacobian = self.forces(q, t)
             self.counters.newton_iterations += 1
-            residual = m.mass_ff_op @ a - force
-            if ap.size:
-                residual += m.mass_fp_op @ ap
-            constraint = None
-            if joints.shape[0]:
-                residual += joints.T @ lam
-                constraint = joints @ q + fixed_part
+            residual = self.residual(a, force, ap, lam)
+            constraint = joints @ q + fixed_part if joints.shape[0] else None
             dq, dlam = m.solve(beta_prime, -1.0, jacobian, -residual,
                                None if constraint is None else -constraint)
             q += dq

@@ -620,14 +620,18 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
                  modal, dynamic, solver, source)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate the TOML scene file ``path`` (SceneError for any problem)."""
+def read_scene_file(path: str | Path) -> dict:
+    """The TOML table of a scene file, unvalidated (SceneError if unreadable or not TOML)."""
     path = Path(path)
     try:
         with path.open("rb") as f:
-            data = tomllib.load(f)
+            return tomllib.load(f)
     except OSError as exc:
         raise SceneError(f"{path}: cannot read the scene file ({exc.strerror or exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: TOML syntax error: {exc}") from None
-    return parse_scene(data, str(path))
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate the TOML scene file ``path`` (SceneError for any problem)."""
+    return parse_scene(read_scene_file(path), str(path))

@@ -61,7 +61,7 @@ import numpy as np
 
 from runtime.element import METHODS
 from runtime.kernels import BACKENDS
-from runtime.scene import INTEGRATORS, Scene, SceneError, parse_scene
+from runtime.scene import INTEGRATORS, Scene, SceneError, parse_scene, read_scene_file
 from runtime.sweep import SchedulerError, run_cases
 
 __all__ = [
@@ -255,14 +255,7 @@ class Plan:
 
 def _read(scene_path: str | Path) -> tuple[dict, dict]:
     """(scene data without [study], the [study] table) of a TOML file."""
-    path = Path(scene_path)
-    try:
-        with path.open("rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file ({exc.strerror or exc})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: TOML syntax error: {exc}") from None
+    data = read_scene_file(scene_path)
     table = data.pop("study", {})
     if not isinstance(table, dict):
         raise StudyError(f"study: expected a table [study], got {_show(table)}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import datetime
 import os
 import platform
+import re
 import shutil
 import subprocess
 import sys
@@ -70,6 +71,8 @@ def _scenes(out: Path, figures: Path) -> str:
         dyn = summary.get("dynamic", {})
         if "response_frequency_rad_s" in dyn:
             key.append(f"response {dyn['response_frequency_rad_s']:.4g} rad/s")
+        if "static" not in summary and dyn:
+            key += [f"final {k} = {v:.4g}" for k, v in dyn["sensors_final"].items()]
         timing = summary["timing"]
         lines.append(
             f"| {name} | {summary['status']} | {'; '.join(key)} | {dyn.get('steps', '-')} | "
@@ -124,11 +127,38 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
     parts += ["## 7. Stability on stiff and extreme cases (`ancf study stability`)", ""]
     rows = stability.stability_study(scheduler=scheduler, workers=workers, quick=quick)
     stability.write(rows, work / "stability")
-    parts.append(stability.markdown(rows))
+    parts.append(_failures(rows))
+    parts.append(_demote(stability.markdown(rows), 2))
     parts.append(f"\nReport generated in {time.perf_counter() - start:.0f} s.\n")
     path = out / "report.md"
     path.write_text("\n".join(parts))
     return path
+
+
+def _demote(markdown: str, levels: int) -> str:
+    """Push the headings of an embedded Markdown document ``levels`` levels down."""
+    return "\n".join("#" * levels + line if line.startswith("#") else line
+                     for line in markdown.splitlines()) + "\n"
+
+
+def _failures(rows) -> str:
+    """The failing rows of the stability table grouped by cause, with their counts."""
+    failing: dict[tuple[str, str, str], list] = {}
+    for row in rows:
+        if row.passed is False:
+            # same cause up to its numbers: one line
+            key = (row.group, row.method, re.sub(r"[-+]?\d[\d.e+-]*", "#", row.cause))
+            failing.setdefault(key, []).append(row)
+    if not failing:
+        return "Every row passes its stated tolerance.\n"
+    lines = [f"{sum(len(v) for v in failing.values())} of {len(rows)} rows fail their "
+             "stated tolerance; grouped by cause (every row is in the tables below):", ""]
+    for (group, method, _), cases in sorted(failing.items()):
+        names = [c.case for c in cases]
+        shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        lines.append(f"- **{group}**, {method}, {len(cases)} row(s) ({shown}): "
+                     f"{cases[0].cause}")
+    return "\n".join(lines) + "\n"
 
 
 def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers) -> list[str]:
@@ -145,8 +175,7 @@ def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers) -
         folder = work / "error_vs_time" / label
         error_vs_time.study(ROOT / "scenes" / f"{scene}.toml", folder, scheduler=scheduler,
                             workers=workers, **sweep)
-        text = (folder / "error_vs_time.md").read_text()
-        parts.append(text.replace("# Error against run time", "### Error against run time"))
+        parts.append(_demote((folder / "error_vs_time.md").read_text(), 2))
         png = folder / "error_vs_time.png"
         if png.exists():
             shutil.copy(png, figures / f"error_vs_time_{label}.png")
