@@ -108,10 +108,11 @@ class KernelFamily:
         (reusing them avoids page-faulting fresh memory on large batches).
         Returns each output as an (m, size) array.
         """
-        arrays = self.signatures[kernel]["arrays"]
-        varying = [a["name"] for a in arrays if a["role"] == "batch" and a["name"] in inputs]
-        fixed = {k: v for k, v in inputs.items() if k not in varying[:1]}
-        return self.bind(kernel, fixed)({varying[0]: inputs[varying[0]]}, out)
+        # a one-shot call: everything but the first batch array is bound for this call only
+        first = next(a["name"] for a in self.signatures[kernel]["arrays"]
+                     if a["role"] == "batch")
+        fixed = {name: value for name, value in inputs.items() if name != first}
+        return self.bind(kernel, fixed)({first: inputs[first]}, out)
 
     def bind(self, kernel: str, fixed: dict) -> BoundKernel:
         """``kernel`` with every input but the per-call batch arrays converted once."""
