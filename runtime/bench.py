@@ -136,13 +136,13 @@ def step_cost(elements: int, steps: int = 5, method: str = "gram", backend: str 
     import tomllib
     from pathlib import Path
 
+    import scenes
     from runtime.integrators import Trapezoidal
     from runtime.linear import single_threaded_blas
     from runtime.model import Model
     from runtime.scene import parse_scene
 
-    path = Path(scene) if scene else Path(__file__).resolve().parent.parent / "scenes" / \
-        "cantilever.toml"
+    path = Path(scene) if scene else scenes.path("cantilever")
     data = copy.deepcopy(tomllib.loads(path.read_text()))
     body = data["body"][0]
     body["end"] = [body["end"][0] * elements / body["elements"], *body["end"][1:]]

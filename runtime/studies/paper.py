@@ -15,9 +15,10 @@ import tempfile
 import tomllib
 from pathlib import Path
 
+import scenes
 from runtime.kernels import element_kind
 
-SCENE = Path(__file__).resolve().parent.parent.parent / "scenes" / "cantilever.toml"
+SCENE = scenes.path("cantilever")
 METHODS = ("gram", "cij", "quadrature")
 
 #: Published figures: (table, elements, t_end) -> force evaluations, CPU s with invariants

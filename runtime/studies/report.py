@@ -21,11 +21,11 @@ import numpy as np
 import scipy
 import sympy
 
+import scenes
 from runtime import bench, invariant_report, jit
 from runtime.run import run
 from runtime.studies import error_vs_time, paper, stability
 
-ROOT = Path(__file__).resolve().parent.parent.parent
 SCENES = ("cantilever", "rotating_beam", "pendulum", "arc_cantilever")
 
 
@@ -60,8 +60,8 @@ def _scenes(out: Path, figures: Path) -> str:
              "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for name in SCENES:
         folder = out / "scenes" / name
-        run(ROOT / "scenes" / f"{name}.toml", folder, quiet=True)  # warm (kernels, imports)
-        summary, _ = run(ROOT / "scenes" / f"{name}.toml", folder, quiet=True)
+        run(scenes.path(name), folder, quiet=True)  # warm (kernels, imports)
+        summary, _ = run(scenes.path(name), folder, quiet=True)
         key = []
         if "static" in summary:
             key += [f"static {k} = {v:.5g}" for k, v in summary["static"]["sensors"].items()
@@ -173,7 +173,7 @@ def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers) -
                     ("rotating_beam", "rotating_beam", {})]
     for label, scene, sweep in studies:
         folder = work / "error_vs_time" / label
-        error_vs_time.study(ROOT / "scenes" / f"{scene}.toml", folder, scheduler=scheduler,
+        error_vs_time.study(scenes.path(scene), folder, scheduler=scheduler,
                             workers=workers, **sweep)
         parts.append(_demote((folder / "error_vs_time.md").read_text(), 2))
         png = folder / "error_vs_time.png"
