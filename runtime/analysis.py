@@ -65,7 +65,7 @@ def _solve_static(model: Model, settings) -> StaticResult:
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
     lets the next grow again (doubling, up to the initial increment).
     """
-    nominal = sum((vector for _, vector in model.nominal_loads()), np.zeros(model.size))
+    nominal = model.nominal_load()
     q = model.reference.copy()
     multipliers = np.zeros(model.joints.shape[0])
     done, increment, iterations, steps = 0.0, 1.0 / settings.load_steps, 0, 0

@@ -335,6 +335,10 @@ class Model:
                 self._nominal_loads.append((load.law, vector))
         return self._nominal_loads
 
+    def nominal_load(self) -> np.ndarray:
+        """Every load at its nominal value, time laws not applied (static analysis), (size,)."""
+        return sum((vector for _, vector in self.nominal_loads()), np.zeros(self.size))
+
     def external_forces(self, t: float) -> np.ndarray:
         """Point forces and gravity at time t (N), (size,)."""
         force = np.zeros(self.size)

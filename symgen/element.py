@@ -87,16 +87,6 @@ class ElementSpec:
             if kind == "r"
         )
 
-    def dof_names(self) -> list[str]:
-        """Human-readable name of every element coordinate, node-major."""
-        axes = "xyz"[: self.dim]
-        return [
-            f"node{node}.{kind}.{axis}"
-            for node in range(len(self.node_x))
-            for kind in self.vectors
-            for axis in axes
-        ]
-
     def straight_reference(self) -> list[sp.Expr]:
         """Reference coordinates e0 of the straight element along local x from the origin.
 

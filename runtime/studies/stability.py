@@ -577,10 +577,10 @@ def newton_case(jacobian: str, scheme: str = "central", relative_step: float = 1
     if jacobian not in ("analytic", "finite_difference"):
         raise ValueError(f"jacobian: expected analytic or finite_difference, got {jacobian!r}")
     model = _newton_model()
-    load = sum((vector for _, vector in model.nominal_loads()), np.zeros(model.size))
+    load = model.nominal_load()
     tolerance = 1e-10 * NEWTON["length"]      # the static analysis' default (m)
     run = _newton_solve(model, load, jacobian, scheme, relative_step, tolerance)
-    order, at = convergence_order(run["decrements"])
+    order, _ = convergence_order(run["decrements"])
     residual_order, _ = convergence_order(run["residuals"])
     tip = run["q"][model.node_dofs(NEWTON["elements"], "r")]   # one body: node = index
     decrements = ", ".join(f"{d:.1e}" for d in run["decrements"])
