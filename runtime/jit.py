@@ -35,9 +35,11 @@ from pathlib import Path
 
 __all__ = [
     "COMPILE_FLAGS",
+    "CacheError",
     "CompilationError",
     "CompiledModule",
     "CompilerNotFoundError",
+    "JitEnvironmentError",
     "cache_dir",
     "cache_key",
     "compile_module",
@@ -60,12 +62,22 @@ _LOCK = threading.RLock()
 _MEMO: dict[str, CompiledModule] = {}
 
 
-class CompilerNotFoundError(RuntimeError):
+class JitEnvironmentError(RuntimeError):
+    """The C backend cannot be used on this machine (compiler or cache folder); a run that
+    meets it ends with exit code 3 (environment)."""
+
+
+class CompilerNotFoundError(JitEnvironmentError):
     """No C compiler could be found for ``backend='c'``."""
 
 
-class CompilationError(RuntimeError):
+class CompilationError(JitEnvironmentError):
     """The C compiler failed; the message ends with the tail of its output."""
+
+
+class CacheError(JitEnvironmentError):
+    """The kernel cache folder is unusable (not a folder, not writable) or unsafe (owned by
+    another user or writable by others)."""
 
 
 @dataclass(frozen=True)
