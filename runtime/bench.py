@@ -157,7 +157,7 @@ def step_cost(elements: int, steps: int = 5, method: str = "gram", backend: str 
         state = integrator.initial_state()
         start = time.perf_counter()
         for n in range(1, steps + 1):
-            state = integrator.step(state, n * h, h)
+            state = integrator.advance(state, n, h)
         per_step = (time.perf_counter() - start) / steps
     return {"elements": elements, "coordinates": model.free.size, "build_s": build,
             "step_s": per_step,

@@ -1,13 +1,17 @@
-"""Fixed-step implicit integrators for M q'' + A^T lambda = F(q, t), A q = 0.
+"""Fixed-step implicit integrators for M q'' + A^T lambda = F(q, t), A q = 0 (the Python
+engine: the readable reference of the compiled one in ``runtime.stepper``).
 
 * ``trapezoidal``: the paper's scheme - the index-1 form (eq. 8) integrated with the
-  second-order Adams-Moulton (trapezoidal) rule, Newton on the new accelerations with the
-  exact Jacobian, then projection of positions and velocities onto the constraints;
+  second-order Adams-Moulton (trapezoidal) rule, Newton on the new accelerations, then
+  projection of positions and velocities onto the constraints;
 * ``generalized_alpha``: Chung-Hulbert generalized-alpha in the index-3 form of Arnold and
   Bruls, Newton on the positions, numerical damping set by the spectral radius ``rho_inf``.
 
-Both work on the free coordinates; prescribed ones (hub rotations) enter through their known
-values, rates and accelerations.
+Both work on the free coordinates of a ``DAESystem``; prescribed ones (hub rotations) enter
+through their known values, rates and accelerations.  Newton is ``full`` (the exact Jacobian
+and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
+its factorisation are kept, across steps too, until the corrections stop shrinking by at
+least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate).
 """
 
 from __future__ import annotations
@@ -15,12 +19,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg
 
-from runtime.analysis import length_scale
-from runtime.linear import DENSE_LIMIT, SaddleSolver, single_threaded_blas
+from runtime.dae import DAESystem
+from runtime.linear import SchurSolver, single_threaded_blas
 from runtime.model import Model
+
+#: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
+#: the previous one (the same rule in both engines).
+CONTRACTION = 0.5
+NEWTON_MODES = ("full", "modified")
 
 
 class Divergence(RuntimeError):
@@ -39,6 +46,7 @@ class Counters:
     newton_iterations: int = 0
     force_evaluations: int = 0
     jacobian_evaluations: int = 0
+    factorisations: int = 0
 
 
 @dataclass
@@ -53,50 +61,108 @@ class State:
     extra: dict = field(default_factory=dict)
 
 
+def newton_not_converged(iterations: int, correction: float) -> str:
+    """The cause of a Newton failure, worded identically by both engines."""
+    return (f"Newton did not converge in {iterations} iterations (last correction "
+            f"{correction:.3g} m)")
+
+
+NON_FINITE = "non-finite forces (the state blew up)"
+SINGULAR = "singular iteration matrix"
+
+
+def initial_state(dae: DAESystem, t: float = 0.0) -> State:
+    """Consistent initial state at rest (except prescribed motions): M a = F - M_fp a_p with
+    the joints' accelerations A_f a + A_p a_p = 0."""
+    qp, _, ap = (x[0] for x in dae.prescribed_motion([t]))
+    q = dae.fixed_values[dae.free].copy()
+    force, _ = dae.model.internal_forces(dae.full_coordinates(q, qp), jacobian=False)
+    force = force[dae.free] + dae.load_factors([t])[0] @ dae.load_vectors
+    solver = SchurSolver(dae.mass_band, dae.joints_free)
+    a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
+    return State(t, q, np.zeros_like(q), a, lam)
+
+
 class Integrator:
-    """Shared machinery: residual pieces, initial accelerations, the step loop."""
+    """Shared machinery: forces, Newton linear solves, initial accelerations, the loop."""
 
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
-        self.model, self.settings = model, settings
+        self.dae = DAESystem(model, q_full)
+        self.settings = settings
+        self.newton = getattr(settings, "newton", None) or "full"
+        if self.newton not in NEWTON_MODES:
+            raise ValueError(f"newton: expected one of {NEWTON_MODES}, got {self.newton!r}")
         self.counters = Counters()
-        self.scale = length_scale(model)
-        self.fixed_values = q_full.copy()
-        self._mass_solver = _factor(model.mass_ff)
+        self.scale = self.dae.scale
+        self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
+        self._refresh = True
 
-    def full(self, q: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Global coordinates and prescribed accelerations at time t."""
-        qp, _, ap = self.model.prescribed_state(t)
-        return self.model.full(q, qp, self.fixed_values), ap
+    # --- pieces of a Newton iteration --------------------------------------------------
 
-    def full_velocity(self, v: np.ndarray, t: float) -> np.ndarray:
-        """Global velocity vector (fixed coordinates at rest)."""
-        _, vp, _ = self.model.prescribed_state(t)
-        out = np.zeros(self.model.size)
-        out[self.model.free] = v
-        out[self.model.prescribed] = vp
-        return out
-
-    def forces(self, q: np.ndarray, t: float, jacobian: bool = True):
-        """Free part of elastic + external force, and the free-free Jacobian (or None)."""
-        q_full, _ = self.full(q, t)
-        force, data = self.model.internal_forces(q_full, jacobian)
+    def forces(self, q: np.ndarray, t: float, qp: np.ndarray, loads: np.ndarray,
+               jacobian: bool):
+        """Free part of elastic + external force (nf,), and the Jacobian data or None."""
+        dae = self.dae
+        force, data = dae.model.internal_forces(dae.full_coordinates(q, qp), jacobian)
         self.counters.force_evaluations += 1
-        total = (force + self.model.external_forces(t))[self.model.free]
+        total = force[dae.free] + loads @ dae.load_vectors
         if not np.all(np.isfinite(total)):
-            raise Divergence(t, "non-finite forces (the state blew up)")
+            raise Divergence(t, NON_FINITE)
         if jacobian:
             self.counters.jacobian_evaluations += 1
         return total, data
 
+    def residual(self, a: np.ndarray, force: np.ndarray, ap: np.ndarray,
+                 multipliers: np.ndarray) -> np.ndarray:
+        """M_ff a + M_fp a_p + A^T lambda - F: the equations of motion of the free part."""
+        dae = self.dae
+        residual = dae.mass_ff @ a - force
+        if ap.size:
+            residual += dae.mass_fp @ ap
+        if dae.joints:
+            residual += dae.joints_free.T @ multipliers
+        return residual
+
+    def linear_step(self, q: np.ndarray, t: float, qp: np.ndarray, loads: np.ndarray,
+                    mass_coef: float, jacobian_coef: float, residual_of, constraint):
+        """One Newton iteration: forces (and the Jacobian, when it is rebuilt), the residual
+        ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy] = -[r; c]
+        with S = mass_coef M + jacobian_coef J.  Returns (dx, dy)."""
+        rebuild = self.newton == "full" or self._refresh or self._solver is None
+        force, data = self.forces(q, t, qp, loads, rebuild)
+        self.counters.newton_iterations += 1
+        if rebuild:
+            band = jacobian_coef * self.dae.model.banded(data) + mass_coef * self.dae.mass_band
+            try:
+                self._solver = SchurSolver(band, self.dae.joints_free)
+            except np.linalg.LinAlgError:
+                raise Divergence(t, SINGULAR) from None
+            self.counters.factorisations += 1
+            self._refresh = False
+        return self._solver.solve(-residual_of(force), None if constraint is None
+                                  else -constraint)
+
+    def converged(self, increment: np.ndarray) -> bool:
+        return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
+
+    def newton_loop(self, t: float, iterate) -> None:
+        """Run ``iterate()`` (one Newton iteration, returning its position correction) until
+        it converges; modified Newton marks the Jacobian stale when corrections stall."""
+        previous = None
+        for _ in range(self.settings.max_iterations):
+            increment = iterate()
+            size = float(np.abs(increment).max(initial=0.0))
+            if self.converged(increment):
+                return
+            if previous is not None and size > CONTRACTION * previous:
+                self._refresh = True
+            previous = size
+        raise Divergence(t, newton_not_converged(self.settings.max_iterations, size))
+
+    # --- the loop ----------------------------------------------------------------------
+
     def initial_state(self, t: float = 0.0) -> State:
-        """Consistent initial state at rest (except prescribed motions)."""
-        m = self.model
-        q = self.fixed_values[m.free].copy()
-        force, _ = self.forces(q, t, jacobian=False)
-        _, _, ap = m.prescribed_state(t)
-        solver = SaddleSolver(m.mass_ff, m.joints_free)
-        a, lam = solver.solve(force - m.mass_fp @ ap, -(m.joints_prescribed @ ap))
-        return State(t, q, np.zeros_like(q), a, lam)
+        return initial_state(self.dae, t)
 
     def run(self, t_end: float, step: float, observe, progress=None) -> State:
         """Integrate from rest at t = 0 to ``t_end``; ``observe(t, q_full, v_full)`` is called
@@ -104,90 +170,73 @@ class Integrator:
         with single_threaded_blas():
             return self._run(t_end, step, observe, progress)
 
+    def _observe(self, observe, state: State) -> None:
+        qp, vp, _ = (x[0] for x in self.dae.prescribed_motion([state.t]))
+        observe(state.t, self.dae.full_coordinates(state.q, qp),
+                self.dae.full_velocities(state.v, vp))
+
     def _run(self, t_end: float, step: float, observe, progress) -> State:
         state = self.initial_state()
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
-        observe(0.0, self.full(state.q, 0.0)[0], self.full_velocity(state.v, 0.0))
+        self._observe(observe, state)
         for n in range(1, steps + 1):
-            t = n * step
-            state = self.step(state, t, step)
-            self.counters.steps += 1
+            state = self.advance(state, n, step)
             if n % stride == 0 or n == steps:
-                observe(t, self.full(state.q, t)[0], self.full_velocity(state.v, t))
+                self._observe(observe, state)
             if progress is not None:
-                progress.update(t)
+                progress.update(state.t)
         return state
 
-    def residual(self, a: np.ndarray, force: np.ndarray, prescribed_acceleration: np.ndarray,
-                 multipliers: np.ndarray) -> np.ndarray:
-        """M_ff a + M_fp a_p + A^T lambda - F: the equations of motion of the free part."""
-        m = self.model
-        residual = m.mass_ff_op @ a - force
-        if prescribed_acceleration.size:
-            residual += m.mass_fp_op @ prescribed_acceleration
-        if m.joints_free.shape[0]:
-            residual += m.joints_free.T @ multipliers
-        return residual
+    def advance(self, state: State, n: int, h: float) -> State:
+        """Step ``n`` (to t = n h) from ``state``."""
+        t = n * h
+        prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
+        state = self.step(state, t, h, prescribed, self.dae.load_factors([t])[0])
+        self.counters.steps += 1
+        return state
 
-    def converged(self, increment: np.ndarray) -> bool:
-        return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
-
-    def step(self, state: State, t: float, h: float) -> State:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-
-def _factor(matrix):
-    """Factorisation of the constant free-free mass matrix (done once)."""
-    if matrix.shape[0] <= DENSE_LIMIT:
-        factor = scipy.linalg.cho_factor(matrix.toarray())
-        return lambda rhs: scipy.linalg.cho_solve(factor, rhs)
-    return scipy.sparse.linalg.splu(matrix.tocsc()).solve
+    def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
+        raise NotImplementedError  # pragma: no cover - abstract
 
 
 class Trapezoidal(Integrator):
     """The paper's integrator (see the module docstring)."""
 
-    def step(self, state: State, t: float, h: float) -> State:
-        m = self.model
-        joints = m.joints_free
-        _, _, ap = m.prescribed_state(t)
+    def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
+        dae = self.dae
+        qp, vp, ap = prescribed
         a, lam = state.a.copy(), state.multipliers.copy()
         base_q = state.q + h * state.v + h * h / 4 * state.a
-        for _ in range(self.settings.max_iterations):
-            q = base_q + h * h / 4 * a
-            force, jacobian = self.forces(q, t)
-            self.counters.newton_iterations += 1
-            residual = self.residual(a, force, ap, lam)
-            constraint = joints @ a + m.joints_prescribed @ ap if joints.shape[0] else None
-            da, dlam = m.solve(1.0, -h * h / 4, jacobian, -residual,
-                               None if constraint is None else -constraint)
-            a += da
-            lam += dlam
-            if self.converged(h * h / 4 * da):
-                break
-        else:
-            raise Divergence(t, f"Newton did not converge in {self.settings.max_iterations} "
-                             f"iterations (last correction {np.abs(h * h / 4 * da).max():.3g} m)")
-        q = base_q + h * h / 4 * a
+        k = h * h / 4
+
+        def iterate() -> np.ndarray:
+            nonlocal a, lam
+            constraint = (dae.joints_free @ a + dae.joints_prescribed @ ap
+                          if dae.joints else None)
+            da, dlam = self.linear_step(base_q + k * a, t, qp, loads, 1.0, -k,
+                                        lambda force: self.residual(a, force, ap, lam),
+                                        constraint)
+            a = a + da
+            lam = lam + dlam
+            return k * da
+
+        self.newton_loop(t, iterate)
+        q = base_q + k * a
         v = state.v + h / 2 * (state.a + a)
-        if joints.shape[0]:
-            q, v = self.project(q, v, t)
+        if dae.joints:
+            q, v = self.project(q, v, qp, vp)
         return State(t, q, v, a, lam)
 
-    def project(self, q: np.ndarray, v: np.ndarray, t: float):
+    def project(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray, vp: np.ndarray):
         """Mass-orthogonal projection of positions and velocities onto A q = 0, A v = 0."""
-        m = self.model
-        qp, vp, _ = m.prescribed_state(t)
-        joints = m.joints_free.toarray()
-        minv_at = self._mass_solver(joints.T)
-        schur = joints @ minv_at
+        dae = self.dae
         for _ in range(3):
-            violation = joints @ q + m.joints_prescribed @ qp + m.joints[:, m.fixed] @ \
-                self.fixed_values[m.fixed]
-            q = q - minv_at @ np.linalg.solve(schur, violation)
-        v = v - minv_at @ np.linalg.solve(schur, joints @ v + m.joints_prescribed @ vp)
+            violation = (dae.joints_free @ q + dae.joints_prescribed @ qp
+                         + dae.joint_fixed_part)
+            q = q - dae.projector @ violation
+        v = v - dae.projector @ (dae.joints_free @ v + dae.joints_prescribed @ vp)
         return q, v
 
 
@@ -196,22 +245,17 @@ class GeneralizedAlpha(Integrator):
 
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
         super().__init__(model, settings, q_full)
-        rho = settings.rho_inf
-        self.alpha_m = (2 * rho - 1) / (rho + 1)
-        self.alpha_f = rho / (rho + 1)
-        self.gamma = 0.5 + self.alpha_f - self.alpha_m
-        self.beta = 0.25 * (self.gamma + 0.5) ** 2
+        self.alpha_m, self.alpha_f, self.gamma, self.beta = alpha_parameters(settings.rho_inf)
 
     def initial_state(self, t: float = 0.0) -> State:
         state = super().initial_state(t)
         state.extra["abar"] = state.a.copy()
         return state
 
-    def step(self, state: State, t: float, h: float) -> State:
-        m = self.model
-        joints = m.joints_free
+    def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
+        dae = self.dae
+        qp, _, ap = prescribed
         am, af, gamma, beta = self.alpha_m, self.alpha_f, self.gamma, self.beta
-        _, _, ap = m.prescribed_state(t)
         abar = state.extra["abar"]
         q = state.q + h * state.v + h * h * (0.5 - beta) * abar
         v = state.v + h * (1 - gamma) * abar
@@ -222,26 +266,31 @@ class GeneralizedAlpha(Integrator):
         lam = state.multipliers.copy()
         beta_prime = (1 - am) / (h * h * beta * (1 - af))
         gamma_prime = gamma / (h * beta)
-        fixed_part = m.joints_prescribed @ m.prescribed_state(t)[0] + \
-            m.joints[:, m.fixed] @ self.fixed_values[m.fixed]
-        for _ in range(self.settings.max_iterations):
-            force, jacobian = self.forces(q, t)
-            self.counters.newton_iterations += 1
-            residual = self.residual(a, force, ap, lam)
-            constraint = joints @ q + fixed_part if joints.shape[0] else None
-            dq, dlam = m.solve(beta_prime, -1.0, jacobian, -residual,
-                               None if constraint is None else -constraint)
-            q += dq
-            v += gamma_prime * dq
-            a += beta_prime * dq
-            lam += dlam
-            if self.converged(dq):
-                break
-        else:
-            raise Divergence(t, f"Newton did not converge in {self.settings.max_iterations} "
-                             f"iterations (last correction {np.abs(dq).max():.3g} m)")
+        fixed_part = dae.joints_prescribed @ qp + dae.joint_fixed_part
+
+        def iterate() -> np.ndarray:
+            nonlocal q, v, a, lam
+            constraint = dae.joints_free @ q + fixed_part if dae.joints else None
+            dq, dlam = self.linear_step(q, t, qp, loads, beta_prime, -1.0,
+                                        lambda force: self.residual(a, force, ap, lam),
+                                        constraint)
+            q = q + dq
+            v = v + gamma_prime * dq
+            a = a + beta_prime * dq
+            lam = lam + dlam
+            return dq
+
+        self.newton_loop(t, iterate)
         abar_new = abar_new + (1 - af) / (1 - am) * a
         return State(t, q, v, a, lam, {"abar": abar_new})
+
+
+def alpha_parameters(rho_inf: float) -> tuple[float, float, float, float]:
+    """(alpha_m, alpha_f, gamma, beta) of generalized-alpha for the spectral radius rho_inf."""
+    alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
+    alpha_f = rho_inf / (rho_inf + 1)
+    gamma = 0.5 + alpha_f - alpha_m
+    return alpha_m, alpha_f, gamma, 0.25 * (gamma + 0.5) ** 2
 
 
 INTEGRATORS = {"trapezoidal": Trapezoidal, "generalized_alpha": GeneralizedAlpha}

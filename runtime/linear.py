@@ -52,17 +52,61 @@ class SaddleSolver:
 
 
 def solve_symmetric_banded(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Solve a symmetric banded system (upper LAPACK storage): Cholesky when positive
-    definite, otherwise a banded LU of the mirrored full band.  Cost O(n b^2)."""
-    _, solution, info = scipy.linalg.lapack.dpbsv(band, rhs, lower=0)
-    if info == 0:
+    """Solve a symmetric banded system (upper LAPACK storage, see ``BandedFactor``)."""
+    return BandedFactor(band).solve(rhs)
+
+
+class BandedFactor:
+    """Factorisation of a symmetric banded matrix given in upper LAPACK storage
+    ((bandwidth + 1, n)): Cholesky when positive definite, otherwise a banded LU with
+    partial pivoting of the mirrored full band.  Raises LinAlgError when singular."""
+
+    def __init__(self, band: np.ndarray) -> None:
+        self.u = band.shape[0] - 1
+        self.cholesky = True
+        try:
+            self._factor = scipy.linalg.cholesky_banded(band, lower=False, check_finite=False)
+            return
+        except np.linalg.LinAlgError:
+            self.cholesky = False
+        u, n = self.u, band.shape[1]
+        full = np.zeros((3 * u + 1, n))   # dgbtrf storage: u extra rows for the fill-in
+        full[u: 2 * u + 1] = band
+        for k in range(1, u + 1):          # lower diagonals mirror the upper ones
+            full[2 * u + k, : -k] = band[u - k, k:]
+        lu, pivots, info = scipy.linalg.lapack.dgbtrf(full, u, u)
+        if info != 0:
+            raise np.linalg.LinAlgError("singular banded matrix")
+        self._factor = (lu, pivots)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solution (n,) or (n, k) of the factorised system."""
+        if self.cholesky:
+            return scipy.linalg.cho_solve_banded((self._factor, False), rhs,
+                                                 check_finite=False)
+        lu, pivots = self._factor
+        solution, info = scipy.linalg.lapack.dgbtrs(lu, self.u, self.u, rhs, pivots)
         return solution
-    if info < 0:  # pragma: no cover - an argument error is a bug here
-        raise ValueError(f"dpbsv: illegal argument {-info}")
-    else:  # not positive definite
-        u = band.shape[0] - 1
-        full = np.zeros((2 * u + 1, band.shape[1]))
-        full[: u + 1] = band
-        for k in range(1, u + 1):  # lower diagonals mirror the upper ones
-            full[u + k, : -k] = band[u - k, k:]
-        return scipy.linalg.solve_banded((u, u), full, rhs, check_finite=False)
+
+
+class SchurSolver:
+    """[[S, A^T], [A, 0]] [x; y] = [r; c] for a banded symmetric S (upper LAPACK storage)
+    and a few joint rows A: S is factorised once, y from the small Schur complement
+    A S^-1 A^T, then x = S^-1 (r - A^T y).  Needs S regular (dynamics: S contains M)."""
+
+    def __init__(self, band: np.ndarray, joints: scipy.sparse.spmatrix) -> None:
+        self.factor = BandedFactor(band)
+        self.joints = joints
+        self.m = joints.shape[0]
+        if self.m:
+            self.coupling = self.factor.solve(joints.T.toarray())   # S^-1 A^T, (n, m)
+            self._schur = scipy.linalg.lu_factor(joints @ self.coupling, check_finite=False)
+
+    def solve(self, rhs: np.ndarray, rhs_constraints: np.ndarray | None = None):
+        """(x, y) with S x + A^T y = rhs and A x = rhs_constraints (zero if None)."""
+        x = self.factor.solve(rhs)
+        if not self.m:
+            return x, np.zeros(0)
+        c = np.zeros(self.m) if rhs_constraints is None else rhs_constraints
+        y = scipy.linalg.lu_solve(self._schur, self.joints @ x - c, check_finite=False)
+        return x - self.coupling @ y, y

@@ -230,37 +230,6 @@ class Model:
 
     # --- states ------------------------------------------------------------------------
 
-    def prescribed_state(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Values, rates and accelerations (each (prescribed,)) of prescribed coordinates."""
-        if not self.hubs:
-            empty = np.zeros(0)
-            return empty, empty, empty
-        q = np.empty(self.size)
-        v = np.zeros(self.size)
-        a = np.zeros(self.size)
-        for node, law, axis in self.hubs:
-            theta, rate, acc = law.value(t), law.rate(t), law.acceleration(t)
-            rot, d_rot, dd_rot = _rotation(self.dim, axis, theta)
-            dofs = self.node_dofs(node).reshape(-1, self.dim)
-            reference = self.reference[dofs]
-            for k, name in enumerate(self.vectors):
-                if name == "r":
-                    q[dofs[k]], v[dofs[k]], a[dofs[k]] = reference[k], 0.0, 0.0
-                else:
-                    q[dofs[k]] = rot @ reference[k]
-                    v[dofs[k]] = rate * (d_rot @ reference[k])
-                    a[dofs[k]] = acc * (d_rot @ reference[k]) + rate**2 * (dd_rot @ reference[k])
-        p = self.prescribed
-        return q[p], v[p], a[p]
-
-    def full(self, q_free: np.ndarray, q_prescribed: np.ndarray,
-             fixed_values: np.ndarray | None = None) -> np.ndarray:
-        """Global vector from free and prescribed parts (fixed at reference or given)."""
-        q = self.reference.copy() if fixed_values is None else fixed_values.copy()
-        q[self.free] = q_free
-        q[self.prescribed] = q_prescribed
-        return q
-
     # --- element quantities ------------------------------------------------------------
 
     def internal_forces(self, q: np.ndarray, jacobian: bool = True):
@@ -366,18 +335,3 @@ class Model:
             u[starts + c] = vector[c]
         return u
 
-
-def _rotation(dim: int, axis: np.ndarray, theta: float):
-    """Rotation matrix R(theta) about ``axis`` (3D) or in the plane, and dR/dtheta, d2R."""
-    c, s = np.cos(theta), np.sin(theta)
-    if dim == 2:
-        rot = np.array([[c, -s], [s, c]])
-        d_rot = np.array([[-s, -c], [c, -s]])
-        return rot, d_rot, -rot
-    axis = axis / np.linalg.norm(axis)
-    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    outer = np.outer(axis, axis)
-    rot = c * np.eye(3) + s * cross + (1 - c) * outer
-    d_rot = -s * np.eye(3) + c * cross + s * outer
-    dd_rot = -c * np.eye(3) - s * cross + c * outer
-    return rot, d_rot, dd_rot

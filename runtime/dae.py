@@ -1,0 +1,164 @@
+"""The differential-algebraic system that the dynamic solvers see (both engines).
+
+    M_ff a + M_fp a_p + A_f^T lambda = F(q_full, t)         (free coordinates)
+    A_f q_free + A_p q_p + A_x q_x = 0                       (joints)
+
+``q_full`` (size,) holds every coordinate of the model; ``q_free`` (nf,) the unknowns;
+``q_p`` the prescribed coordinates (hub rotations: known values, rates and accelerations
+at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values).
+``F`` is the elastic force of the element groups plus the external loads, each a constant
+vector times a time law.  A ``DAESystem`` is built once from a ``Model`` and holds only
+arrays and the element groups; the Python engine (``runtime.integrators``) and the
+compiled engine (``runtime.stepper``) both consume it, nothing else of the model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse
+
+from runtime.analysis import length_scale
+from runtime.model import Model
+
+
+@dataclass(frozen=True)
+class ElementGroup:
+    """Elements that share one set of invariants (a body): kernels, maps, references."""
+
+    name: str
+    kind: str                 # element kind, e.g. "beam3d"
+    family: str               # kernel family, e.g. "gram_straight"
+    dofs: np.ndarray          # (elements, ndof) int32 global coordinate indices
+    e0: np.ndarray            # (elements, ndof) reference coordinates
+    element: object           # the runtime.Element whose invariants and kernels they use
+
+
+@dataclass(frozen=True)
+class Hub:
+    """A node whose gradients follow a rigid rotation R(theta(t)) about ``axis``."""
+
+    coordinates: np.ndarray   # (vectors, dim) global indices of the node's nodal vectors
+    reference: np.ndarray     # (vectors, dim) reference nodal vectors
+    rotated: np.ndarray       # (vectors,) bool: gradient (rotated) or position (held)
+    law: object               # time law of the angle theta (rad)
+    axis: np.ndarray          # (3,) rotation axis (3D); unused in 2D
+
+
+class DAESystem:
+    """Sizes, mass, element groups, joints, loads and prescribed motion of a model.
+
+    Built from a model and the full initial coordinates ``q_full`` (fixed coordinates keep
+    their values from it).  Arrays over free coordinates are in the order of ``free``.
+    """
+
+    def __init__(self, model: Model, q_full: np.ndarray) -> None:
+        self.model = model
+        self.dim, self.size = model.dim, model.size
+        self.free, self.fixed, self.prescribed = model.free, model.fixed, model.prescribed
+        self.fixed_values = np.array(q_full, dtype=float)
+        self.scale = length_scale(model)
+        self.mass_ff, self.mass_fp = model.mass_ff, model.mass_fp
+        self.bandwidth = model.bandwidth
+        self.mass_band = model.mass_banded          # (bandwidth + 1, nf), LAPACK upper
+        self.joints_free = model.joints_free.tocsr()
+        self.joints_prescribed = model.joints_prescribed.tocsr()
+        self.joint_fixed_part = np.asarray(model.joints[:, self.fixed]
+                                           @ self.fixed_values[self.fixed]).ravel()
+        self.groups = [ElementGroup(b.name, b.element.kind.name, b.element.family,
+                                    b.element_dofs.astype(np.int32), b.element_e0, b.element)
+                       for b in model.bodies.values()]
+        loads = model.nominal_loads()
+        self.load_laws = [law for law, _ in loads]
+        self.load_vectors = (np.array([vector[self.free] for _, vector in loads])
+                             if loads else np.zeros((0, self.free.size)))
+        self.hubs = [self._hub(node, law, axis) for node, law, axis in model.hubs]
+        self.projector = self._projector()
+
+    @property
+    def joints(self) -> int:
+        """Number of joint rows (Lagrange multipliers)."""
+        return self.joints_free.shape[0]
+
+    def _hub(self, node: int, law, axis: np.ndarray) -> Hub:
+        m = self.model
+        coordinates = m.node_dofs(node).reshape(-1, self.dim)
+        rotated = np.array([name != "r" for name in m.vectors])
+        return Hub(coordinates, m.reference[coordinates], rotated, law,
+                   np.asarray(axis, float) / np.linalg.norm(axis))
+
+    def _projector(self) -> np.ndarray:
+        """(nf, joints) M^-1 A^T (A M^-1 A^T)^-1 of the mass-orthogonal projection onto the
+        joints (the paper's integrator projects positions and velocities every step)."""
+        if not self.joints:
+            return np.zeros((self.free.size, 0))
+        factor = scipy.linalg.cholesky_banded(self.mass_band, lower=False)
+        minv_at = scipy.linalg.cho_solve_banded((factor, False),
+                                                self.joints_free.T.toarray())
+        schur = self.joints_free @ minv_at
+        return np.linalg.solve(schur.T, minv_at.T).T
+
+    # --- time-dependent data, vectorised over the step times of a block ------------------
+
+    def prescribed_motion(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Values, rates and accelerations (each (len(times), prescribed)) of the prescribed
+        coordinates at ``times`` (s)."""
+        times = np.atleast_1d(np.asarray(times, float))
+        n = times.size
+        q, v, a = (np.zeros((n, self.size)) for _ in range(3))
+        for hub in self.hubs:
+            theta = np.array([hub.law.value(t) for t in times])
+            rate = np.array([hub.law.rate(t) for t in times])
+            acc = np.array([hub.law.acceleration(t) for t in times])
+            rot, d_rot, dd_rot = rotations(self.dim, hub.axis, theta)
+            for k, rotated in enumerate(hub.rotated):
+                cols = hub.coordinates[k]
+                ref = hub.reference[k]
+                if not rotated:
+                    q[:, cols] = ref
+                    continue
+                q[:, cols] = rot @ ref
+                v[:, cols] = rate[:, None] * (d_rot @ ref)
+                a[:, cols] = acc[:, None] * (d_rot @ ref) + rate[:, None] ** 2 * (dd_rot @ ref)
+        p = self.prescribed
+        return q[:, p], v[:, p], a[:, p]
+
+    def load_factors(self, times: np.ndarray) -> np.ndarray:
+        """(len(times), loads) values of the loads' time laws at ``times`` (s)."""
+        times = np.atleast_1d(np.asarray(times, float))
+        return np.array([[law.value(t) for law in self.load_laws] for t in times]
+                        ).reshape(times.size, len(self.load_laws))
+
+    # --- full vectors ------------------------------------------------------------------
+
+    def full_coordinates(self, q_free: np.ndarray, q_prescribed: np.ndarray) -> np.ndarray:
+        """q_full (size,): free and prescribed parts, fixed ones at their held values."""
+        q_full = self.fixed_values.copy()
+        q_full[self.free] = q_free
+        q_full[self.prescribed] = q_prescribed
+        return q_full
+
+    def full_velocities(self, v_free: np.ndarray, v_prescribed: np.ndarray) -> np.ndarray:
+        """v_full (size,): fixed coordinates at rest."""
+        v_full = np.zeros(self.size)
+        v_full[self.free] = v_free
+        v_full[self.prescribed] = v_prescribed
+        return v_full
+
+
+def rotations(dim: int, axis: np.ndarray, theta: np.ndarray):
+    """R(theta), dR/dtheta, d2R/dtheta2 for every angle, each (len(theta), dim, dim): in the
+    plane (dim 2) or about the unit ``axis`` (dim 3, Rodrigues)."""
+    c, s = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
+    if dim == 2:
+        rot = np.concatenate([np.concatenate([c, -s], 2), np.concatenate([s, c], 2)], 1)
+        d_rot = np.concatenate([np.concatenate([-s, -c], 2), np.concatenate([c, -s], 2)], 1)
+        return rot, d_rot, -rot
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    outer, eye = np.outer(axis, axis), np.eye(3)
+    rot = c * eye + s * cross + (1 - c) * outer
+    d_rot = -s * eye + c * cross + s * outer
+    dd_rot = -c * eye - s * cross + c * outer
+    return rot, d_rot, dd_rot
