@@ -182,6 +182,16 @@ class Element:
         """
         return self._method_kernels.bind(kernel, dict(self._inputs))
 
+    @property
+    def kernel_family(self):
+        """The loaded kernel family of this element's method (``runtime.kernels``)."""
+        return self._method_kernels
+
+    @property
+    def kernel_inputs(self) -> dict:
+        """The invariant inputs of this element's method kernels, by argument name."""
+        return dict(self._inputs)
+
     def mass_matrix(self) -> np.ndarray:
         """Constant consistent mass matrix (kg), (ndof, ndof): int rho S^T S dV0."""
         n = self.kind.n_shape

@@ -114,6 +114,16 @@ class KernelFamily:
         fixed = {name: value for name, value in inputs.items() if name != first}
         return self.bind(kernel, fixed)({first: inputs[first]}, out)
 
+    def address(self, kernel: str) -> int:
+        """Address of the C function of ``kernel`` (for generated code that calls it, such
+        as the compiled stepper); valid while this family is loaded."""
+        if self.backend != "c":
+            raise ValueError(f"backend: kernel addresses exist only for backend 'c', not "
+                             f"{self.backend!r}")
+        ffi, lib = self._module.ffi, self._module.lib
+        function = ffi.addressof(lib, f"{self.kind.name}_{self.family}_{kernel}")
+        return int(ffi.cast("uintptr_t", function))
+
     def bind(self, kernel: str, fixed: dict) -> BoundKernel:
         """``kernel`` with every input but the per-call batch arrays converted once."""
         return BoundKernel(self, kernel, fixed)
