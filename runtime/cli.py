@@ -109,7 +109,8 @@ def cmd_bench(args) -> int:
 def cmd_run(args) -> int:
     from runtime.run import run
 
-    summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet)
+    summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet,
+                        args.engine)
     if code == 2:
         print(f"ancf run: {summary['message']}", file=sys.stderr)
     elif code == 1:
@@ -154,6 +155,7 @@ def cmd_bench_steps(args) -> int:
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.element import METHODS
+    from runtime.engines import ENGINES
     from runtime.kernels import BACKENDS
 
     main = argparse.ArgumentParser(prog="ancf", description=__doc__)
@@ -180,6 +182,8 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--out", required=True, help="results folder")
     run.add_argument("--method", choices=list(METHODS), help="override the scene's [solver]")
     run.add_argument("--backend", choices=list(BACKENDS), help="override the scene's [solver]")
+    run.add_argument("--engine", choices=list(ENGINES),
+                     help="dynamic engine (default: compiled with the C backend)")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     run.set_defaults(run=cmd_run)
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from runtime.catalog import NEWTON_MODES
 from runtime.dae import DAESystem
 from runtime.linear import SchurSolver, single_threaded_blas
 from runtime.model import Model
@@ -27,7 +28,6 @@ from runtime.model import Model
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
 #: the previous one (the same rule in both engines).
 CONTRACTION = 0.5
-NEWTON_MODES = ("full", "modified")
 
 
 class Divergence(RuntimeError):

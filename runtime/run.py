@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import analysis, output
-from runtime.integrators import INTEGRATORS, Divergence
+from runtime import analysis, engines, output
+from runtime.integrators import Divergence
 from runtime.model import Model
 from runtime.scene import Scene, SceneError, load_scene
 from runtime.sensors import Sensors
@@ -16,7 +16,8 @@ from runtime.signal import dominant_frequency
 
 
 def run(scene_path, out_dir: str | Path, method: str | None = None,
-        backend: str | None = None, quiet: bool = False) -> tuple[dict, int]:
+        backend: str | None = None, quiet: bool = False,
+        engine: str | None = None) -> tuple[dict, int]:
     """Run every analysis of a scene (a TOML path or a parsed Scene); returns (summary, code).
 
     Exit code 0: ok; 1: a run diverged (results up to that point are written); 2: the scene
@@ -36,12 +37,15 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
         scene = scene_path if given else load_scene(scene_path)
         summary["title"] = scene.title
         model = Model(scene, method, backend)
+        engine = engines.choose(engine or getattr(scene.solver, "engine", None),
+                                model.backend)
     except (SceneError, ValueError) as error:
         summary.update(status="failed", message=str(error))
         timing["total_s"] = time.perf_counter() - start
         output.write_json_atomic(out / "summary.json", summary)
         return summary, 2
     summary["method"], summary["backend"] = model.method, model.backend
+    built: set[str] = set()
     timing["compile_s"] = model.timing["compile_s"]
     timing["preprocess_s"] = model.timing["preprocess_s"]
     sensors = Sensors(model)
@@ -64,16 +68,16 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
                                 "frequencies_rad_s": omega.tolist(),
                                 "frequencies_hz": (omega / (2 * np.pi)).tolist()}
         if scene.dynamic is not None:
-            code = _dynamic(model, scene.dynamic, sensors, out, summary, quiet)
+            code = _dynamic(model, scene.dynamic, sensors, out, summary, quiet, engine, built)
     except analysis.ConvergenceError as error:
         summary.update(status="diverged", message=str(error))
         code = 1
     # plots are outputs, not simulation: their time is reported apart (and in total_s)
     timing["simulate_s"] = time.perf_counter() - simulate_start - timing.get("postprocess_s", 0.0)
-    summary["kernel_s"] = model.kernel_seconds
-    summary["kernels"] = sorted({f"{b.element.kind.name}/{f}/{model.backend}"
-                                 for b in model.bodies.values()
-                                 for f in ("invariants", b.element.family)})
+    summary["kernel_s"] = model.kernel_seconds + summary.get("dynamic", {}).get("kernel_s", 0)
+    summary["kernels"] = sorted(built | {f"{b.element.kind.name}/{f}/{model.backend}"
+                                         for b in model.bodies.values()
+                                         for f in ("invariants", b.element.family)})
     timing["total_s"] = time.perf_counter() - start
     output.write_json_atomic(out / "summary.json", summary)
     return summary, code
@@ -86,8 +90,10 @@ def _default_static():
 
 
 def _dynamic(model: Model, settings, sensors: Sensors, out: Path, summary: dict,
-             quiet: bool) -> int:
-    integrator = INTEGRATORS[settings.integrator](model, settings, model.reference)
+             quiet: bool, engine: str, built: set[str]) -> int:
+    integrator = engines.make(engine, model, settings, model.reference)
+    summary["timing"]["compile_s"] += getattr(integrator, "compile_s", 0.0)
+    built.update(getattr(integrator, "modules", ()))
     csv_path = out / "timeseries.csv"
     final: dict = {}
     progress = output.Progress(settings.t_end, enabled=False if quiet else None)
@@ -111,10 +117,13 @@ def _dynamic(model: Model, settings, sensors: Sensors, out: Path, summary: dict,
     counters = integrator.counters
     summary["dynamic"] = {
         "t_end": settings.t_end, "step": settings.step, "integrator": settings.integrator,
+        "engine": engine, "newton": integrator.newton,
         "t_reached": final.get("t", 0.0), "steps": counters.steps,
         "newton_iterations": counters.newton_iterations,
         "force_evaluations": counters.force_evaluations,
         "jacobian_evaluations": counters.jacobian_evaluations,
+        "factorisations": counters.factorisations,
+        "kernel_s": getattr(integrator, "kernel_seconds", 0.0),
         "sensors_final": {k: v for k, v in final.items() if k != "t"},
     }
     # post-processing (frequency fit, plots) is timed apart from the simulation

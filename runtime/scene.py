@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from runtime.catalog import ENGINES, NEWTON_MODES
 from runtime.element import METHODS
 from runtime.kernels import BACKENDS, element_kind, known_kinds
 from runtime.laws import Constant, Law, SceneError, _is_number, _show, parse_law
@@ -46,6 +47,7 @@ LOAD_TYPES = ("point_force", "gravity")
 SENSOR_TYPES = ("displacement", "position", "strain_energy", "kinetic_energy",
                 "potential_energy", "total_energy", "constraint_violation")
 INTEGRATORS = ("trapezoidal", "generalized_alpha")
+
 MODAL_ABOUT = ("reference", "static")
 # names of sensors become CSV columns and PNG file names; "t" is the time column and
 # "energies" the energy plot
@@ -215,6 +217,7 @@ class Dynamic:
     max_iterations: int = 20
     frequency_of: str | None = None    # sensor whose oscillation frequency is measured ...
     frequency_after: float = 0.0       # ... from this time (s) to t_end
+    newton: str = "full"               # full | modified (Jacobian kept while it converges)
 
 
 @dataclass(frozen=True)
@@ -223,6 +226,7 @@ class Solver:
 
     method: str = "gram"
     backend: str = "c"
+    engine: str | None = None          # compiled | python; None: compiled with backend c
 
 
 @dataclass(frozen=True)
@@ -541,7 +545,9 @@ def _dynamic(data: Any) -> Dynamic:
         "integrator": lambda v, p: _choice(v, p, INTEGRATORS, "integrator"),
         "output_every": positive, "rho_inf": _number, "tolerance": positive,
         "max_iterations": _count, "frequency_of": _string,
-        "frequency_after": lambda v, p: _number(v, p)}, required=("t_end", "step"))
+        "frequency_after": lambda v, p: _number(v, p),
+        "newton": lambda v, p: _choice(v, p, NEWTON_MODES, "Newton mode")},
+        required=("t_end", "step"))
     if not 0.0 <= fields.get("frequency_after", 0.0) < fields["t_end"]:
         raise SceneError(f"{path}.frequency_after: expected a time in [0, t_end), got "
                          f"{fields['frequency_after']!r}")
@@ -560,7 +566,8 @@ def _dynamic(data: Any) -> Dynamic:
 def _solver(data: Any) -> Solver:
     return Solver(**_table_fields(data, "solver", {
         "method": lambda v, p: _choice(v, p, METHODS, "method"),
-        "backend": lambda v, p: _choice(v, p, BACKENDS, "backend")}))
+        "backend": lambda v, p: _choice(v, p, BACKENDS, "backend"),
+        "engine": lambda v, p: _choice(v, p, ENGINES, "engine")}))
 
 
 def parse_scene(data: dict, source: str = "<scene>") -> Scene:

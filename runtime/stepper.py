@@ -20,10 +20,10 @@ import jinja2
 import numpy as np
 
 from runtime import jit
+from runtime.catalog import NEWTON_MODES
 from runtime.dae import DAESystem
 from runtime.integrators import (
     CONTRACTION,
-    NEWTON_MODES,
     NON_FINITE,
     SINGULAR,
     Counters,

@@ -1,0 +1,50 @@
+"""Engines that run a dynamic analysis: the registry (the only list of them).
+
+* ``compiled``: the whole time step in generated C (``runtime.stepper``), the default
+  wherever the C backend works;
+* ``python``: the readable reference (``runtime.integrators``), the only one with the
+  NumPy backend.
+
+Both take ``(model, settings, q_full)`` and offer ``run(t_end, step, observe, progress)``
+and ``counters``; they agree to round-off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from runtime import catalog
+from runtime.integrators import INTEGRATORS
+from runtime.model import Model
+
+
+def _python(model: Model, settings, q_full: np.ndarray):
+    return INTEGRATORS[settings.integrator](model, settings, q_full)
+
+
+def _compiled(model: Model, settings, q_full: np.ndarray):
+    from runtime.stepper import CompiledEngine
+
+    return CompiledEngine(model, settings, q_full)
+
+
+ENGINES = {"compiled": _compiled, "python": _python}
+assert tuple(ENGINES) == catalog.ENGINES
+
+
+def choose(requested: str | None, backend: str) -> str:
+    """The engine to use: ``requested``, or by default ``compiled`` with the C backend and
+    ``python`` with NumPy.  ValueError naming the option when they do not fit."""
+    if requested is None:
+        return "compiled" if backend == "c" else "python"
+    if requested not in ENGINES:
+        raise ValueError(f"engine: expected one of {', '.join(ENGINES)}, got {requested!r}")
+    if requested == "compiled" and backend != "c":
+        raise ValueError(f"engine: the compiled engine needs backend \"c\", got backend "
+                         f"{backend!r}; use engine \"python\" or backend \"c\"")
+    return requested
+
+
+def make(name: str, model: Model, settings, q_full: np.ndarray):
+    """The engine ``name`` for a dynamic analysis of ``model`` from ``q_full``."""
+    return ENGINES[name](model, settings, q_full)
