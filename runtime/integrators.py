@@ -16,6 +16,7 @@ least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterat
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,6 +94,8 @@ class Integrator:
         if self.newton not in NEWTON_MODES:
             raise ValueError(f"newton: expected one of {NEWTON_MODES}, got {self.newton!r}")
         self.counters = Counters()
+        #: seconds in steps, in element kernels and in factorisations (as the compiled engine)
+        self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         self.scale = self.dae.scale
         self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
         self._refresh = True
@@ -133,10 +136,13 @@ class Integrator:
         self.counters.newton_iterations += 1
         if rebuild:
             band = jacobian_coef * self.dae.model.banded(data) + mass_coef * self.dae.mass_band
+            start = time.perf_counter()
             try:
                 self._solver = SchurSolver(band, self.dae.joints_free)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
+            finally:
+                self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
         return self._solver.solve(-residual_of(force), None if constraint is None
@@ -192,8 +198,13 @@ class Integrator:
     def advance(self, state: State, n: int, h: float) -> State:
         """Step ``n`` (to t = n h) from ``state``."""
         t = n * h
-        prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
-        state = self.step(state, t, h, prescribed, self.dae.load_factors([t])[0])
+        start, kernels = time.perf_counter(), self.dae.model.kernel_seconds
+        try:
+            prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
+            state = self.step(state, t, h, prescribed, self.dae.load_factors([t])[0])
+        finally:
+            self.timing["steps_s"] += time.perf_counter() - start
+            self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
         return state
 

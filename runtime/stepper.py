@@ -33,6 +33,7 @@ from runtime.integrators import (
     initial_state,
     newton_not_converged,
 )
+from runtime.linear import single_threaded_blas
 from runtime.model import Model
 
 STEPPER_VERSION = "1"
@@ -120,6 +121,7 @@ class CompiledEngine:
         self.dae = DAESystem(model, q_full)
         self.counters = Counters()
         self.kernel_seconds = 0.0
+        self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         source, cdef = render(self.dae, self.integrator)
         start = time.perf_counter()
         compiled = jit.compile_module("stepper", source, cdef)
@@ -235,6 +237,10 @@ class CompiledEngine:
     def run(self, t_end: float, step: float, observe, progress=None):
         """Integrate from rest at t = 0 to ``t_end``; ``observe(t, q_full, v_full)`` at t = 0
         and every ``output_every`` seconds, as the Python engine.  Raises Divergence."""
+        with single_threaded_blas():
+            return self._run(t_end, step, observe, progress)
+
+    def _run(self, t_end: float, step: float, observe, progress) -> State:
         dae = self.dae
         state = initial_state(dae)
         m = self._model(step)
@@ -283,6 +289,8 @@ class CompiledEngine:
         c.force_evaluations, c.jacobian_evaluations = s.force_evaluations, s.jacobian_evaluations
         c.factorisations = s.factorisations
         self.kernel_seconds = s.kernel_seconds
+        self.timing = {"steps_s": s.advance_seconds, "kernel_s": s.kernel_seconds,
+                       "factorisation_s": s.factor_seconds}
 
     def _cause(self, status: int, s) -> str:
         if status == 1:
