@@ -23,8 +23,10 @@ import re
 import shlex
 import shutil
 import socket
+import stat
 import subprocess
 import sys
+import sysconfig
 import tempfile
 import threading
 import time
@@ -39,6 +41,7 @@ __all__ = [
     "CompilationError",
     "CompiledModule",
     "CompilerNotFoundError",
+    "CompilerNotWorkingError",
     "JitEnvironmentError",
     "cache_dir",
     "cache_key",
@@ -55,6 +58,7 @@ _BUILD_ENV = ("CFLAGS", "CPPFLAGS", "LDFLAGS", "LDSHARED")
 _POLL_S = 0.05
 _LOG_TAIL_CHARS = 6000
 _NAME_RE = re.compile(r"[A-Za-z0-9_]+")
+_NUMPY_HINT = "use backend='numpy' (--backend numpy on the command line)"
 
 # One build or load at a time per process: compiling redirects fds 1/2, changes the working
 # directory (cffi) and sets $CC, which are all process-wide.
@@ -68,11 +72,16 @@ class JitEnvironmentError(RuntimeError):
 
 
 class CompilerNotFoundError(JitEnvironmentError):
-    """No C compiler could be found for ``backend='c'``."""
+    """No usable C compiler could be found for ``backend='c'``."""
+
+
+class CompilerNotWorkingError(CompilerNotFoundError):
+    """A C compiler was found but cannot build extensions (it fails on a trivial C file, or
+    on Python's headers), so the fault is the machine's, not the source's."""
 
 
 class CompilationError(JitEnvironmentError):
-    """The C compiler failed; the message ends with the tail of its output."""
+    """The C compiler failed on the source; the message ends with the tail of its output."""
 
 
 class CacheError(JitEnvironmentError):
@@ -98,21 +107,40 @@ def cache_dir() -> Path:
 
     ``$ANCF_CACHE_DIR`` if set, else the platform's user cache folder: ``$XDG_CACHE_HOME/ancf``
     or ``~/.cache/ancf`` on Linux, ``~/Library/Caches/ancf`` on macOS,
-    ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.
+    ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.  Raises :class:`CacheError` (one sentence
+    naming the path, the fault and the fix) if it cannot be created or is not a folder.
     """
     env = os.environ.get("ANCF_CACHE_DIR")
-    if env:
-        path = Path(env).expanduser()
-    elif sys.platform == "win32":
-        base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
-        path = Path(base) / "ancf" / "Cache"
-    elif sys.platform == "darwin":
-        path = Path.home() / "Library" / "Caches" / "ancf"
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME")
-        base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
-        path = base / "ancf"
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        if env:
+            path = Path(env).expanduser()
+        elif sys.platform == "win32":
+            base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
+            path = Path(base) / "ancf" / "Cache"
+        elif sys.platform == "darwin":
+            path = Path.home() / "Library" / "Caches" / "ancf"
+        else:
+            xdg = os.environ.get("XDG_CACHE_HOME")
+            base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
+            path = base / "ancf"
+    except RuntimeError as exc:  # Path.home() without a home folder
+        raise CacheError(
+            f"cannot locate the kernel cache folder ({exc}): set ANCF_CACHE_DIR to a folder"
+        ) from exc
+    try:
+        if not os.path.lexists(path):
+            path.mkdir(parents=True, exist_ok=True)
+        st = os.stat(path)
+    except OSError as exc:
+        raise CacheError(
+            f"cannot create the kernel cache folder {path} ({exc.strerror or exc}): create it "
+            "or set ANCF_CACHE_DIR to a writable folder"
+        ) from exc
+    if not stat.S_ISDIR(st.st_mode):
+        raise CacheError(
+            f"kernel cache folder {path} exists but is not a folder: remove it or set "
+            "ANCF_CACHE_DIR to a folder"
+        )
     return path
 
 
@@ -337,6 +365,39 @@ def _tail(text: str) -> str:
     return text
 
 
+def _compiles(cmd: tuple[str, ...], code: str, tmp: Path, extra: Sequence[str] = ()) -> bool:
+    """True if ``cmd`` compiles ``code`` to an object file."""
+    probe = tmp / "probe.c"
+    probe.write_text(code)
+    try:
+        res = subprocess.run(
+            [*cmd, *extra, "-c", str(probe), "-o", str(tmp / "probe.o")],
+            capture_output=True, timeout=120, check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return res.returncode == 0
+
+
+def _diagnose_compiler(cmd: tuple[str, ...], tmp: Path) -> None:
+    """After a failed build, raise :class:`CompilerNotWorkingError` if the compiler fails on
+    a trivial C file or on Python's headers (a machine fault, not the source's)."""
+    if not _compiles(cmd, "int ancf_probe(void) { return 0; }\n", tmp):
+        raise CompilerNotWorkingError(
+            f"the C compiler {shlex.join(cmd)} does not work (it cannot compile an empty C "
+            f"function): set CC to a working compiler, install gcc, or {_NUMPY_HINT}."
+        )
+    includes = dict.fromkeys(
+        filter(None, (sysconfig.get_path("include"), sysconfig.get_path("platinclude")))
+    )
+    if not _compiles(cmd, "#include <Python.h>\n", tmp, [f"-I{d}" for d in includes]):
+        raise CompilerNotWorkingError(
+            f"the C compiler {shlex.join(cmd)} cannot compile against Python's headers "
+            f"(Python.h in {', '.join(includes)}): install the Python development package "
+            f"(python3-dev or python3-devel) or {_NUMPY_HINT}."
+        )
+
+
 def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: Path) -> Path:
     """Compile in a private temporary folder and move the .so into ``folder`` atomically."""
     import cffi
@@ -355,6 +416,7 @@ def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: P
             except Exception as exc:  # cffi.VerificationError, CDefError, distutils errors
                 error = exc
         if error is not None or built is None:
+            _diagnose_compiler(cmd, tmp)
             log = log_path.read_text(encoding="utf-8", errors="replace")
             raise CompilationError(
                 f"compiling C module {modname} with {shlex.join(cmd)} failed: {error}\n"
@@ -370,7 +432,7 @@ def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: P
 def _no_compiler_message(tried: list[str]) -> str:
     return (
         f"backend='c' needs a C compiler and none was found (tried {', '.join(tried)}): "
-        "install gcc or use backend='numpy'."
+        "install gcc or use backend='numpy' (--backend numpy on the command line)."
     )
 
 
@@ -419,6 +481,8 @@ def _obtain(
                 continue  # finished by someone else between our checks
             try:
                 path = _build(modname, source, cdef, cmd, folder)
+            except CompilerNotWorkingError:
+                raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
                 os.write(fd, str(exc).encode("utf-8", "replace"))
                 os.close(fd)
@@ -444,8 +508,11 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
 
     ``name`` becomes part of the module name ``_ancf_{name}_{hash}``.  Returns the loaded
     module; ``compiled`` tells whether this call ran the compiler.  ``timeout_s`` is the age
-    after which another process's lock counts as stale.  Raises :class:`CompilerNotFoundError`
-    when no C compiler exists and :class:`CompilationError` when compilation fails.
+    after which another process's lock counts as stale.  Raises
+    :class:`CompilerNotFoundError` when no C compiler exists,
+    :class:`CompilerNotWorkingError` when it cannot build extensions,
+    :class:`CompilationError` when the source fails to compile and :class:`CacheError` when
+    the cache folder is unsafe or unusable (all :class:`JitEnvironmentError`).
     """
     t0 = time.perf_counter()
     modname = module_name(name, source, cdef)
@@ -453,7 +520,15 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
         memo = _MEMO.get(modname)
         if memo is not None:
             return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
-        module, compiled, path = _obtain(modname, source, cdef, cache_dir(), timeout_s)
+        folder = cache_dir()
+        try:
+            module, compiled, path = _obtain(modname, source, cdef, folder, timeout_s)
+        except OSError as exc:
+            where = f": {exc.filename}" if exc.filename else ""
+            raise CacheError(
+                f"kernel cache folder {folder} is not usable ({exc.strerror or exc}{where}): "
+                "make it writable or set ANCF_CACHE_DIR to a writable folder of your own"
+            ) from exc
         result = CompiledModule(module, compiled, time.perf_counter() - t0, path)
         _MEMO[modname] = result
         return result

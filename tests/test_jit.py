@@ -236,7 +236,7 @@ def test_no_compiler_gives_one_clear_sentence(
     with pytest.raises(jit.CompilerNotFoundError) as info:
         jit.compile_module("axpy", src, CDEF)
     msg = str(info.value)
-    assert "install gcc" in msg and "backend='numpy'" in msg
+    assert "install gcc" in msg and "backend='numpy'" in msg and "--backend numpy" in msg
     assert "no-such-cc" in msg and "gcc, cc" in msg
     assert msg.count(". ") == 0 and msg.endswith(".")
     assert not [p for p in cache.iterdir() if ".lock" in p.name]
