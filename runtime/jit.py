@@ -4,10 +4,16 @@ The module name is a hash of everything that changes the binary (source, cdef, c
 identity, flags, Python ABI, machine, cffi version, and the CPU because of ``-march=native``),
 so a cached ``.so`` is never stale.  Several processes may ask for the same new module at the
 same moment: the first to create ``<modname>.lock`` exclusively compiles in a private temporary
-folder, moves the ``.so`` into place atomically and writes ``<modname>.ready`` last; the others
-poll for the marker.  A failed build renames the lock to ``<modname>.failed`` (holding the
-compiler log); waiters raise from it and a later fresh call removes it and tries again.
-No lock library is used (the scheme follows FEniCS FFCx's JIT cache).
+folder, moves the ``.so`` into place atomically and writes ``<modname>.ready`` (the SHA-256 of
+the ``.so``) last; the others poll for the marker.  A failed build renames the lock to
+``<modname>.failed`` (holding the compiler log); waiters raise from it and a later fresh call
+removes it and tries again.  No lock library is used (the scheme follows FEniCS FFCx's JIT
+cache).
+
+Loading a shared object runs its code, so the cache is private: folders are created with mode
+0700, a folder or cached file that belongs to another user, is writable by group or others or
+is a symbolic link is refused (:class:`CacheError`), and a ``.so`` is loaded only if its
+SHA-256 matches its ready marker (otherwise it is rebuilt).
 """
 
 from __future__ import annotations
@@ -52,7 +58,8 @@ __all__ = [
 COMPILE_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-ffp-contract=fast", "-std=gnu11")
 
 #: Bump when the way modules are built changes (invalidates every cached binary).
-_JIT_FORMAT = "1"
+#: 2: the ready marker holds the SHA-256 of the shared object.
+_JIT_FORMAT = "2"
 #: Environment variables that distutils folds into the compile or link command.
 _BUILD_ENV = ("CFLAGS", "CPPFLAGS", "LDFLAGS", "LDSHARED")
 _POLL_S = 0.05
@@ -102,13 +109,81 @@ class CompiledModule:
 # --------------------------------------------------------------------------- cache folder
 
 
+def _euid() -> int | None:
+    """The effective user id, None where the platform has none (Windows: no checks)."""
+    return os.geteuid() if hasattr(os, "geteuid") else None
+
+
+def _check_private(path: Path, st: os.stat_result, folder: bool) -> None:
+    """Raise :class:`CacheError` unless ``st`` (of the cache folder, or of a cached file)
+    belongs to us and only we can write it."""
+    euid = _euid()
+    if euid is None:
+        return
+    what = "kernel cache folder" if folder else "cached file"
+    if st.st_uid != euid:
+        fix = "set ANCF_CACHE_DIR to a folder of your own" if folder else (
+            "delete it (it is rebuilt) or set ANCF_CACHE_DIR to a folder of your own")
+        raise CacheError(
+            f"{what} {path} belongs to another user (uid {st.st_uid}, you are uid {euid}), "
+            f"who could plant code in it: {fix}"
+        )
+    if st.st_mode & 0o022:
+        fix = f"run 'chmod go-w {path}' or set ANCF_CACHE_DIR to a private folder" if folder \
+            else "delete it (it is rebuilt) or set ANCF_CACHE_DIR to a private folder"
+        raise CacheError(
+            f"{what} {path} is writable by group or others (mode "
+            f"{stat.S_IMODE(st.st_mode):04o}), so another user could plant code in it: {fix}"
+        )
+
+
+def _check_path_to(path: Path) -> None:
+    """Refuse a cache path another user could redirect: a folder above it that others may
+    write without the sticky bit, or a symbolic link on the way that another user owns."""
+    euid = _euid()
+    if euid is None:
+        return
+    logical = Path(os.path.abspath(path))
+    for p in [logical, *logical.parents, *Path(os.path.realpath(path)).parents]:
+        try:
+            st = os.lstat(p)
+        except OSError:
+            continue
+        if stat.S_ISLNK(st.st_mode) and st.st_uid not in (0, euid):
+            raise CacheError(
+                f"symbolic link {p} on the way to the kernel cache folder {path} belongs to "
+                f"another user (uid {st.st_uid}), who could redirect the cache: set "
+                "ANCF_CACHE_DIR to a path without it"
+            )
+        if (stat.S_ISDIR(st.st_mode) and p != logical and st.st_mode & stat.S_IWOTH
+                and not st.st_mode & stat.S_ISVTX):
+            raise CacheError(
+                f"folder {p} above the kernel cache folder {path} is writable by others "
+                "without the sticky bit, so another user could swap the cache: set "
+                "ANCF_CACHE_DIR to a folder on a private path"
+            )
+
+
+def _make_folder(path: Path) -> None:
+    """Create ``path`` and its missing parents with mode 0700 (whatever the umask)."""
+    missing = []
+    p = path
+    while not os.path.lexists(p) and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    for p in reversed(missing):
+        with contextlib.suppress(FileExistsError):
+            os.mkdir(p, 0o700)
+
+
 def cache_dir() -> Path:
-    """Return the cache folder (created if missing).
+    """Return the cache folder, created with mode 0700 if missing and checked to be private.
 
     ``$ANCF_CACHE_DIR`` if set, else the platform's user cache folder: ``$XDG_CACHE_HOME/ancf``
     or ``~/.cache/ancf`` on Linux, ``~/Library/Caches/ancf`` on macOS,
     ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.  Raises :class:`CacheError` (one sentence
-    naming the path, the fault and the fix) if it cannot be created or is not a folder.
+    naming the path, the fault and the fix) if it cannot be created, is not a folder, belongs
+    to another user or can be written by group or others.
     """
     env = os.environ.get("ANCF_CACHE_DIR")
     try:
@@ -128,8 +203,7 @@ def cache_dir() -> Path:
             f"cannot locate the kernel cache folder ({exc}): set ANCF_CACHE_DIR to a folder"
         ) from exc
     try:
-        if not os.path.lexists(path):
-            path.mkdir(parents=True, exist_ok=True)
+        _make_folder(path)
         st = os.stat(path)
     except OSError as exc:
         raise CacheError(
@@ -141,6 +215,8 @@ def cache_dir() -> Path:
             f"kernel cache folder {path} exists but is not a folder: remove it or set "
             "ANCF_CACHE_DIR to a folder"
         )
+    _check_private(path, st, folder=True)
+    _check_path_to(path)
     return path
 
 
@@ -263,7 +339,44 @@ def _import_so(modname: str, path: Path) -> types.ModuleType:
     return module
 
 
+def _read_private(path: Path) -> bytes | None:
+    """The content of a cached file, None if missing; :class:`CacheError` if it is a symbolic
+    link or not a regular file, belongs to another user or can be written by others."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
+        raise CacheError(
+            f"cached file {path} is {kind}, which the cache never creates: delete it (it is "
+            "rebuilt) or set ANCF_CACHE_DIR to a folder of your own"
+        )
+    _check_private(path, st, folder=False)
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0))
+    with os.fdopen(fd, "rb") as fh:
+        if os.fstat(fh.fileno()).st_ino != st.st_ino:
+            return None  # replaced since the check: look again
+        return fh.read()
+
+
+def _verified(so: Path, ready: Path) -> bool:
+    """True if the ready marker exists and names the SHA-256 of the shared object."""
+    marker = _read_private(ready)
+    if marker is None:
+        return False
+    fields = marker.decode("ascii", "replace").split()
+    if len(fields) != 2 or fields[1] != so.name:
+        return False
+    binary = _read_private(so)
+    return binary is not None and hashlib.sha256(binary).hexdigest() == fields[0]
+
+
 # --------------------------------------------------------------------------- locking
+
+
+def _owner_line() -> bytes:
+    return f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n".encode()
 
 
 def _take_lock(lock: Path) -> int | None:
@@ -272,7 +385,7 @@ def _take_lock(lock: Path) -> int | None:
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
     except FileExistsError:
         return None
-    os.write(fd, f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n".encode())
+    os.write(fd, _owner_line())
     return fd
 
 
@@ -398,13 +511,16 @@ def _diagnose_compiler(cmd: tuple[str, ...], tmp: Path) -> None:
         )
 
 
-def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: Path) -> Path:
-    """Compile in a private temporary folder and move the .so into ``folder`` atomically."""
+def _build(
+    modname: str, source: str, cdef: str, cmd: tuple[str, ...], so: Path, ready: Path
+) -> None:
+    """Compile in a private temporary folder (removed whatever happens), move the .so into
+    place atomically, then write its ready marker (its SHA-256) atomically."""
     import cffi
 
-    tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=folder))
-    log_path = tmp / "build.log"
+    tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=so.parent))
     try:
+        log_path = tmp / "build.log"
         error: BaseException | None = None
         built: str | None = None
         with _captured_output(log_path), _compiler_env(cmd):
@@ -422,9 +538,14 @@ def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: P
                 f"compiling C module {modname} with {shlex.join(cmd)} failed: {error}\n"
                 f"--- compiler output (tail) ---\n{_tail(log)}"
             ) from error
-        target = _so_path(folder, modname)
-        os.replace(built, target)
-        return target
+        os.chmod(built, 0o755)  # whatever the umask: only we may write it
+        digest = hashlib.sha256(Path(built).read_bytes()).hexdigest()
+        os.replace(built, so)
+        marker = tmp / "ready"
+        fd = os.open(marker, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        with os.fdopen(fd, "w", encoding="ascii") as fh:
+            fh.write(f"{digest}  {so.name}\n")
+        os.replace(marker, ready)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -445,17 +566,13 @@ def _obtain(
     lock = folder / f"{modname}.lock"
     failed = folder / f"{modname}.failed"
     fresh = True  # a fresh call clears an old .failed; a waiter raises from a new one
-    retried_load = False
+    trust_cache = True  # False once a verified cached binary failed to import: rebuild it
     while True:
-        if ready.exists() and so.exists():
+        if trust_cache and _verified(so, ready):
             try:
                 return _import_so(modname, so), False, so
             except ImportError:
-                if retried_load:
-                    raise
-                retried_load = True  # damaged binary: rebuild once
-                with contextlib.suppress(FileNotFoundError):
-                    ready.unlink()
+                trust_cache = False
                 continue
         if failed.exists():
             if not fresh:
@@ -474,13 +591,15 @@ def _obtain(
             _break_stale_lock(lock, timeout_s)
             time.sleep(_POLL_S)
             continue
-        # We own the lock: build, publish the .so, write .ready last, release.
+        # We own the lock: build, publish the .so and its ready marker, release.
         holding = True
         try:
-            if ready.exists() and so.exists():
+            if trust_cache and _verified(so, ready):
                 continue  # finished by someone else between our checks
+            with contextlib.suppress(FileNotFoundError):
+                ready.unlink()  # corrupt, planted or unloadable: never trust it again
             try:
-                path = _build(modname, source, cdef, cmd, folder)
+                _build(modname, source, cdef, cmd, so, ready)
             except CompilerNotWorkingError:
                 raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
@@ -490,8 +609,7 @@ def _obtain(
                 os.replace(lock, failed)
                 holding = False
                 raise
-            ready.write_text(f"{path.name}\n")
-            return _import_so(modname, path), True, path
+            return _import_so(modname, so), True, so
         finally:
             if fd != -1:
                 os.close(fd)

@@ -1,11 +1,14 @@
-"""Tests of runtime.jit under environment faults: compilers that do not work and cache
-folders that cannot be used must each give one clear sentence."""
+"""Tests of runtime.jit under faults and attack: broken compilers, unusable or unsafe cache
+folders, planted shared objects."""
 
 from __future__ import annotations
 
+import hashlib
+import importlib.machinery
 import json
 import os
 import shutil
+import stat
 import subprocess
 import sys
 import uuid
@@ -145,5 +148,185 @@ def test_read_only_cache_loads_what_it_holds_and_refuses_new_builds_clearly(
     kind, msg = out["error"]
     assert kind == "CacheError" and "\n" not in msg
     assert str(cache) in msg and "writable" in msg and "ANCF_CACHE_DIR" in msg
+
+
+# --------------------------------------------------------------------------- planted code
+
+
+PLANTED_C = r"""
+#include <stdio.h>
+#include <stdlib.h>
+__attribute__((constructor)) static void planted(void) {
+    const char *mark = getenv("ANCF_TEST_PLANTED");
+    FILE *f = mark ? fopen(mark, "w") : NULL;
+    if (f) { fputs("planted code ran\n", f); fclose(f); }
+}
+"""
+
+
+
+def so_name(modname: str) -> str:
+    return modname + importlib.machinery.EXTENSION_SUFFIXES[0]
+
+
+@pytest.fixture
+def planted(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, Path]:
+    """A shared object whose constructor writes the returned mark file when loaded."""
+    assert CC is not None
+    src = tmp_path / "planted.c"
+    src.write_text(PLANTED_C)
+    so = tmp_path / "planted.so"
+    subprocess.run([CC, "-shared", "-fPIC", "-o", str(so), str(src)], check=True)
+    mark = tmp_path / "planted-code-ran"
+    monkeypatch.setenv("ANCF_TEST_PLANTED", str(mark))
+    return so, mark
+
+
+def other_user(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make ``path`` belong to another user (really as root, else by faking our uid)."""
+    if os.geteuid() == 0:
+        os.chown(path, 65534, 65534)
+    else:
+        uid = os.geteuid() + 1
+        monkeypatch.setattr(os, "geteuid", lambda: uid)
+
+
+@needs_cc
+def test_planted_module_in_a_cache_folder_others_can_write_is_never_loaded(
+    cache: Path, planted: tuple[Path, Path]
+) -> None:
+    planted_so, mark = planted
+    cache.mkdir()
+    os.chmod(cache, 0o777)
+    src = unique_source("planted")
+    modname = jit.module_name("axpy", src, CDEF)
+    so = cache / so_name(modname)
+    shutil.copy(planted_so, so)
+    digest = hashlib.sha256(so.read_bytes()).hexdigest()
+    (cache / f"{modname}.ready").write_text(f"{digest}  {so.name}\n")  # even a right hash
+    with pytest.raises(jit.CacheError) as info:
+        jit.compile_module("axpy", src, CDEF)
+    msg = one_sentence(info.value)
+    assert str(cache) in msg and "writable by group or others" in msg
+    assert "ANCF_CACHE_DIR" in msg
+    assert not mark.exists()
+
+
+LOAD = """
+import json, sys
+from runtime import jit
+r = jit.compile_module('axpy', sys.argv[1], sys.argv[2])
+print(json.dumps({'compiled': r.compiled, 'value': r.module.lib.axpy(2.0, 3.0, 4.0)}))
+"""
+
+
+@needs_cc
+def test_binary_not_matching_its_ready_marker_is_rebuilt_never_loaded(
+    cache: Path, planted: tuple[Path, Path]
+) -> None:
+    planted_so, mark = planted
+    src = unique_source("swapped")
+    first = jit.compile_module("axpy", src, CDEF)
+    ready = first.path.with_name(f"{first.module.__name__}.ready")
+    assert hashlib.sha256(first.path.read_bytes()).hexdigest() in ready.read_text()
+
+    # Same owner, same name, but not the binary the marker names (loaded in a fresh process,
+    # because this one already holds the module).
+    swap = cache / "swap.tmp"
+    shutil.copy(planted_so, swap)
+    os.replace(swap, first.path)
+    assert run_child(LOAD, src, CDEF) == {"compiled": True, "value": 10.0}
+    assert not mark.exists()
+    assert hashlib.sha256(first.path.read_bytes()).hexdigest() in ready.read_text()
+
+    # A partially written binary is rebuilt too.
+    data = first.path.read_bytes()
+    swap.write_bytes(data[: len(data) // 2])
+    os.replace(swap, first.path)
+    assert run_child(LOAD, src, CDEF) == {"compiled": True, "value": 10.0}
+    assert run_child(LOAD, src, CDEF) == {"compiled": False, "value": 10.0}
+
+
+def test_cached_files_others_can_write_or_that_are_links_are_refused(
+    cache: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    src = unique_source("cached-file")
+    first = jit.compile_module("axpy", src, CDEF)
+    ready = first.path.with_name(f"{first.module.__name__}.ready")
+
+    monkeypatch.setattr(jit, "_MEMO", {})
+    os.chmod(first.path, 0o777)
+    with pytest.raises(jit.CacheError) as info:
+        jit.compile_module("axpy", src, CDEF)
+    msg = one_sentence(info.value)
+    assert str(first.path) in msg and "writable by group or others" in msg
+    assert "delete it" in msg
+    os.chmod(first.path, 0o755)
+
+    moved = ready.with_name("elsewhere")
+    os.replace(ready, moved)
+    ready.symlink_to(moved)
+    with pytest.raises(jit.CacheError, match="symbolic link") as info:
+        jit.compile_module("axpy", src, CDEF)
+    assert str(ready) in one_sentence(info.value)
+    os.replace(moved, ready)
+    assert jit.compile_module("axpy", src, CDEF).compiled is False
+
+    if os.geteuid() == 0:
+        monkeypatch.setattr(jit, "_MEMO", {})
+        os.chown(first.path, 65534, 65534)
+        with pytest.raises(jit.CacheError, match="belongs to another user"):
+            jit.compile_module("axpy", src, CDEF)
+
+
+def test_cache_folder_of_another_user_or_open_to_others_is_refused(
+    cache: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    cache.mkdir()
+    os.chmod(cache, 0o775)
+    with pytest.raises(jit.CacheError) as info:
+        jit.cache_dir()
+    msg = one_sentence(info.value)
+    assert str(cache) in msg and "chmod go-w" in msg and "ANCF_CACHE_DIR" in msg
+    os.chmod(cache, 0o700)
+    assert jit.cache_dir() == cache
+
+    other_user(cache, monkeypatch)
+    with pytest.raises(jit.CacheError) as info:
+        jit.cache_dir()
+    msg = one_sentence(info.value)
+    assert str(cache) in msg and "belongs to another user" in msg and "ANCF_CACHE_DIR" in msg
+
+
+def test_cache_folders_are_private_whatever_the_umask(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "a" / "b"
+    monkeypatch.setenv("ANCF_CACHE_DIR", str(folder))
+    old = os.umask(0)
+    try:
+        assert jit.cache_dir() == folder
+        jit.compile_module("axpy", unique_source("umask"), CDEF)
+    finally:
+        os.umask(old)
+    for p in (folder, folder.parent):
+        assert stat.S_IMODE(p.stat().st_mode) == 0o700, p
+    for p in folder.iterdir():
+        assert not p.stat().st_mode & 0o022, p
+
+
+def test_cache_below_a_folder_others_can_write_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o777)
+    monkeypatch.setenv("ANCF_CACHE_DIR", str(shared / "cache"))
+    with pytest.raises(jit.CacheError) as info:
+        jit.cache_dir()
+    msg = one_sentence(info.value)
+    assert str(shared) in msg and "sticky" in msg and "ANCF_CACHE_DIR" in msg
+    os.chmod(shared, 0o1777)  # like /tmp: others cannot rename what is ours
+    assert jit.cache_dir() == shared / "cache"
 
 
