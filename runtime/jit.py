@@ -63,6 +63,11 @@ _JIT_FORMAT = "2"
 #: Environment variables that distutils folds into the compile or link command.
 _BUILD_ENV = ("CFLAGS", "CPPFLAGS", "LDFLAGS", "LDSHARED")
 _POLL_S = 0.05
+#: A waiter says once on stderr whom it waits for after this many seconds.
+_NOTICE_S = 2.0
+#: A lock whose owner process started this much later than the lock was written names a
+#: reused PID (the owner died and the PID went to another process).
+_PID_REUSE_SLACK_S = 2.0
 _LOG_TAIL_CHARS = 6000
 _NAME_RE = re.compile(r"[A-Za-z0-9_]+")
 _NUMPY_HINT = "use backend='numpy' (--backend numpy on the command line)"
@@ -92,8 +97,8 @@ class CompilationError(JitEnvironmentError):
 
 
 class CacheError(JitEnvironmentError):
-    """The kernel cache folder is unusable (not a folder, not writable) or unsafe (owned by
-    another user or writable by others)."""
+    """The kernel cache folder is unusable (not a folder, not writable, a wait for another
+    process's compile timed out) or unsafe (owned by another user or writable by others)."""
 
 
 @dataclass(frozen=True)
@@ -102,8 +107,9 @@ class CompiledModule:
 
     module: types.ModuleType  # the cffi extension module (has .ffi and .lib)
     compiled: bool  # True if this call compiled it, False if loaded from cache/memo
-    seconds: float  # wall time spent in this call (compile or load)
+    seconds: float  # wall time spent in this call (compile, wait for another process, load)
     path: Path  # the .so file
+    waited: bool = False  # True if `seconds` includes waiting for another process's compile
 
 
 # --------------------------------------------------------------------------- cache folder
@@ -389,13 +395,47 @@ def _take_lock(lock: Path) -> int | None:
     return fd
 
 
-def _owner_is_dead(lock: Path) -> bool:
-    """True if the lock names a process on this host that no longer exists."""
+def _lock_owner(lock: Path) -> tuple[int, str, float] | None:
+    """PID, host and time written in a lock file; None if unreadable."""
     try:
-        pid_s, host, _ = lock.read_text().split()
-        pid = int(pid_s)
+        pid_s, host, time_s = lock.read_text().split()
+        return int(pid_s), host, float(time_s)
     except (OSError, ValueError):
-        return False  # gone, or not written yet
+        return None  # gone, or not written yet
+
+
+@functools.lru_cache(maxsize=1)
+def _boot_time() -> float | None:
+    try:
+        with open("/proc/stat", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("btime "):
+                    return float(line.split()[1])
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _process_start(pid: int) -> float | None:
+    """Wall-clock start time of process ``pid`` (Linux /proc), None if unknown."""
+    boot = _boot_time()
+    if boot is None:
+        return None
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as fh:
+            fields = fh.read().rpartition(")")[2].split()
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _owner_is_dead(lock: Path) -> bool:
+    """True if the lock names a process on this host that no longer exists, or whose PID now
+    belongs to a process started after the lock was written."""
+    owner = _lock_owner(lock)
+    if owner is None:
+        return False
+    pid, host, written = owner
     if host != socket.gethostname() or pid == os.getpid():
         return False
     try:
@@ -403,8 +443,9 @@ def _owner_is_dead(lock: Path) -> bool:
     except ProcessLookupError:
         return True
     except OSError:
-        return False
-    return False
+        pass  # alive, owned by another user
+    started = _process_start(pid)
+    return started is not None and started > written + _PID_REUSE_SLACK_S
 
 
 def _break_stale_lock(lock: Path, timeout_s: float) -> None:
@@ -428,6 +469,24 @@ def _break_stale_lock(lock: Path, timeout_s: float) -> None:
     finally:
         with contextlib.suppress(OSError):
             grave.unlink()
+
+
+def _wait_notice(lock: Path, modname: str) -> str:
+    owner = _lock_owner(lock)
+    who = f"process {owner[0]} on {owner[1]}" if owner else "another process"
+    return (
+        f"ancf: waiting for {who} to finish compiling C module {modname} (lock file {lock}; "
+        "delete it if that process is gone)\n"
+    )
+
+
+def _wait_timeout_message(lock: Path, modname: str, timeout_s: float) -> str:
+    owner = _lock_owner(lock)
+    who = f"process {owner[0]} on {owner[1]}" if owner else "another process"
+    return (
+        f"gave up after {timeout_s:.0f} s waiting for {who} to compile C module {modname}: "
+        f"if no such compile is running, delete the lock file {lock} and try again"
+    )
 
 
 # --------------------------------------------------------------------------- building
@@ -559,18 +618,24 @@ def _no_compiler_message(tried: list[str]) -> str:
 
 def _obtain(
     modname: str, source: str, cdef: str, folder: Path, timeout_s: float
-) -> tuple[types.ModuleType, bool, Path]:
-    """Load ``modname`` from the cache, compiling it (or waiting for another process) first."""
+) -> tuple[types.ModuleType, bool, bool, Path]:
+    """Load ``modname`` from the cache, compiling it (or waiting for another process) first.
+
+    Returns the module, whether this call compiled it, whether it waited for another
+    process, and the .so path.
+    """
     so = _so_path(folder, modname)
     ready = folder / f"{modname}.ready"
     lock = folder / f"{modname}.lock"
     failed = folder / f"{modname}.failed"
     fresh = True  # a fresh call clears an old .failed; a waiter raises from a new one
     trust_cache = True  # False once a verified cached binary failed to import: rebuild it
+    wait_start: float | None = None
+    noticed = False
     while True:
         if trust_cache and _verified(so, ready):
             try:
-                return _import_so(modname, so), False, so
+                return _import_so(modname, so), False, wait_start is not None, so
             except ImportError:
                 trust_cache = False
                 continue
@@ -588,7 +653,15 @@ def _obtain(
         fd = _take_lock(lock)
         if fd is None:
             fresh = False
+            now = time.monotonic()
+            wait_start = now if wait_start is None else wait_start
             _break_stale_lock(lock, timeout_s)
+            if not noticed and now - wait_start >= _NOTICE_S and lock.exists():
+                sys.stderr.write(_wait_notice(lock, modname))
+                sys.stderr.flush()
+                noticed = True
+            if now - wait_start > timeout_s and lock.exists():
+                raise CacheError(_wait_timeout_message(lock, modname, timeout_s))
             time.sleep(_POLL_S)
             continue
         # We own the lock: build, publish the .so and its ready marker, release.
@@ -609,7 +682,7 @@ def _obtain(
                 os.replace(lock, failed)
                 holding = False
                 raise
-            return _import_so(modname, so), True, so
+            return _import_so(modname, so), True, wait_start is not None, so
         finally:
             if fd != -1:
                 os.close(fd)
@@ -625,9 +698,10 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
     """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
 
     ``name`` becomes part of the module name ``_ancf_{name}_{hash}``.  Returns the loaded
-    module; ``compiled`` tells whether this call ran the compiler.  ``timeout_s`` is the age
-    after which another process's lock counts as stale.  Raises
-    :class:`CompilerNotFoundError` when no C compiler exists,
+    module; ``compiled`` tells whether this call ran the compiler and ``waited`` whether it
+    waited for another process's compile (``seconds`` includes that wait).  ``timeout_s`` is
+    the age after which another process's lock counts as stale, and the longest this call
+    waits for one.  Raises :class:`CompilerNotFoundError` when no C compiler exists,
     :class:`CompilerNotWorkingError` when it cannot build extensions,
     :class:`CompilationError` when the source fails to compile and :class:`CacheError` when
     the cache folder is unsafe or unusable (all :class:`JitEnvironmentError`).
@@ -640,13 +714,13 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
             return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
         folder = cache_dir()
         try:
-            module, compiled, path = _obtain(modname, source, cdef, folder, timeout_s)
+            module, compiled, waited, path = _obtain(modname, source, cdef, folder, timeout_s)
         except OSError as exc:
             where = f": {exc.filename}" if exc.filename else ""
             raise CacheError(
                 f"kernel cache folder {folder} is not usable ({exc.strerror or exc}{where}): "
                 "make it writable or set ANCF_CACHE_DIR to a writable folder of your own"
             ) from exc
-        result = CompiledModule(module, compiled, time.perf_counter() - t0, path)
+        result = CompiledModule(module, compiled, time.perf_counter() - t0, path, waited)
         _MEMO[modname] = result
         return result

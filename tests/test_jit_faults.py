@@ -1,5 +1,5 @@
 """Tests of runtime.jit under faults and attack: broken compilers, unusable or unsafe cache
-folders, planted shared objects."""
+folders, planted shared objects, long or stale locks."""
 
 from __future__ import annotations
 
@@ -8,9 +8,12 @@ import importlib.machinery
 import json
 import os
 import shutil
+import socket
 import stat
 import subprocess
 import sys
+import threading
+import time
 import uuid
 from pathlib import Path
 
@@ -328,5 +331,103 @@ def test_cache_below_a_folder_others_can_write_is_refused(
     assert str(shared) in msg and "sticky" in msg and "ANCF_CACHE_DIR" in msg
     os.chmod(shared, 0o1777)  # like /tmp: others cannot rename what is ours
     assert jit.cache_dir() == shared / "cache"
+
+
+# --------------------------------------------------------------------------- waiting
+
+
+def release_after(seconds: float, lock: Path) -> threading.Timer:
+    """Remove ``lock`` after a while, so that code without a fix ends (late) instead of
+    hanging."""
+    timer = threading.Timer(seconds, lambda: lock.unlink(missing_ok=True))
+    timer.start()
+    return timer
+
+
+SLOW_OWNER = """
+import sys, time
+from runtime import jit
+build = jit._build
+def slow_build(*args):
+    time.sleep(float(sys.argv[3]))
+    build(*args)
+jit._build = slow_build
+print(jit.compile_module('axpy', sys.argv[1], sys.argv[2]).compiled)
+"""
+
+
+def test_waiter_reports_its_wait_and_says_once_whom_it_waits_for(
+    cache: Path, capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    src = unique_source("waiter")
+    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    owner = subprocess.Popen(
+        [sys.executable, "-c", SLOW_OWNER, src, CDEF, "2.0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
+    )
+    try:
+        deadline = time.monotonic() + 60
+        while not lock.exists():
+            assert owner.poll() is None, owner.communicate()
+            assert time.monotonic() < deadline, "the owner never took the lock"
+            time.sleep(0.01)
+        monkeypatch.setattr(jit, "_NOTICE_S", 0.3)
+        r = jit.compile_module("axpy", src, CDEF)
+        out, err = owner.communicate(timeout=60)
+    finally:
+        if owner.poll() is None:
+            owner.kill()
+    assert owner.returncode == 0 and out.strip() == "True", err
+    assert r.compiled is False and r.waited is True
+    assert r.seconds > 0.5  # the wait counts: callers report it as compile time
+    assert r.module.lib.axpy(2.0, 3.0, 4.0) == 10.0
+    stderr = capfd.readouterr().err
+    assert stderr.count("ancf: waiting for") == 1, stderr
+    assert f"process {owner.pid} on {socket.gethostname()}" in stderr and str(lock) in stderr
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_lock_naming_a_reused_pid_is_broken_at_once(cache: Path) -> None:
+    src = unique_source("reused-pid")
+    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    cache.mkdir()
+    newcomer = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    # The lock was written a minute before the process now holding its PID started.
+    lock.write_text(f"{newcomer.pid} {socket.gethostname()} {time.time() - 60:.3f}\n")
+    timer = release_after(10, lock)
+    try:
+        start = time.perf_counter()
+        r = jit.compile_module("axpy", src, CDEF)
+        elapsed = time.perf_counter() - start
+    finally:
+        timer.cancel()
+        newcomer.kill()
+        newcomer.wait()
+    assert r.compiled and r.module.lib.axpy(1.0, 2.0, 3.0) == 5.0
+    assert elapsed < 8
+
+
+def test_wait_is_bounded_by_an_error_naming_the_lock_file(
+    cache: Path, capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    src = unique_source("bounded-wait")
+    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    cache.mkdir()
+    lock.write_text(f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n")
+    future = time.time() + 3600  # e.g. a clock skewed file server: never old enough
+    os.utime(lock, (future, future))
+    monkeypatch.setattr(jit, "_NOTICE_S", 0.2)
+    timer = release_after(10, lock)
+    try:
+        start = time.perf_counter()
+        with pytest.raises(jit.CacheError) as info:
+            jit.compile_module("axpy", src, CDEF, timeout_s=1.0)
+        elapsed = time.perf_counter() - start
+    finally:
+        timer.cancel()
+    msg = one_sentence(info.value)
+    assert f"delete the lock file {lock}" in msg and f"process {os.getpid()}" in msg
+    assert elapsed < 8
+    assert capfd.readouterr().err.count("ancf: waiting for") == 1
 
 
