@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import glob
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -391,12 +392,26 @@ def _take_lock(lock: Path) -> int | None:
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
     except FileExistsError:
         return None
-    os.write(fd, _owner_line())
+    try:
+        os.write(fd, _owner_line())
+    except BaseException:  # e.g. a full disk: leave no lock that names no owner
+        os.close(fd)
+        lock.unlink()
+        raise
     return fd
 
 
+def _still_ours(fd: int, lock: Path) -> bool:
+    """True if ``lock`` is still the file behind ``fd`` (not broken and taken by another)."""
+    try:
+        mine, there = os.fstat(fd), os.stat(lock)
+    except OSError:
+        return False
+    return (mine.st_dev, mine.st_ino) == (there.st_dev, there.st_ino)
+
+
 def _lock_owner(lock: Path) -> tuple[int, str, float] | None:
-    """PID, host and time written in a lock file; None if unreadable."""
+    """PID, host and time written in a lock (or build owner) file; None if unreadable."""
     try:
         pid_s, host, time_s = lock.read_text().split()
         return int(pid_s), host, float(time_s)
@@ -469,6 +484,20 @@ def _break_stale_lock(lock: Path, timeout_s: float) -> None:
     finally:
         with contextlib.suppress(OSError):
             grave.unlink()
+
+
+def _sweep_builds(folder: Path, modname: str, timeout_s: float) -> None:
+    """Remove build folders of ``modname`` left by a killed compile (owner dead, or older
+    than ``timeout_s``).  Called while holding the module's lock."""
+    for entry in folder.glob(f"{glob.escape(modname)}.build.*"):
+        try:
+            st = os.lstat(entry)
+        except OSError:
+            continue
+        if stat.S_ISDIR(st.st_mode) and (
+            time.time() - st.st_mtime > timeout_s or _owner_is_dead(entry / "owner")
+        ):
+            shutil.rmtree(entry, ignore_errors=True)
 
 
 def _wait_notice(lock: Path, modname: str) -> str:
@@ -579,6 +608,7 @@ def _build(
 
     tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=so.parent))
     try:
+        (tmp / "owner").write_bytes(_owner_line())  # lets a later lock holder sweep it
         log_path = tmp / "build.log"
         error: BaseException | None = None
         built: str | None = None
@@ -665,8 +695,8 @@ def _obtain(
             time.sleep(_POLL_S)
             continue
         # We own the lock: build, publish the .so and its ready marker, release.
-        holding = True
         try:
+            _sweep_builds(folder, modname, timeout_s)
             if trust_cache and _verified(so, ready):
                 continue  # finished by someone else between our checks
             with contextlib.suppress(FileNotFoundError):
@@ -676,19 +706,19 @@ def _obtain(
             except CompilerNotWorkingError:
                 raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
-                os.write(fd, str(exc).encode("utf-8", "replace"))
-                os.close(fd)
-                fd = -1
-                os.replace(lock, failed)
-                holding = False
+                if _still_ours(fd, lock):
+                    os.write(fd, str(exc).encode("utf-8", "replace"))
+                    os.close(fd)
+                    fd = -1
+                    os.replace(lock, failed)
                 raise
             return _import_so(modname, so), True, wait_start is not None, so
         finally:
             if fd != -1:
+                if _still_ours(fd, lock):
+                    with contextlib.suppress(FileNotFoundError):
+                        lock.unlink()
                 os.close(fd)
-            if holding:
-                with contextlib.suppress(FileNotFoundError):
-                    lock.unlink()
 
 
 # --------------------------------------------------------------------------- public entry

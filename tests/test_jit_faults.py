@@ -1,5 +1,5 @@
-"""Tests of runtime.jit under faults and attack: broken compilers, unusable or unsafe cache
-folders, planted shared objects, long or stale locks."""
+"""Tests of runtime.jit under attack and faults: planted shared objects, unsafe or unusable
+cache folders, broken compilers, long or stale locks, killed compiles."""
 
 from __future__ import annotations
 
@@ -431,3 +431,63 @@ def test_wait_is_bounded_by_an_error_naming_the_lock_file(
     assert capfd.readouterr().err.count("ancf: waiting for") == 1
 
 
+# --------------------------------------------------------------------------- leftovers
+
+
+def test_build_folders_of_killed_compiles_are_swept(cache: Path) -> None:
+    src = unique_source("sweep")
+    modname = jit.module_name("axpy", src, CDEF)
+    cache.mkdir()
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    host, now = socket.gethostname(), time.time()
+    dead = cache / f"{modname}.build.dead"
+    old = cache / f"{modname}.build.old"
+    live = cache / f"{modname}.build.live"
+    for folder, pid in ((dead, gone), (old, str(os.getpid())), (live, str(os.getpid()))):
+        folder.mkdir()
+        (folder / "owner").write_text(f"{pid} {host} {now:.3f}\n")
+        (folder / "half.o").write_bytes(b"\0" * 100)
+    os.utime(old, (now - 7200, now - 7200))
+    assert jit.compile_module("axpy", src, CDEF, timeout_s=600).compiled
+    assert leftovers(cache) == [live.name]  # a compile still running is left alone
+
+
+def test_interrupted_compile_leaves_no_lock_or_build_folder(
+    cache: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import cffi
+
+    def interrupted(self: object, *args: object, **kwargs: object) -> str:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cffi.FFI, "compile", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        jit.compile_module("axpy", unique_source("interrupt"), CDEF)
+    assert list(cache.iterdir()) == []
+
+
+def test_owner_whose_lock_was_broken_leaves_the_new_lock_alone(
+    cache: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    build = jit._build
+    lock: list[Path] = []
+
+    def build_while_lock_is_taken_over(*args: object) -> object:
+        # Meanwhile a waiter broke our lock as stale and another process took it.
+        lock[0].unlink()
+        lock[0].write_text(f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n")
+        return build(*args)
+
+    monkeypatch.setattr(jit, "_build", build_while_lock_is_taken_over)
+    good = unique_source("taken-over")
+    lock.append(cache / f"{jit.module_name('axpy', good, CDEF)}.lock")
+    assert jit.compile_module("axpy", good, CDEF).compiled
+    assert lock[0].exists()
+
+    bad = f"/* {uuid.uuid4().hex} */\ndouble axpy(double a, double x, double y) {{ return q; }}\n"
+    modname = jit.module_name("axpy", bad, CDEF)
+    lock[0] = cache / f"{modname}.lock"
+    with pytest.raises(jit.CompilationError):
+        jit.compile_module("axpy", bad, CDEF)
+    assert lock[0].exists() and not (cache / f"{modname}.failed").exists()
