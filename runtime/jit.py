@@ -4,16 +4,23 @@ The module name is a hash of everything that changes the binary (source, cdef, c
 identity, flags, Python ABI, machine, cffi version, and the CPU because of ``-march=native``),
 so a cached ``.so`` is never stale.  Several processes may ask for the same new module at the
 same moment: the first to create ``<modname>.lock`` exclusively compiles in a private temporary
-folder, moves the ``.so`` into place atomically and writes ``<modname>.ready`` last; the others
-poll for the marker.  A failed build renames the lock to ``<modname>.failed`` (holding the
-compiler log); waiters raise from it and a later fresh call removes it and tries again.
-No lock library is used (the scheme follows FEniCS FFCx's JIT cache).
+folder, moves the ``.so`` into place atomically and writes ``<modname>.ready`` (the SHA-256 of
+the ``.so``) last; the others poll for the marker.  A failed build renames the lock to
+``<modname>.failed`` (holding the compiler log); waiters raise from it and a later fresh call
+removes it and tries again.  No lock library is used (the scheme follows FEniCS FFCx's JIT
+cache).
+
+Loading a shared object runs its code, so the cache is private: folders are created with mode
+0700, a folder or cached file that belongs to another user, is writable by group or others or
+is a symbolic link is refused (:class:`CacheError`), and a ``.so`` is loaded only if its
+SHA-256 matches its ready marker (otherwise it is rebuilt).
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
+import glob
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -23,8 +30,10 @@ import re
 import shlex
 import shutil
 import socket
+import stat
 import subprocess
 import sys
+import sysconfig
 import tempfile
 import threading
 import time
@@ -39,6 +48,7 @@ __all__ = [
     "CompilationError",
     "CompiledModule",
     "CompilerNotFoundError",
+    "CompilerNotWorkingError",
     "JitEnvironmentError",
     "cache_dir",
     "cache_key",
@@ -49,12 +59,19 @@ __all__ = [
 COMPILE_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-ffp-contract=fast", "-std=gnu11")
 
 #: Bump when the way modules are built changes (invalidates every cached binary).
-_JIT_FORMAT = "1"
+#: 2: the ready marker holds the SHA-256 of the shared object.
+_JIT_FORMAT = "2"
 #: Environment variables that distutils folds into the compile or link command.
 _BUILD_ENV = ("CFLAGS", "CPPFLAGS", "LDFLAGS", "LDSHARED")
 _POLL_S = 0.05
+#: A waiter says once on stderr whom it waits for after this many seconds.
+_NOTICE_S = 2.0
+#: A lock whose owner process started this much later than the lock was written names a
+#: reused PID (the owner died and the PID went to another process).
+_PID_REUSE_SLACK_S = 2.0
 _LOG_TAIL_CHARS = 6000
 _NAME_RE = re.compile(r"[A-Za-z0-9_]+")
+_NUMPY_HINT = "use backend='numpy' (--backend numpy on the command line)"
 
 # One build or load at a time per process: compiling redirects fds 1/2, changes the working
 # directory (cffi) and sets $CC, which are all process-wide.
@@ -68,16 +85,21 @@ class JitEnvironmentError(RuntimeError):
 
 
 class CompilerNotFoundError(JitEnvironmentError):
-    """No C compiler could be found for ``backend='c'``."""
+    """No usable C compiler could be found for ``backend='c'``."""
+
+
+class CompilerNotWorkingError(CompilerNotFoundError):
+    """A C compiler was found but cannot build extensions (it fails on a trivial C file, or
+    on Python's headers), so the fault is the machine's, not the source's."""
 
 
 class CompilationError(JitEnvironmentError):
-    """The C compiler failed; the message ends with the tail of its output."""
+    """The C compiler failed on the source; the message ends with the tail of its output."""
 
 
 class CacheError(JitEnvironmentError):
-    """The kernel cache folder is unusable (not a folder, not writable) or unsafe (owned by
-    another user or writable by others)."""
+    """The kernel cache folder is unusable (not a folder, not writable, a wait for another
+    process's compile timed out) or unsafe (owned by another user or writable by others)."""
 
 
 @dataclass(frozen=True)
@@ -86,33 +108,122 @@ class CompiledModule:
 
     module: types.ModuleType  # the cffi extension module (has .ffi and .lib)
     compiled: bool  # True if this call compiled it, False if loaded from cache/memo
-    seconds: float  # wall time spent in this call (compile or load)
+    seconds: float  # wall time spent in this call (compile, wait for another process, load)
     path: Path  # the .so file
+    waited: bool = False  # True if `seconds` includes waiting for another process's compile
 
 
 # --------------------------------------------------------------------------- cache folder
 
 
+def _euid() -> int | None:
+    """The effective user id, None where the platform has none (Windows: no checks)."""
+    return os.geteuid() if hasattr(os, "geteuid") else None
+
+
+def _check_private(path: Path, st: os.stat_result, folder: bool) -> None:
+    """Raise :class:`CacheError` unless ``st`` (of the cache folder, or of a cached file)
+    belongs to us and only we can write it."""
+    euid = _euid()
+    if euid is None:
+        return
+    what = "kernel cache folder" if folder else "cached file"
+    if st.st_uid != euid:
+        fix = "set ANCF_CACHE_DIR to a folder of your own" if folder else (
+            "delete it (it is rebuilt) or set ANCF_CACHE_DIR to a folder of your own")
+        raise CacheError(
+            f"{what} {path} belongs to another user (uid {st.st_uid}, you are uid {euid}), "
+            f"who could plant code in it: {fix}"
+        )
+    if st.st_mode & 0o022:
+        fix = f"run 'chmod go-w {path}' or set ANCF_CACHE_DIR to a private folder" if folder \
+            else "delete it (it is rebuilt) or set ANCF_CACHE_DIR to a private folder"
+        raise CacheError(
+            f"{what} {path} is writable by group or others (mode "
+            f"{stat.S_IMODE(st.st_mode):04o}), so another user could plant code in it: {fix}"
+        )
+
+
+def _check_path_to(path: Path) -> None:
+    """Refuse a cache path another user could redirect: a folder above it that others may
+    write without the sticky bit, or a symbolic link on the way that another user owns."""
+    euid = _euid()
+    if euid is None:
+        return
+    logical = Path(os.path.abspath(path))
+    for p in [logical, *logical.parents, *Path(os.path.realpath(path)).parents]:
+        try:
+            st = os.lstat(p)
+        except OSError:
+            continue
+        if stat.S_ISLNK(st.st_mode) and st.st_uid not in (0, euid):
+            raise CacheError(
+                f"symbolic link {p} on the way to the kernel cache folder {path} belongs to "
+                f"another user (uid {st.st_uid}), who could redirect the cache: set "
+                "ANCF_CACHE_DIR to a path without it"
+            )
+        if (stat.S_ISDIR(st.st_mode) and p != logical and st.st_mode & stat.S_IWOTH
+                and not st.st_mode & stat.S_ISVTX):
+            raise CacheError(
+                f"folder {p} above the kernel cache folder {path} is writable by others "
+                "without the sticky bit, so another user could swap the cache: set "
+                "ANCF_CACHE_DIR to a folder on a private path"
+            )
+
+
+def _make_folder(path: Path) -> None:
+    """Create ``path`` and its missing parents with mode 0700 (whatever the umask)."""
+    missing = []
+    p = path
+    while not os.path.lexists(p) and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    for p in reversed(missing):
+        with contextlib.suppress(FileExistsError):
+            os.mkdir(p, 0o700)
+
+
 def cache_dir() -> Path:
-    """Return the cache folder (created if missing).
+    """Return the cache folder, created with mode 0700 if missing and checked to be private.
 
     ``$ANCF_CACHE_DIR`` if set, else the platform's user cache folder: ``$XDG_CACHE_HOME/ancf``
     or ``~/.cache/ancf`` on Linux, ``~/Library/Caches/ancf`` on macOS,
-    ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.
+    ``%LOCALAPPDATA%\\ancf\\Cache`` on Windows.  Raises :class:`CacheError` (one sentence
+    naming the path, the fault and the fix) if it cannot be created, is not a folder, belongs
+    to another user or can be written by group or others.
     """
     env = os.environ.get("ANCF_CACHE_DIR")
-    if env:
-        path = Path(env).expanduser()
-    elif sys.platform == "win32":
-        base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
-        path = Path(base) / "ancf" / "Cache"
-    elif sys.platform == "darwin":
-        path = Path.home() / "Library" / "Caches" / "ancf"
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME")
-        base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
-        path = base / "ancf"
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        if env:
+            path = Path(env).expanduser()
+        elif sys.platform == "win32":
+            base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
+            path = Path(base) / "ancf" / "Cache"
+        elif sys.platform == "darwin":
+            path = Path.home() / "Library" / "Caches" / "ancf"
+        else:
+            xdg = os.environ.get("XDG_CACHE_HOME")
+            base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
+            path = base / "ancf"
+    except RuntimeError as exc:  # Path.home() without a home folder
+        raise CacheError(
+            f"cannot locate the kernel cache folder ({exc}): set ANCF_CACHE_DIR to a folder"
+        ) from exc
+    try:
+        _make_folder(path)
+        st = os.stat(path)
+    except OSError as exc:
+        raise CacheError(
+            f"cannot create the kernel cache folder {path} ({exc.strerror or exc}): create it "
+            "or set ANCF_CACHE_DIR to a writable folder"
+        ) from exc
+    if not stat.S_ISDIR(st.st_mode):
+        raise CacheError(
+            f"kernel cache folder {path} exists but is not a folder: remove it or set "
+            "ANCF_CACHE_DIR to a folder"
+        )
+    _check_private(path, st, folder=True)
+    _check_path_to(path)
     return path
 
 
@@ -235,7 +346,44 @@ def _import_so(modname: str, path: Path) -> types.ModuleType:
     return module
 
 
+def _read_private(path: Path) -> bytes | None:
+    """The content of a cached file, None if missing; :class:`CacheError` if it is a symbolic
+    link or not a regular file, belongs to another user or can be written by others."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
+        raise CacheError(
+            f"cached file {path} is {kind}, which the cache never creates: delete it (it is "
+            "rebuilt) or set ANCF_CACHE_DIR to a folder of your own"
+        )
+    _check_private(path, st, folder=False)
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0))
+    with os.fdopen(fd, "rb") as fh:
+        if os.fstat(fh.fileno()).st_ino != st.st_ino:
+            return None  # replaced since the check: look again
+        return fh.read()
+
+
+def _verified(so: Path, ready: Path) -> bool:
+    """True if the ready marker exists and names the SHA-256 of the shared object."""
+    marker = _read_private(ready)
+    if marker is None:
+        return False
+    fields = marker.decode("ascii", "replace").split()
+    if len(fields) != 2 or fields[1] != so.name:
+        return False
+    binary = _read_private(so)
+    return binary is not None and hashlib.sha256(binary).hexdigest() == fields[0]
+
+
 # --------------------------------------------------------------------------- locking
+
+
+def _owner_line() -> bytes:
+    return f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n".encode()
 
 
 def _take_lock(lock: Path) -> int | None:
@@ -244,17 +392,65 @@ def _take_lock(lock: Path) -> int | None:
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
     except FileExistsError:
         return None
-    os.write(fd, f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n".encode())
+    try:
+        os.write(fd, _owner_line())
+    except BaseException:  # e.g. a full disk: leave no lock that names no owner
+        os.close(fd)
+        lock.unlink()
+        raise
     return fd
 
 
-def _owner_is_dead(lock: Path) -> bool:
-    """True if the lock names a process on this host that no longer exists."""
+def _still_ours(fd: int, lock: Path) -> bool:
+    """True if ``lock`` is still the file behind ``fd`` (not broken and taken by another)."""
     try:
-        pid_s, host, _ = lock.read_text().split()
-        pid = int(pid_s)
+        mine, there = os.fstat(fd), os.stat(lock)
+    except OSError:
+        return False
+    return (mine.st_dev, mine.st_ino) == (there.st_dev, there.st_ino)
+
+
+def _lock_owner(lock: Path) -> tuple[int, str, float] | None:
+    """PID, host and time written in a lock (or build owner) file; None if unreadable."""
+    try:
+        pid_s, host, time_s = lock.read_text().split()
+        return int(pid_s), host, float(time_s)
     except (OSError, ValueError):
-        return False  # gone, or not written yet
+        return None  # gone, or not written yet
+
+
+@functools.lru_cache(maxsize=1)
+def _boot_time() -> float | None:
+    try:
+        with open("/proc/stat", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("btime "):
+                    return float(line.split()[1])
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _process_start(pid: int) -> float | None:
+    """Wall-clock start time of process ``pid`` (Linux /proc), None if unknown."""
+    boot = _boot_time()
+    if boot is None:
+        return None
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as fh:
+            fields = fh.read().rpartition(")")[2].split()
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _owner_is_dead(lock: Path) -> bool:
+    """True if the lock names a process on this host that no longer exists, or whose PID now
+    belongs to a process started after the lock was written."""
+    owner = _lock_owner(lock)
+    if owner is None:
+        return False
+    pid, host, written = owner
     if host != socket.gethostname() or pid == os.getpid():
         return False
     try:
@@ -262,8 +458,9 @@ def _owner_is_dead(lock: Path) -> bool:
     except ProcessLookupError:
         return True
     except OSError:
-        return False
-    return False
+        pass  # alive, owned by another user
+    started = _process_start(pid)
+    return started is not None and started > written + _PID_REUSE_SLACK_S
 
 
 def _break_stale_lock(lock: Path, timeout_s: float) -> None:
@@ -287,6 +484,38 @@ def _break_stale_lock(lock: Path, timeout_s: float) -> None:
     finally:
         with contextlib.suppress(OSError):
             grave.unlink()
+
+
+def _sweep_builds(folder: Path, modname: str, timeout_s: float) -> None:
+    """Remove build folders of ``modname`` left by a killed compile (owner dead, or older
+    than ``timeout_s``).  Called while holding the module's lock."""
+    for entry in folder.glob(f"{glob.escape(modname)}.build.*"):
+        try:
+            st = os.lstat(entry)
+        except OSError:
+            continue
+        if stat.S_ISDIR(st.st_mode) and (
+            time.time() - st.st_mtime > timeout_s or _owner_is_dead(entry / "owner")
+        ):
+            shutil.rmtree(entry, ignore_errors=True)
+
+
+def _wait_notice(lock: Path, modname: str) -> str:
+    owner = _lock_owner(lock)
+    who = f"process {owner[0]} on {owner[1]}" if owner else "another process"
+    return (
+        f"ancf: waiting for {who} to finish compiling C module {modname} (lock file {lock}; "
+        "delete it if that process is gone)\n"
+    )
+
+
+def _wait_timeout_message(lock: Path, modname: str, timeout_s: float) -> str:
+    owner = _lock_owner(lock)
+    who = f"process {owner[0]} on {owner[1]}" if owner else "another process"
+    return (
+        f"gave up after {timeout_s:.0f} s waiting for {who} to compile C module {modname}: "
+        f"if no such compile is running, delete the lock file {lock} and try again"
+    )
 
 
 # --------------------------------------------------------------------------- building
@@ -337,13 +566,50 @@ def _tail(text: str) -> str:
     return text
 
 
-def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: Path) -> Path:
-    """Compile in a private temporary folder and move the .so into ``folder`` atomically."""
+def _compiles(cmd: tuple[str, ...], code: str, tmp: Path, extra: Sequence[str] = ()) -> bool:
+    """True if ``cmd`` compiles ``code`` to an object file."""
+    probe = tmp / "probe.c"
+    probe.write_text(code)
+    try:
+        res = subprocess.run(
+            [*cmd, *extra, "-c", str(probe), "-o", str(tmp / "probe.o")],
+            capture_output=True, timeout=120, check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return res.returncode == 0
+
+
+def _diagnose_compiler(cmd: tuple[str, ...], tmp: Path) -> None:
+    """After a failed build, raise :class:`CompilerNotWorkingError` if the compiler fails on
+    a trivial C file or on Python's headers (a machine fault, not the source's)."""
+    if not _compiles(cmd, "int ancf_probe(void) { return 0; }\n", tmp):
+        raise CompilerNotWorkingError(
+            f"the C compiler {shlex.join(cmd)} does not work (it cannot compile an empty C "
+            f"function): set CC to a working compiler, install gcc, or {_NUMPY_HINT}."
+        )
+    includes = dict.fromkeys(
+        filter(None, (sysconfig.get_path("include"), sysconfig.get_path("platinclude")))
+    )
+    if not _compiles(cmd, "#include <Python.h>\n", tmp, [f"-I{d}" for d in includes]):
+        raise CompilerNotWorkingError(
+            f"the C compiler {shlex.join(cmd)} cannot compile against Python's headers "
+            f"(Python.h in {', '.join(includes)}): install the Python development package "
+            f"(python3-dev or python3-devel) or {_NUMPY_HINT}."
+        )
+
+
+def _build(
+    modname: str, source: str, cdef: str, cmd: tuple[str, ...], so: Path, ready: Path
+) -> None:
+    """Compile in a private temporary folder (removed whatever happens), move the .so into
+    place atomically, then write its ready marker (its SHA-256) atomically."""
     import cffi
 
-    tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=folder))
-    log_path = tmp / "build.log"
+    tmp = Path(tempfile.mkdtemp(prefix=f"{modname}.build.", dir=so.parent))
     try:
+        (tmp / "owner").write_bytes(_owner_line())  # lets a later lock holder sweep it
+        log_path = tmp / "build.log"
         error: BaseException | None = None
         built: str | None = None
         with _captured_output(log_path), _compiler_env(cmd):
@@ -355,14 +621,20 @@ def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: P
             except Exception as exc:  # cffi.VerificationError, CDefError, distutils errors
                 error = exc
         if error is not None or built is None:
+            _diagnose_compiler(cmd, tmp)
             log = log_path.read_text(encoding="utf-8", errors="replace")
             raise CompilationError(
                 f"compiling C module {modname} with {shlex.join(cmd)} failed: {error}\n"
                 f"--- compiler output (tail) ---\n{_tail(log)}"
             ) from error
-        target = _so_path(folder, modname)
-        os.replace(built, target)
-        return target
+        os.chmod(built, 0o755)  # whatever the umask: only we may write it
+        digest = hashlib.sha256(Path(built).read_bytes()).hexdigest()
+        os.replace(built, so)
+        marker = tmp / "ready"
+        fd = os.open(marker, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        with os.fdopen(fd, "w", encoding="ascii") as fh:
+            fh.write(f"{digest}  {so.name}\n")
+        os.replace(marker, ready)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -370,30 +642,32 @@ def _build(modname: str, source: str, cdef: str, cmd: tuple[str, ...], folder: P
 def _no_compiler_message(tried: list[str]) -> str:
     return (
         f"backend='c' needs a C compiler and none was found (tried {', '.join(tried)}): "
-        "install gcc or use backend='numpy'."
+        "install gcc or use backend='numpy' (--backend numpy on the command line)."
     )
 
 
 def _obtain(
     modname: str, source: str, cdef: str, folder: Path, timeout_s: float
-) -> tuple[types.ModuleType, bool, Path]:
-    """Load ``modname`` from the cache, compiling it (or waiting for another process) first."""
+) -> tuple[types.ModuleType, bool, bool, Path]:
+    """Load ``modname`` from the cache, compiling it (or waiting for another process) first.
+
+    Returns the module, whether this call compiled it, whether it waited for another
+    process, and the .so path.
+    """
     so = _so_path(folder, modname)
     ready = folder / f"{modname}.ready"
     lock = folder / f"{modname}.lock"
     failed = folder / f"{modname}.failed"
     fresh = True  # a fresh call clears an old .failed; a waiter raises from a new one
-    retried_load = False
+    trust_cache = True  # False once a verified cached binary failed to import: rebuild it
+    wait_start: float | None = None
+    noticed = False
     while True:
-        if ready.exists() and so.exists():
+        if trust_cache and _verified(so, ready):
             try:
-                return _import_so(modname, so), False, so
+                return _import_so(modname, so), False, wait_start is not None, so
             except ImportError:
-                if retried_load:
-                    raise
-                retried_load = True  # damaged binary: rebuild once
-                with contextlib.suppress(FileNotFoundError):
-                    ready.unlink()
+                trust_cache = False
                 continue
         if failed.exists():
             if not fresh:
@@ -409,31 +683,42 @@ def _obtain(
         fd = _take_lock(lock)
         if fd is None:
             fresh = False
+            now = time.monotonic()
+            wait_start = now if wait_start is None else wait_start
             _break_stale_lock(lock, timeout_s)
+            if not noticed and now - wait_start >= _NOTICE_S and lock.exists():
+                sys.stderr.write(_wait_notice(lock, modname))
+                sys.stderr.flush()
+                noticed = True
+            if now - wait_start > timeout_s and lock.exists():
+                raise CacheError(_wait_timeout_message(lock, modname, timeout_s))
             time.sleep(_POLL_S)
             continue
-        # We own the lock: build, publish the .so, write .ready last, release.
-        holding = True
+        # We own the lock: build, publish the .so and its ready marker, release.
         try:
-            if ready.exists() and so.exists():
+            _sweep_builds(folder, modname, timeout_s)
+            if trust_cache and _verified(so, ready):
                 continue  # finished by someone else between our checks
+            with contextlib.suppress(FileNotFoundError):
+                ready.unlink()  # corrupt, planted or unloadable: never trust it again
             try:
-                path = _build(modname, source, cdef, cmd, folder)
+                _build(modname, source, cdef, cmd, so, ready)
+            except CompilerNotWorkingError:
+                raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
-                os.write(fd, str(exc).encode("utf-8", "replace"))
-                os.close(fd)
-                fd = -1
-                os.replace(lock, failed)
-                holding = False
+                if _still_ours(fd, lock):
+                    os.write(fd, str(exc).encode("utf-8", "replace"))
+                    os.close(fd)
+                    fd = -1
+                    os.replace(lock, failed)
                 raise
-            ready.write_text(f"{path.name}\n")
-            return _import_so(modname, path), True, path
+            return _import_so(modname, so), True, wait_start is not None, so
         finally:
             if fd != -1:
+                if _still_ours(fd, lock):
+                    with contextlib.suppress(FileNotFoundError):
+                        lock.unlink()
                 os.close(fd)
-            if holding:
-                with contextlib.suppress(FileNotFoundError):
-                    lock.unlink()
 
 
 # --------------------------------------------------------------------------- public entry
@@ -443,9 +728,13 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
     """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
 
     ``name`` becomes part of the module name ``_ancf_{name}_{hash}``.  Returns the loaded
-    module; ``compiled`` tells whether this call ran the compiler.  ``timeout_s`` is the age
-    after which another process's lock counts as stale.  Raises :class:`CompilerNotFoundError`
-    when no C compiler exists and :class:`CompilationError` when compilation fails.
+    module; ``compiled`` tells whether this call ran the compiler and ``waited`` whether it
+    waited for another process's compile (``seconds`` includes that wait).  ``timeout_s`` is
+    the age after which another process's lock counts as stale, and the longest this call
+    waits for one.  Raises :class:`CompilerNotFoundError` when no C compiler exists,
+    :class:`CompilerNotWorkingError` when it cannot build extensions,
+    :class:`CompilationError` when the source fails to compile and :class:`CacheError` when
+    the cache folder is unsafe or unusable (all :class:`JitEnvironmentError`).
     """
     t0 = time.perf_counter()
     modname = module_name(name, source, cdef)
@@ -453,7 +742,15 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
         memo = _MEMO.get(modname)
         if memo is not None:
             return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
-        module, compiled, path = _obtain(modname, source, cdef, cache_dir(), timeout_s)
-        result = CompiledModule(module, compiled, time.perf_counter() - t0, path)
+        folder = cache_dir()
+        try:
+            module, compiled, waited, path = _obtain(modname, source, cdef, folder, timeout_s)
+        except OSError as exc:
+            where = f": {exc.filename}" if exc.filename else ""
+            raise CacheError(
+                f"kernel cache folder {folder} is not usable ({exc.strerror or exc}{where}): "
+                "make it writable or set ANCF_CACHE_DIR to a writable folder of your own"
+            ) from exc
+        result = CompiledModule(module, compiled, time.perf_counter() - t0, path, waited)
         _MEMO[modname] = result
         return result

@@ -59,7 +59,7 @@ def test_compile_then_load_from_cache_in_fresh_process(
     first = jit.compile_module("axpy", src, CDEF)
     out, err = capfd.readouterr()
     assert (out, err) == ("", "")  # build logs are captured, not printed
-    assert first.compiled is True
+    assert first.compiled is True and first.waited is False
     assert first.module.lib.axpy(2.0, 3.0, 4.0) == 10.0
     assert first.path.parent == cache and first.path.exists()
     modname = jit.module_name("axpy", src, CDEF)
@@ -139,7 +139,8 @@ def test_four_processes_compile_the_same_module_once(cache: Path, tmp_path: Path
                 p.kill()
     for p, (_out, err) in zip(procs, outputs, strict=True):
         assert p.returncode == 0, err
-        assert err == ""
+        # nothing on stderr but, on a slow machine, one notice that it waits for the builder
+        assert all(line.startswith("ancf: waiting for") for line in err.splitlines()), err
     results = [json.loads(out) for out, _ in outputs]
     assert [r["value"] for r in results] == [10.0] * 4
     assert sum(r["compiled"] for r in results) == 1
@@ -236,7 +237,7 @@ def test_no_compiler_gives_one_clear_sentence(
     with pytest.raises(jit.CompilerNotFoundError) as info:
         jit.compile_module("axpy", src, CDEF)
     msg = str(info.value)
-    assert "install gcc" in msg and "backend='numpy'" in msg
+    assert "install gcc" in msg and "backend='numpy'" in msg and "--backend numpy" in msg
     assert "no-such-cc" in msg and "gcc, cc" in msg
     assert msg.count(". ") == 0 and msg.endswith(".")
     assert not [p for p in cache.iterdir() if ".lock" in p.name]
