@@ -125,7 +125,7 @@ class CompiledEngine:
         source, cdef = render(self.dae, self.integrator)
         start = time.perf_counter()
         compiled = jit.compile_module("stepper", source, cdef)
-        self.compile_s = compiled.seconds if compiled.compiled else 0.0
+        self.compile_s = compiled.seconds if compiled.compiled or compiled.waited else 0.0
         self.load_s = time.perf_counter() - start - self.compile_s
         self.modules = [f"stepper/{self.integrator}"]
         self._ffi, self._lib = compiled.module.ffi, compiled.module.lib
