@@ -26,7 +26,7 @@ from types import TracebackType
 from typing import IO, Any
 
 __all__ = ["ENERGIES_FILE", "OutputError", "Progress", "TimeSeriesWriter", "atomic_file",
-           "plot_file_name", "plot_files", "plot_series", "prepare_folder",
+           "plot_file_name", "plot_series", "prepare_folder",
            "write_json_atomic"]
 
 ENERGIES_FILE = "energies.png"
@@ -222,14 +222,6 @@ def plot_file_name(name: str) -> str:
         return f"{name}.png"
     digest = hashlib.sha1(name.encode("utf-8", "surrogatepass")).hexdigest()[:8]
     return f"{safe[:MAX_STEM - 9] or 'series'}-{digest}.png"
-
-
-def plot_files(names: Sequence[str], energies: Sequence[str] = ()) -> list[str]:
-    """The file names :func:`plot_series` writes for the series ``names``."""
-    files = [plot_file_name(name) for name in names if name not in energies]
-    if any(name in energies for name in names):
-        files.append(ENERGIES_FILE)
-    return files
 
 
 def _label(name: str, unit: str | None, width: int = 40) -> str:

@@ -247,12 +247,12 @@ class _Job:
 
 
 def _owned_files(scene: Scene | None) -> list[str]:
-    """Files a run of ``scene`` writes in its folder (beside summary.json)."""
+    """Files a run of ``scene`` owns in its folder beside summary.json: the time series,
+    the energy plot and a plot named after each sensor (energies had one before they shared
+    energies.png: a folder of an earlier version loses those too)."""
     if scene is None:
         return []
-    energies = [s.name for s in scene.sensors if s.type in ENERGY_TYPES]
-    plots = output.plot_files([s.name for s in scene.sensors], energies)
-    return [CSV, *plots] if scene.dynamic is not None else []
+    return [CSV, output.ENERGIES_FILE, *(output.plot_file_name(s.name) for s in scene.sensors)]
 
 
 def _environment_message(error: JitEnvironmentError) -> str:

@@ -18,7 +18,6 @@ from runtime.output import (
     Progress,
     TimeSeriesWriter,
     plot_file_name,
-    plot_files,
     plot_series,
     prepare_folder,
     write_json_atomic,
@@ -264,9 +263,6 @@ def test_plot_file_names_are_safe_short_and_distinct():
     assert plot_file_name(long_a) != plot_file_name(long_b)
     assert plot_file_name("a b") != plot_file_name("a_b")
     assert plot_file_name("energies") != "energies.png"
-    assert plot_files(["tip_y", "strain", "kinetic"], ["strain", "kinetic", "absent"]) == \
-        ["tip_y.png", "energies.png"]
-    assert plot_files(["tip_y"], ["absent"]) == ["tip_y.png"]
 
 
 @pytest.fixture

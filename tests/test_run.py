@@ -540,6 +540,10 @@ def test_reused_output_folder_loses_stale_outputs_only(tmp_path):
     assert run(write(tmp_path, small_scene(("dynamic",))), out, quiet=True)[1] == 0
     assert not (out / "old_sensor.png").exists()
     assert (out / "notes.txt").read_text() == "mine" == (out / "picture.png").read_text()
+    # a plot of an earlier version, when energies had one plot each
+    (out / "kinetic.png").write_text("old")
+    assert run(write(tmp_path, small_scene(("static",))), out, quiet=True)[1] == 0
+    assert not (out / "kinetic.png").exists() and not (out / "timeseries.csv").exists()
     # a newer run that fails: no stale results beside its summary
     data = small_scene()
     data["body"][0]["sectoin"] = data["body"][0].pop("section")
