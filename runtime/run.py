@@ -203,6 +203,8 @@ class _Job:
             raise _Stop(ExitCode.DIVERGED, str(error), "diverged") from None
         except output.OutputError as error:
             raise _Stop(ExitCode.ENVIRONMENT, str(error)) from None
+        except JitEnvironmentError as error:  # a dynamic engine compiled on demand
+            raise _Stop(ExitCode.ENVIRONMENT, _environment_message(error)) from None
         return ExitCode.OK, None
 
     def save(self, code: ExitCode) -> ExitCode:

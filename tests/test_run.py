@@ -600,3 +600,18 @@ def test_summary_that_cannot_be_written_is_exit_3(tmp_path, monkeypatch):
     assert summary["message"] == "summary.json not written (No space left on device)"
     assert "summary.json" not in summary["files"]
     assert "static" in summary  # the results are still returned
+
+
+def test_compiler_fault_when_the_dynamic_engine_is_built_is_exit_3(tmp_path, monkeypatch):
+    from runtime import jit
+    from runtime.integrators import INTEGRATORS
+
+    def no_compiler(*args, **kwargs):
+        raise jit.CompilerNotFoundError("no C compiler for the stepper")
+
+    monkeypatch.setitem(INTEGRATORS, "trapezoidal", no_compiler)
+    summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
+    assert code == 3 and summary["status"] == "failed"
+    assert summary["message"] == ("no C compiler for the stepper; --backend numpy needs no C "
+                                  "compiler")
+    assert "static" in summary and "modal" in summary  # what ran before is kept
