@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import difflib
+import signal
 import sys
 import tempfile
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import NoReturn
+
+from runtime.jit import JitEnvironmentError
 
 METHOD_FAMILIES = {
     "invariants": ["invariants", "invariants_general"],
@@ -106,21 +113,60 @@ def cmd_bench(args) -> int:
     return 0
 
 
-def cmd_run(args) -> int:
-    from runtime.run import run
+def _first_line(text: str) -> str:
+    return text.strip().split("\n", 1)[0]
 
-    summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet,
-                        args.engine)
-    if code == 2:
-        print(f"ancf run: {summary['message']}", file=sys.stderr)
-    elif code == 1:
-        print(f"ancf run: {summary['message']} (results up to then in {args.out})",
-              file=sys.stderr)
-    elif not args.quiet:
-        timing = summary["timing"]
-        print(f"{summary['scene']}: ok, total {timing['total_s']:.2f} s (compile "
-              f"{timing['compile_s']:.2f}, preprocess {timing['preprocess_s']:.3f}, simulate "
-              f"{timing['simulate_s']:.2f}); results in {args.out}")
+
+@contextlib.contextmanager
+def _interrupt_on_signals() -> Iterator[None]:
+    """SIGINT and SIGTERM raise KeyboardInterrupt naming the signal while the block runs
+    (main thread only; a signal ignored by whoever started us, such as SIGINT of a
+    background job, stays ignored)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    previous = {s: signal.signal(s, interrupt) for s in (signal.SIGINT, signal.SIGTERM)
+                if signal.getsignal(s) is not signal.SIG_IGN}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
+
+
+def cmd_run(args) -> int:
+    from runtime.run import SUMMARY, ExitCode, RunInterrupted, run
+
+    try:
+        with _interrupt_on_signals():
+            summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet,
+                                plots=not args.no_plots, engine=args.engine)
+    except RunInterrupted as stop:
+        print(f"ancf run: {_first_line(stop.summary['message'])}", file=sys.stderr)
+        return ExitCode.INTERRUPTED
+    written = SUMMARY in summary.get("files", ())
+    if code == ExitCode.OK:
+        warnings = summary["warnings"]
+        if warnings:
+            more = f" (and {len(warnings) - 1} more in {SUMMARY})" if len(warnings) > 1 else ""
+            print(f"ancf run: warning: {_first_line(warnings[0])}{more}", file=sys.stderr)
+        if not args.quiet:
+            timing = summary["timing"]
+            print(f"{summary['scene']}: ok, total {timing['total_s']:.2f} s (compile "
+                  f"{timing['compile_s']:.2f}, preprocess {timing['preprocess_s']:.3f}, "
+                  f"simulate {timing['simulate_s']:.2f}); results in {args.out}")
+        return code
+    line = _first_line(summary["message"])
+    if code == ExitCode.DIVERGED:
+        line += f" (results up to then in {args.out})"
+    elif code == ExitCode.INTERNAL:
+        where = f" with {Path(args.out) / SUMMARY}, which holds the traceback" if written else ""
+        line += f"; this is a bug, please report it{where}"
+    print(f"ancf run: {line}", file=sys.stderr)
     return code
 
 
@@ -152,13 +198,20 @@ def cmd_bench_steps(args) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that reports an error in one line (exit code 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
+    from runtime.catalog import ENGINES
     from runtime.element import METHODS
-    from runtime.engines import ENGINES
     from runtime.kernels import BACKENDS
 
-    main = argparse.ArgumentParser(prog="ancf", description=__doc__)
+    main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)
 
     gen = sub.add_parser("generate", help="regenerate kernels from symgen into generated/")
@@ -185,6 +238,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--engine", choices=list(ENGINES),
                      help="dynamic engine (default: compiled with the C backend)")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
+    run.add_argument("--no-plots", action="store_true", help="write no PNG plots")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability
@@ -227,13 +281,26 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``ancf`` console script."""
-    args = parser().parse_args(argv)
+    """Entry point of the ``ancf`` console script; returns the exit code.  Errors are one line
+    on stderr: 2 for options and inputs, 3 for the environment (files, C compiler, kernel
+    cache), 130 for an interruption."""
+    command = "ancf"
     try:
-        return args.run(args)
+        try:
+            args = parser().parse_args(argv)
+        except SystemExit as done:  # --help, or an option error already reported
+            return done.code if isinstance(done.code, int) else 2
+        command = f"ancf {args.command}"
+        return int(args.run(args))
+    except KeyboardInterrupt:
+        print(f"{command}: interrupted", file=sys.stderr)
+        return 130
     except ValueError as error:  # includes scene, study and scheduler errors
-        print(f"ancf {args.command}: {error}", file=sys.stderr)
+        print(f"{command}: {_first_line(str(error))}", file=sys.stderr)
         return 2
+    except (JitEnvironmentError, OSError) as error:
+        print(f"{command}: {_first_line(str(error))}", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":

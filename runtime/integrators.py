@@ -87,6 +87,8 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
 class Integrator:
     """Shared machinery: forces, Newton linear solves, initial accelerations, the loop."""
 
+    engine = "python"
+
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
         self.dae = DAESystem(model, q_full)
         self.settings = settings

@@ -1,31 +1,122 @@
-"""Run outputs (DESIGN.md section 7): the time-series CSV written as the run goes, the atomic
-``summary.json``, the PNG plots and a progress bar on stderr.
+"""Run outputs (DESIGN.md section 7): the output folder, the time-series CSV written as the
+run goes, the atomic ``summary.json`` and PNG plots, and a progress bar on stderr.
+
+Every file is created with the ordinary permissions of ``open`` (0666 less the umask).  A
+write error (full disk, read-only folder) raises :class:`OutputError` and never leaves a
+partial file: the CSV is cut back to its last whole row, other files are replaced atomically.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import hashlib
+import io
 import json
 import math
 import os
 import re
+import secrets
 import sys
-import tempfile
 import time
-from collections.abc import Mapping, Sequence
+import warnings
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Any, TextIO
+from typing import IO, Any
 
-__all__ = ["Progress", "TimeSeriesWriter", "plot_timeseries", "write_json_atomic"]
+__all__ = ["ENERGIES_FILE", "OutputError", "Progress", "TimeSeriesWriter", "atomic_file",
+           "plot_file_name", "plot_series", "prepare_folder",
+           "write_json_atomic"]
+
+ENERGIES_FILE = "energies.png"
+# longest plot file stem: room for the temporary-file decoration within 255 bytes
+MAX_STEM = 100
+# what a run may have written, hence may remove when it reuses a folder
+OUTPUT_SUFFIXES = (".json", ".csv", ".png", ".vtu", ".pvd")
+
+
+class OutputError(OSError):
+    """The output folder or an output file cannot be written (exit code 3, environment)."""
+
+
+def _reason(error: OSError) -> str:
+    return error.strerror or str(error)
+
+
+def prepare_folder(folder: str | Path, owned: Iterable[str] = ()) -> None:
+    """Make ``folder`` ready for a run: create it if needed, check that files can be created
+    in it, then remove the outputs of a previous run there - ``summary.json``,
+    ``timeseries.csv``, the ``owned`` file names and the files listed under ``files`` in the
+    old ``summary.json`` - and nothing else.  Raises OutputError, with a one-line message."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"{folder}: exists and is not a folder") from None
+    except NotADirectoryError:
+        raise OutputError(f"{folder}: cannot create the folder: part of the path is a file") \
+            from None
+    except OSError as error:
+        raise OutputError(f"{folder}: cannot create the folder ({_reason(error)})") from None
+    probe = folder / f".ancf-probe-{os.getpid()}-{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        os.unlink(probe)
+    except OSError as error:
+        raise OutputError(f"{folder}: cannot write in the folder ({_reason(error)})") from None
+    names = {"summary.json", "timeseries.csv", *owned, *_previous_files(folder)}
+    for name in sorted(names):
+        try:
+            (folder / name).unlink(missing_ok=True)
+        except IsADirectoryError:
+            raise OutputError(f"{folder / name}: is a folder; expected an output file of a "
+                              f"previous run") from None
+        except OSError as error:
+            raise OutputError(f"{folder / name}: cannot remove the output of a previous run "
+                              f"({_reason(error)})") from None
+
+
+def _previous_files(folder: Path) -> list[str]:
+    """Output file names listed by the summary.json of a previous run in ``folder``."""
+    try:
+        files = json.loads((folder / "summary.json").read_text(encoding="utf-8"))["files"]
+    except (OSError, ValueError, TypeError, KeyError):
+        return []
+    if not isinstance(files, list):
+        return []
+    return [name for name in files if isinstance(name, str) and name == Path(name).name
+            and not name.startswith(".") and name.endswith(OUTPUT_SUFFIXES)]
+
+
+@contextlib.contextmanager
+def atomic_file(path: str | Path, mode: str = "wb") -> Iterator[IO[Any]]:
+    """Open a temporary file beside ``path`` (``mode`` "wb" or "w", UTF-8) that replaces
+    ``path`` when the block ends normally, after fsync; on any exception (KeyboardInterrupt
+    included) it is removed and ``path`` is untouched.  Readers never see a partial file."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with os.fdopen(fd, mode, encoding=None if "b" in mode else "utf-8") as f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 class TimeSeriesWriter:
     """CSV of sensor values against time: header ``t,<columns...>``, one row per ``write``.
 
-    Each row is flushed at once, so the file is readable while the run goes on and keeps
-    what was computed if the run stops early.  Numbers are written with ``repr`` precision
-    (round-trip exact; ``nan``/``inf`` as Python spells them).
+    Each row is built whole and handed to the operating system at once (unbuffered), so the
+    file is readable while the run goes on and keeps what was computed if the run stops.  A
+    write that fails (full disk) or is interrupted cuts the file back to its last whole row
+    and closes it; the failure raises OutputError.  Numbers are written with ``repr``
+    precision (round-trip exact; ``nan``/``inf`` as Python spells them).
     """
 
     def __init__(self, path: str | Path, columns: Sequence[str]) -> None:
@@ -33,11 +124,17 @@ class TimeSeriesWriter:
         self.columns = list(columns)
         if "t" in self.columns or len(set(self.columns)) != len(self.columns):
             raise ValueError(f"columns: expected unique names other than 't', got {columns!r}")
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file: TextIO | None = self.path.open("w", newline="", encoding="utf-8")
-        self._writer = csv.writer(self._file, lineterminator="\n")
-        self._writer.writerow(["t", *self.columns])
-        self._file.flush()
+        self.rows = 0  # data rows on disk
+        self.last_t: float | None = None  # time of the last row on disk
+        self._size = 0  # bytes of whole lines on disk
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file: IO[bytes] | None = open(self.path, "wb", buffering=0)
+        except OSError as error:
+            raise OutputError(f"{self.path}: cannot create ({_reason(error)})") from None
+        header = io.StringIO()
+        csv.writer(header, lineterminator="\n").writerow(["t", *self.columns])
+        self._append(header.getvalue().encode("utf-8"))
 
     def write(self, t: float, values: Sequence[float] | Mapping[str, float]) -> None:
         """Append the row at time t (s): ``values`` in column order, or by column name."""
@@ -49,13 +146,35 @@ class TimeSeriesWriter:
             row = list(values)
         if len(row) != len(self.columns):
             raise ValueError(f"expected {len(self.columns)} values, got {len(row)}")
-        self._writer.writerow([repr(float(t)), *(repr(float(v)) for v in row)])
-        self._file.flush()
+        line = ",".join([repr(float(t)), *(repr(float(v)) for v in row)]) + "\n"
+        self._append(line.encode("ascii"))
+        self.rows += 1
+        self.last_t = float(t)
+
+    def _append(self, data: bytes) -> None:
+        """Write ``data`` whole, or cut the file back to its last whole line and close it."""
+        assert self._file is not None
+        view, done = memoryview(data), 0
+        try:
+            while done < len(data):
+                done += self._file.write(view[done:])  # an OS write may be partial
+        except BaseException as error:
+            with contextlib.suppress(OSError):
+                self._file.truncate(self._size)
+            self.close()
+            if isinstance(error, OSError):
+                kept = "no row" if self.last_t is None else \
+                    f"{self.rows} whole rows, up to t = {self.last_t:.6g} s"
+                raise OutputError(f"{self.path}: cannot write ({_reason(error)}); the file "
+                                  f"keeps {kept}") from error
+            raise
+        self._size += len(data)
 
     def close(self) -> None:
         """Close the file (idempotent)."""
         if self._file is not None:
-            self._file.close()
+            with contextlib.suppress(OSError):
+                self._file.close()
             self._file = None
 
     def __enter__(self) -> TimeSeriesWriter:
@@ -83,98 +202,98 @@ def _json_ready(data: Any) -> Any:
 
 
 def write_json_atomic(path: str | Path, data: Any) -> None:
-    """Write ``data`` as JSON to ``path`` atomically: to a temporary file in the same folder,
-    then ``os.replace``, so readers see the old file or the new one, never a half-written one.
-    NaN and infinities become null."""
+    """Write ``data`` as JSON to ``path`` atomically (see :func:`atomic_file`); NaN and
+    infinities become null."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     ready = _json_ready(data)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(ready, f, indent=2, allow_nan=False)
-            f.write("\n")
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    with atomic_file(path, "w") as f:
+        json.dump(ready, f, indent=2, allow_nan=False)
+        f.write("\n")
 
 
-def _read_csv(csv_path: Path) -> tuple[list[str], list[list[float]]]:
-    with csv_path.open(newline="", encoding="utf-8") as f:
-        rows = list(csv.reader(f))
-    if not rows:
-        return [], []
-    header, data = rows[0], []
-    for row in rows[1:]:
-        if len(row) == len(header):  # a row cut short by a crash is skipped
-            try:
-                data.append([float(x) for x in row])
-            except ValueError:
-                continue
-    return header, data
+def plot_file_name(name: str) -> str:
+    """File name of the plot of the series ``name``: ``<name>.png`` when that is a safe, short
+    file name; otherwise the name with unsafe characters replaced by ``_``, cut to
+    ``MAX_STEM`` characters and followed by a short hash of the whole name, so that
+    different names never share a file."""
+    safe = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".-")
+    if name and safe == name and len(name) <= MAX_STEM and f"{name}.png" != ENERGIES_FILE:
+        return f"{name}.png"
+    digest = hashlib.sha1(name.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+    return f"{safe[:MAX_STEM - 9] or 'series'}-{digest}.png"
 
 
-def _file_name(column: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.\-]", "_", column).lstrip(".") or "column"
+def _label(name: str, unit: str | None, width: int = 40) -> str:
+    short = name if len(name) <= width else name[:width - 3] + "..."
+    return f"{short} ({unit})" if unit else short
 
 
-def plot_timeseries(csv_path: str | Path, out_dir: str | Path,
-                    energy_columns: Sequence[str] = ()) -> list[Path]:
-    """One PNG per sensor column of the time-series CSV against t (``<column>.png``), plus
-    ``energies.png`` with the ``energy_columns`` present in the CSV on one plot, when any.
+def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
+                out_dir: str | Path, units: Mapping[str, str] | None = None,
+                energies: Sequence[str] = ()) -> tuple[list[Path], list[str]]:
+    """Plot each series against t (s) into ``out_dir``: one PNG per series not in
+    ``energies`` (:func:`plot_file_name`), and ``energies.png`` with one panel per series of
+    ``energies``, each on its own scale (a 1e-5 J curve stays visible beside a 1.7 J one).
+    y axes carry ``units[name]``.  Each PNG is written atomically.
 
-    Uses the Agg canvas directly (no pyplot, no global backend switch).  Returns the written
-    paths; [] when the CSV has no data rows.
+    A plot that fails is a warning, never an exception (except KeyboardInterrupt): returns
+    the written paths and the warnings.  Nothing is drawn when t is empty.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    header, rows = _read_csv(Path(csv_path))
-    if not rows or len(header) < 2:
-        return []
+    units = units or {}
+    if len(t) == 0 or not series:
+        return [], []
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except Exception as error:  # a broken matplotlib costs the plots, not the run
+        return [], [f"plots: cannot import matplotlib ({type(error).__name__}: {error})"]
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    t = [r[0] for r in rows]
-    columns = {name: [r[j] for r in rows] for j, name in enumerate(header) if j > 0}
     written: list[Path] = []
+    problems: list[str] = []
 
-    def save(fig: Figure, name: str) -> None:
-        FigureCanvasAgg(fig)
-        # fixed margins: tight_layout would render every figure twice
-        fig.subplots_adjust(left=0.16, right=0.97, bottom=0.12, top=0.92)
-        target = out / name
-        fig.savefig(target, dpi=100)
-        written.append(target)
+    def save(file: str, draw) -> None:
+        target = out / file
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                fig = draw()
+                FigureCanvasAgg(fig)
+                with atomic_file(target) as f:
+                    fig.savefig(f, format="png", dpi=100)
+            problems.extend(f"{file}: {w.message}" for w in caught)
+            written.append(target)
+        except Exception as error:
+            problems.append(f"{file}: not written ({type(error).__name__}: {error})")
 
-    for name, values in columns.items():
-        fig = Figure(figsize=(6.4, 4.0))
+    def single(name: str):
+        fig = Figure(figsize=(6.4, 4.0), layout="constrained")
         ax = fig.add_subplot()
-        ax.plot(t, values, lw=1.2)
-        ax.set_title(name)
+        ax.plot(t, series[name], lw=1.2)
+        ax.set_title(_label(name, None, 60))
         ax.set_xlabel("t (s)")
-        ax.set_ylabel(name)
+        ax.set_ylabel(_label(name, units.get(name)))
         ax.grid(True, alpha=0.3)
-        save(fig, f"{_file_name(name)}.png")
+        return fig
 
-    energies = [name for name in energy_columns if name in columns]
-    if energies:
-        fig = Figure(figsize=(6.4, 4.0))
-        ax = fig.add_subplot()
-        for name in energies:
-            ax.plot(t, columns[name], lw=1.2, label=name)
-        ax.set_title("energies")
-        ax.set_xlabel("t (s)")
-        ax.set_ylabel("energy (J)")
-        ax.grid(True, alpha=0.3)
-        ax.legend()
-        save(fig, "energies.png")
-    return written
+    def energy_panels(names: list[str]):
+        fig = Figure(figsize=(6.4, 1.2 + 1.8 * len(names)), layout="constrained")
+        axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, name in zip(axes, names, strict=True):
+            ax.plot(t, series[name], lw=1.2)
+            ax.set_ylabel(_label(name, units.get(name, "J"), 24))
+            ax.grid(True, alpha=0.3)
+        axes[0].set_title("energies")
+        axes[-1].set_xlabel("t (s)")
+        return fig
+
+    for name in series:
+        if name not in energies:
+            save(plot_file_name(name), lambda name=name: single(name))
+    present = [name for name in series if name in energies]
+    if present:
+        save(ENERGIES_FILE, lambda: energy_panels(present))
+    return written, problems
 
 
 class Progress:

@@ -109,6 +109,8 @@ class CompiledEngine:
     """Runs a dynamic analysis with the generated stepper; the interface of
     ``runtime.integrators.Integrator`` (``run``, ``counters``)."""
 
+    engine = "compiled"
+
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
         if model.backend != "c":
             raise ValueError("engine: the compiled engine needs backend = \"c\"; use "

@@ -141,13 +141,15 @@ def test_timeseries_has_t_then_one_column_per_sensor(full_run):
         assert final[name] == value
 
 
-def test_one_plot_per_sensor_and_the_energies(full_run):
-    _, out, _, _ = full_run
-    expected = {f"{s['name']}.png" for s in SENSORS} | {"energies.png"}
-    found = {p.name for p in out.glob("*.png")}
-    assert expected <= found
+def test_one_plot_per_sensor_and_one_for_the_energies(full_run):
+    _, out, summary, _ = full_run
+    expected = {f"{s['name']}.png" for s in SENSORS if s["name"] not in ENERGIES}
+    expected |= {"energies.png"}
+    assert {p.name for p in out.glob("*.png")} == expected  # energies are not plotted twice
     for name in expected:
         assert (out / name).read_bytes()[:8] == PNG_SIGNATURE
+    assert summary["files"] == sorted(expected | {"summary.json", "timeseries.csv"})
+    assert summary["warnings"] == []
 
 
 @pytest.mark.parametrize("analyses, absent", [
@@ -307,3 +309,308 @@ def test_static_that_does_not_converge_is_reported_as_diverged(tmp_path):
     assert "static" in summary["message"]
     assert "static" not in summary
     assert no_temporary_files(tmp_path / "out")
+
+
+# --------------------------------------------------------------------------- issue 10
+
+def numpy_dynamic(sensors: list[dict], t_end: float = 0.3, **dynamic) -> dict:
+    """A 2-element cantilever shaken at 5 Hz, numpy backend (no compiler), dynamic only."""
+    return cantilever(elements=2, force=[0.0, -1000.0], sensors=sensors,
+                      law={"type": "sine", "amplitude": 1.0, "frequency_hz": 5.0},
+                      analysis_tables={"dynamic": {"t_end": t_end, "step": 2.5e-3,
+                                                   **dynamic}},
+                      solver={"backend": "numpy"})
+
+
+def csv_column(path: Path, name: str) -> tuple[list[float], list[float]]:
+    header, rows = read_csv(path)
+    j = header.index(name)
+    return [row[0] for row in rows], [row[j] for row in rows]
+
+
+TRICKY_SENSORS = [
+    {"name": "a-b", "type": "kinetic_energy"},
+    {"name": "ab", "type": "displacement", "node": "beam:-1", "component": "y"},
+    {"name": "tip-y", "type": "displacement", "node": "beam:-1", "component": "y"},
+    {"name": "return", "type": "displacement", "node": "beam:-1", "component": "x"},
+]
+
+
+@pytest.mark.parametrize("name", ["ab", "tip-y", "return"])
+def test_response_frequency_is_of_the_sensor_named_exactly(name, tmp_path):
+    from runtime.signal import dominant_frequency
+
+    data = numpy_dynamic(TRICKY_SENSORS, frequency_of=name, frequency_after=0.05)
+    summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True)
+    assert code == 0, summary["message"]
+    on_disk = json.loads((tmp_path / "out" / "summary.json").read_text())
+    t, y = csv_column(tmp_path / "out" / "timeseries.csv", name)
+    keep = [i for i, x in enumerate(t) if x >= 0.05]
+    expected = dominant_frequency([t[i] for i in keep], [y[i] for i in keep])
+    assert on_disk["dynamic"]["response_frequency_rad_s"] == pytest.approx(expected, rel=1e-12)
+    if name == "ab":  # not the frequency of "a-b", which genfromtxt also calls "ab"
+        t, y = csv_column(tmp_path / "out" / "timeseries.csv", "a-b")
+        other = dominant_frequency([t[i] for i in keep], [y[i] for i in keep])
+        assert abs(other - expected) > 0.1 * expected
+
+
+def test_frequency_of_a_constant_signal_is_a_warning(tmp_path):
+    sensors = [{"name": "still", "type": "displacement", "node": "beam:0", "component": "y"}]
+    data = numpy_dynamic(sensors, frequency_of="still")
+    summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True, plots=False)
+    assert code == 0 and summary["status"] == "ok"
+    assert summary["dynamic"]["response_frequency_rad_s"] is None
+    assert any("constant" in w for w in summary["warnings"])
+
+
+class Refuse:
+    """Stands in for Model: a test fails if the run gets as far as building the model."""
+
+    calls = 0
+
+    def __init__(self, *args, **kwargs):
+        Refuse.calls += 1
+        raise AssertionError("the model must not be built")
+
+
+@pytest.mark.parametrize("where", ["file", "under_file"])
+def test_unusable_output_folder_is_exit_3_before_any_work(where, tmp_path, monkeypatch):
+    monkeypatch.setattr("runtime.run.Model", Refuse)
+    Refuse.calls = 0
+    scene = write(tmp_path, small_scene())
+    (tmp_path / "file").write_text("not a folder")
+    out = tmp_path / "file" if where == "file" else tmp_path / "file" / "out"
+    summary, code = run(scene, out, quiet=True)
+    assert code == 3 and Refuse.calls == 0
+    assert summary["status"] == "failed"
+    assert str(tmp_path / "file") in summary["message"]
+    assert "no summary.json written" in summary["message"]
+    assert "\n" not in summary["message"]
+    assert (tmp_path / "file").read_text() == "not a folder"
+
+
+def test_read_only_output_folder_is_exit_3(tmp_path, monkeypatch):
+    from runtime import output
+
+    real_open = os.open
+
+    def read_only(path, flags, *args):
+        if flags & os.O_CREAT and str(tmp_path / "out") in str(path):
+            raise OSError(13, "Permission denied", str(path))
+        return real_open(path, flags, *args)
+
+    monkeypatch.setattr(output.os, "open", read_only)
+    monkeypatch.setattr("runtime.run.Model", Refuse)
+    (tmp_path / "out").mkdir()
+    summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
+    assert code == 3
+    assert "cannot write in the folder (Permission denied)" in summary["message"]
+    assert os.listdir(tmp_path / "out") == []
+
+
+def test_invalid_scene_and_unusable_folder_is_exit_2_saying_no_summary(tmp_path):
+    data = small_scene()
+    data["body"][0]["sectoin"] = data["body"][0].pop("section")
+    (tmp_path / "file").write_text("x")
+    summary, code = run(write(tmp_path, data), tmp_path / "file", quiet=True)
+    assert code == 2 and summary["status"] == "failed"
+    first = summary["message"].split("\n")[0]
+    assert first.startswith("body[0].sectoin")
+    assert "exists and is not a folder" in first and "no summary.json written" in first
+
+
+def test_full_disk_during_the_run_is_exit_3_with_whole_csv_rows(tmp_path, monkeypatch):
+    from test_output import FullDisk
+
+    from runtime.output import TimeSeriesWriter
+
+    real_init = TimeSeriesWriter.__init__
+
+    def init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        self._file = FullDisk(self._file, budget=300)  # a few rows, then a cut row
+
+    monkeypatch.setattr(TimeSeriesWriter, "__init__", init)
+    out = tmp_path / "out"
+    summary, code = run(write(tmp_path, small_scene(("dynamic",))), out, quiet=True)
+    assert code == 3
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["status"] == "failed"
+    assert "timeseries.csv: cannot write (No space left on device)" in on_disk["message"]
+    header, rows = read_csv(out / "timeseries.csv")  # every row whole and readable
+    assert header == ["t"] + [s["name"] for s in SENSORS]
+    assert 1 <= len(rows) < 11 and all(len(row) == len(header) for row in rows)
+    assert (out / "timeseries.csv").read_bytes().endswith(b"\n")
+    assert on_disk["dynamic"]["t_reached"] == rows[-1][0]
+    assert f"up to t = {rows[-1][0]:.6g} s" in on_disk["message"]
+    assert not list(out.glob("*.png")) and no_temporary_files(out)
+
+
+@pytest.mark.parametrize("error, hint", [
+    ("CompilerNotFoundError", "--backend numpy"),
+    ("CompilationError", "--backend numpy"),
+    ("CacheError", "ANCF_CACHE_DIR"),
+])
+def test_jit_environment_errors_are_exit_3_with_a_hint(error, hint, tmp_path, monkeypatch):
+    from runtime import jit
+
+    def broken(*args, **kwargs):
+        raise getattr(jit, error)(f"{error} first line\ndetails: compiler output")
+
+    monkeypatch.setattr("runtime.run.Model", broken)
+    out = tmp_path / "out"
+    summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
+    assert code == 3
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["status"] == "failed"
+    first, rest = on_disk["message"].split("\n", 1)
+    assert first.startswith(f"{error} first line") and hint in first
+    assert rest == "details: compiler output"
+
+
+def test_long_sensor_name_keeps_results_and_plot(tmp_path):
+    from runtime.output import plot_file_name
+
+    name = "s" * 300
+    sensors = [{"name": name, "type": "displacement", "node": "beam:-1", "component": "y"}]
+    out = tmp_path / "out"
+    summary, code = run(write(tmp_path, numpy_dynamic(sensors, t_end=0.02)), out, quiet=True)
+    assert code == 0, summary["message"]
+    assert summary["warnings"] == []
+    assert (out / plot_file_name(name)).read_bytes()[:8] == PNG_SIGNATURE
+    assert name in json.loads((out / "summary.json").read_text())["dynamic"]["sensors_final"]
+
+
+def test_failing_plots_are_warnings_not_failures(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    def broken(self, *args, **kwargs):
+        raise RuntimeError("renderer exploded")
+
+    monkeypatch.setattr(Figure, "savefig", broken)
+    out = tmp_path / "out"
+    summary, code = run(write(tmp_path, small_scene(("dynamic",))), out, quiet=True)
+    assert code == 0 and summary["status"] == "ok"
+    assert len(summary["warnings"]) == 2  # tip_y.png and energies.png
+    assert all("renderer exploded" in w for w in summary["warnings"])
+    assert json.loads((out / "summary.json").read_text())["warnings"] == summary["warnings"]
+    assert not list(out.glob("*.png")) and no_temporary_files(out)
+
+
+def test_plots_are_drawn_after_the_summary_is_written(tmp_path, monkeypatch):
+    import time
+
+    from runtime import output
+
+    real = output.plot_series
+    seen = {}
+
+    def slow_plots(*args, **kwargs):
+        seen.update(json.loads((tmp_path / "out" / "summary.json").read_text()))
+        time.sleep(0.3)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(output, "plot_series", slow_plots)
+    summary, code = run(write(tmp_path, small_scene(("dynamic",))), tmp_path / "out",
+                        quiet=True)
+    assert code == 0
+    assert seen["status"] == "ok" and seen["dynamic"]["steps"] == 20  # results already there
+    assert summary["timing"]["postprocess_s"] >= 0.3 > seen["timing"]["postprocess_s"]
+    assert summary["timing"]["simulate_s"] == seen["timing"]["simulate_s"]
+    assert summary["timing"]["total_s"] >= summary["timing"]["simulate_s"] + 0.3
+
+
+def test_no_plots(tmp_path):
+    summary, code = run(write(tmp_path, small_scene(("dynamic",))), tmp_path / "out",
+                        quiet=True, plots=False)
+    assert code == 0
+    assert not list((tmp_path / "out").glob("*.png"))
+    assert summary["files"] == ["summary.json", "timeseries.csv"]
+
+
+def test_reused_output_folder_loses_stale_outputs_only(tmp_path):
+    out = tmp_path / "out"
+    other = [{"name": "old_sensor", "type": "displacement", "node": "beam:-1",
+              "component": "x"}] + SENSORS
+    assert run(write(tmp_path, small_scene(("dynamic",), sensor=other)), out, quiet=True)[1] == 0
+    assert (out / "old_sensor.png").exists()
+    (out / "notes.txt").write_text("mine")
+    (out / "picture.png").write_text("mine")
+    # a newer run of another scene: no old_sensor.png next to its results
+    assert run(write(tmp_path, small_scene(("dynamic",))), out, quiet=True)[1] == 0
+    assert not (out / "old_sensor.png").exists()
+    assert (out / "notes.txt").read_text() == "mine" == (out / "picture.png").read_text()
+    # a plot of an earlier version, when energies had one plot each
+    (out / "kinetic.png").write_text("old")
+    assert run(write(tmp_path, small_scene(("static",))), out, quiet=True)[1] == 0
+    assert not (out / "kinetic.png").exists() and not (out / "timeseries.csv").exists()
+    # a newer run that fails: no stale results beside its summary
+    data = small_scene()
+    data["body"][0]["sectoin"] = data["body"][0].pop("section")
+    assert run(write(tmp_path, data), out, quiet=True)[1] == 2
+    assert sorted(os.listdir(out)) == ["notes.txt", "picture.png", "summary.json"]
+    assert json.loads((out / "summary.json").read_text())["status"] == "failed"
+
+
+def test_outputs_have_ordinary_permissions(tmp_path):
+    old = os.umask(0o022)
+    try:
+        run(write(tmp_path, small_scene(("dynamic",))), tmp_path / "out", quiet=True)
+    finally:
+        os.umask(old)
+    for path in (tmp_path / "out").iterdir():
+        assert path.stat().st_mode & 0o777 == 0o644, path.name
+
+
+def test_internal_error_still_writes_a_failed_summary(tmp_path, monkeypatch):
+    def bug(*args, **kwargs):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr("runtime.run.Sensors", bug)
+    out = tmp_path / "out"
+    summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
+    assert code == 4
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["status"] == "failed"
+    assert on_disk["message"] == "internal error during the model build: ZeroDivisionError: a bug"
+    assert "Traceback" in on_disk["traceback"]
+
+
+def test_out_of_memory_is_exit_3(tmp_path, monkeypatch):
+    def huge(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr("runtime.run.Model", huge)
+    summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
+    assert code == 3
+    assert summary["message"] == "out of memory during the model build"
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["status"] == "failed"
+
+
+def test_summary_that_cannot_be_written_is_exit_3(tmp_path, monkeypatch):
+    from runtime import output
+
+    def full_disk(path, data):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(output, "write_json_atomic", full_disk)
+    summary, code = run(write(tmp_path, small_scene(("static",))), tmp_path / "out",
+                        quiet=True)
+    assert code == 3 and summary["status"] == "failed"
+    assert summary["message"] == "summary.json not written (No space left on device)"
+    assert "summary.json" not in summary["files"]
+    assert "static" in summary  # the results are still returned
+
+
+def test_compiler_fault_when_the_dynamic_engine_is_built_is_exit_3(tmp_path, monkeypatch):
+    from runtime import engines, jit
+
+    def no_compiler(*args, **kwargs):
+        raise jit.CompilerNotFoundError("no C compiler for the stepper")
+
+    monkeypatch.setitem(engines.ENGINES, "compiled", no_compiler)
+    summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
+    assert code == 3 and summary["status"] == "failed"
+    assert summary["message"] == ("no C compiler for the stepper; --backend numpy needs no C "
+                                  "compiler")
+    assert "static" in summary and "modal" in summary  # what ran before is kept
