@@ -653,6 +653,9 @@ def _g(x: float) -> str:
 def _multiple(value: float, step: float, path: str, key: str) -> None:
     """``value`` (at key ``key``) must be an integer multiple of the time step."""
     ratio = value / step
+    if not math.isfinite(ratio):
+        raise SceneError(f"{path}.{key}: {key} / step = {ratio} overflows; expected a {key} "
+                         f"of at most t_end, got {_g(value)} s for step = {_g(step)} s")
     n = round(ratio)
     if abs(ratio - n) <= MULTIPLE_TOLERANCE * ratio:
         return
@@ -821,19 +824,21 @@ def _gib(n: int) -> str:
     return f"{n / 2**30:.3g} GiB" if n < 10**300 else f"{_big(n // 2**30)} GiB"
 
 
-def _check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
-                 sensors: list[Sensor], static: Static | None, modal: Modal | None,
-                 dynamic: Dynamic | None) -> None:
-    """Refuse what cannot run on this machine in a sane time (``LIMITS``), before building."""
+def _model_bytes(bodies: tuple[Body, ...]) -> int:
+    """Estimated peak memory (bytes) of building and solving the model of the bodies."""
+    return LIMITS["bytes_per_matrix_entry"] * sum(
+        b.elements * element_kind(b.element).ndof ** 2 for b in bodies)
+
+
+def _check_model_size(bodies: tuple[Body, ...]) -> None:
+    """Refuse a mesh whose model cannot fit the memory of this machine (``LIMITS``)."""
     memory = LIMITS["memory_bytes"]
     per_entry = LIMITS["bytes_per_matrix_entry"]
     ndof = {b.name: element_kind(b.element).ndof for b in bodies}
     entries = [b.elements * ndof[b.name] ** 2 for b in bodies]
     elements = sum(b.elements for b in bodies)
-    per_node = ndof[bodies[0].name] // 2
-    dim = bodies[0].dim
-    coordinates = sum(b.n_nodes for b in bodies) * per_node
-    model_bytes = per_entry * sum(entries)
+    coordinates = sum(b.n_nodes for b in bodies) * (ndof[bodies[0].name] // 2)
+    model_bytes = _model_bytes(bodies)
     if model_bytes > memory:
         i = max(range(len(bodies)), key=entries.__getitem__)
         n = ndof[bodies[i].name]
@@ -844,6 +849,18 @@ def _check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
                          f"limit of {_gib(memory)}; expected at most about {most} "
                          f"{bodies[i].element} elements in the scene")
 
+
+def _check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
+                 sensors: list[Sensor], static: Static | None, modal: Modal | None,
+                 dynamic: Dynamic | None) -> None:
+    """Refuse what cannot run on this machine in a sane time (``LIMITS``), before building;
+    the mesh itself passed ``_check_model_size``."""
+    memory = LIMITS["memory_bytes"]
+    elements = sum(b.elements for b in bodies)
+    per_node = element_kind(bodies[0].element).ndof // 2
+    dim = bodies[0].dim
+    coordinates = sum(b.n_nodes for b in bodies) * per_node
+    model_bytes = _model_bytes(bodies)
     held = sum(per_node if c.type in ("clamp", "prescribed_rotation") else dim
                for c in constraints if c.node is not None)
     free = coordinates - held
@@ -942,6 +959,7 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
             raise SceneError(f"body[{i}].element: expected a {bodies[0].dim}D element kind like "
                              f"body[0], got {body.element} ({body.dim}D)")
         bodies.append(body)
+    _check_model_size(tuple(bodies))
     dim = bodies[0].dim
     node = _Nodes(tuple(bodies))
 

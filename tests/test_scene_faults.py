@@ -12,7 +12,9 @@ fragment's key path (the text before its first ":").
 from __future__ import annotations
 
 import copy
+import datetime
 import math
+import random
 import tomllib
 
 import pytest
@@ -524,3 +526,46 @@ def test_directory_and_device_are_not_scene_files(tmp_path):
 def test_utf8_byte_order_mark_is_skipped(tmp_path):
     path = _write(tmp_path, b"\xef\xbb\xbf" + BASE.encode())
     assert load_scene(path).bodies[0].name == "beam"
+
+
+# --------------------------------------------------------------------------- random corpus
+
+ODD_VALUES = [0, -1, 10**400, -0.0, 1e-320, 1e308, math.nan, -math.inf, True, "", " ", "x" * 300,
+              "a\x00b", "beam:\u0663", "beam:-1", [], [0, 0], [1e308] * 3, [[0, 1], [0, 1]], {},
+              {"type": "table", "points": []}, datetime.date(2020, 1, 1), [[[]]], 0.5, 1e-3]
+
+
+def _mutated(rng: random.Random) -> dict:
+    """BASE with one to three leaves replaced by odd values or deleted."""
+    data = tomllib.loads(rng.choice([BASE, BASE_2D]))
+
+    def paths(obj, path=()):
+        items = obj.items() if isinstance(obj, dict) else \
+            enumerate(obj) if isinstance(obj, list) else ()
+        for key, value in items:
+            yield (*path, key)
+            yield from paths(value, (*path, key))
+
+    for _ in range(rng.randint(1, 3)):
+        *parents, last = rng.choice(list(paths(data)))
+        target = data
+        for key in parents:
+            target = target[key]
+        if isinstance(target, dict) and rng.random() < 0.2:
+            del target[last]
+        else:
+            target[last] = copy.deepcopy(rng.choice(ODD_VALUES))
+    return data
+
+
+def test_random_malformed_scenes_raise_only_one_line_scene_errors():
+    rng = random.Random(10)
+    errors = 0
+    for _ in range(400):
+        data = _mutated(rng)
+        try:
+            parse_scene(data)
+        except SceneError as error:
+            errors += 1
+            assert "\n" not in str(error) and len(str(error)) < 1000
+    assert errors > 300
