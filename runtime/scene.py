@@ -22,7 +22,11 @@ Beyond the types, a scene is checked for what it would do wrong:
   at most 1e8 time steps or load increments and 1e10 element-steps (about a day at the
   measured ~9 us per element and step); at most 1e8 values in the time series; at most 1000
   Newton iterations, 1000 modes (and no more than the degrees of freedom), 1000 sensors and
-  Gauss orders up to 64.
+  Gauss orders up to 64; a relative Newton tolerance in [1e-15, 1e-2];
+* names: sensor names are file names (``SENSOR_NAME``, at most 64 characters, unique ignoring
+  case, none reserved); body and material names printable, at most 64 characters;
+* files (``read_scene_file``): UTF-8 (a byte order mark is skipped), at most 16 MiB, a
+  regular file, not empty; errors name the file (and the byte offset or the line).
 """
 
 from __future__ import annotations
