@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
+import datetime
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -266,16 +267,26 @@ LAWS: dict[str, type[Law]] = {cls.type: cls for cls in (
     Constant, CosineRamp, LinearRamp, Sine, Table, SpinUp, ConstantRate)}
 
 
-def _show(value: Any) -> str:
-    """A value as the scene spells it, for error messages."""
+def _show(value: Any, depth: int = 0) -> str:
+    """A value as the scene spells it, for error messages: one line, at most about 80
+    characters (control characters escaped, long strings, lists and integers shortened)."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
-        return f'"{value}"'
+        text = "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in value[:60])
+        more = f"... ({len(value)} characters)" if len(value) > 60 else ""
+        return f'"{text}"{more}'
     if isinstance(value, dict):
         return "a table"
     if isinstance(value, list):
-        return "[" + ", ".join(_show(x) for x in value) + "]"
+        if depth >= 2 and value:
+            return "[...]"
+        items = ", ".join(_show(x, depth + 1) for x in value[:6])
+        return f"[{items}, ... ({len(value)} items)]" if len(value) > 6 else f"[{items}]"
+    if isinstance(value, datetime.date | datetime.time):
+        return f"{value.isoformat()} (a {type(value).__name__})"
+    if isinstance(value, int) and value.bit_length() > 200:
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
     return repr(value)
 
 
@@ -283,11 +294,21 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+def _is_finite(value: Any) -> bool:
+    """A number (not a boolean) that is finite as a float (huge integers are not)."""
+    if not _is_number(value):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _check_number(value: Any, path: str, check: str) -> float:
     if check == "positive":
-        if not _is_number(value) or not math.isfinite(value) or value <= 0:
+        if not _is_finite(value) or value <= 0:
             raise SceneError(f"{path}: expected a positive number, got {_show(value)}")
-    elif not _is_number(value) or not math.isfinite(value):
+    elif not _is_finite(value):
         raise SceneError(f"{path}: expected a finite number, got {_show(value)}")
     return float(value)
 
@@ -298,7 +319,7 @@ def _check_points(value: Any, path: str) -> tuple[tuple[float, float], ...]:
     points = []
     for i, pair in enumerate(value):
         if (not isinstance(pair, list) or len(pair) != 2
-                or not all(_is_number(x) and math.isfinite(x) for x in pair)):
+                or not all(_is_finite(x) for x in pair)):
             raise SceneError(f"{path}[{i}]: expected a pair [t, v] of finite numbers, "
                              f"got {_show(pair)}")
         if points and pair[0] <= points[-1][0]:

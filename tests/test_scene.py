@@ -276,8 +276,9 @@ type = "spherical"
 nodes = ["arm:-1", "link:0"]
 
 [[constraint]]
-type = "revolute"
-nodes = ["link:1", "link:-1"]
+type = "prescribed_rotation"
+node = "link:-1"
+angle = { type = "constant_rate", omega = 0.5 }
 axis = [0.0, 2.0, 0.0]
 
 [[load]]
@@ -350,11 +351,11 @@ def test_arc_joints_and_gravity_parse():
     assert scene.title == "pendulum"
     assert scene.bodies[0].arc == Arc((0.0, 0.0, 0.0), 1.0, -90.0, 90.0)
     assert scene.bodies[0].start is None
-    pin, spherical, revolute = scene.constraints
+    pin, spherical, hub = scene.constraints
     assert pin == Constraint("pin", NodeRef("arm", 0), None, None, None)
     assert spherical.nodes == (NodeRef("arm", 4), NodeRef("link", 0))
-    assert revolute.nodes == (NodeRef("link", 1), NodeRef("link", 2))
-    assert revolute.axis == (0.0, 1.0, 0.0)
+    assert hub.node == NodeRef("link", 2)
+    assert hub.axis == (0.0, 1.0, 0.0)
     assert scene.loads == (Load("gravity", None, (0.0, -9.81, 0.0), Constant()),)
     assert [(s.name, s.type) for s in scene.sensors] == [
         ("tip", "position"), ("V", "potential_energy"), ("total", "total_energy")]
@@ -444,7 +445,7 @@ BAD = [
     ("3d", _set(*BODY, "elements", True), "body[0].elements: expected a positive integer, got "
                                           "true"),
     ("3d", _set(*BODY, "elements", 0), "body[0].elements: expected a positive integer, got 0"),
-    ("3d", _set(*BODY, "elements", 2.5), "body[0].elements: expected a positive integer"),
+    ("3d", _set(*BODY, "elements", 2.5), "body[0].elements: expected an integer, got 2.5"),
     ("3d", _set(*BODY, "section", "height", -0.1), "body[0].section.height: expected a positive"),
     ("3d", _set(*BODY, "section", "height", True), "body[0].section.height: expected a positive"),
     ("3d", _set(*BODY, "section", 0.1), "body[0].section: expected a table"),

@@ -450,7 +450,8 @@ def case_scene(plan: Plan, elements: int, step: float | None, integrator: str | 
         dynamic = dict(analysis.get("dynamic", {}))
         dynamic.update(t_end=plan.t_end, step=step, integrator=integrator)
         if dynamic.get("output_every") is not None:
-            dynamic["output_every"] = max(dynamic["output_every"], step)
+            # outputs at a whole number of steps
+            dynamic["output_every"] = step * max(1, round(dynamic["output_every"] / step))
         # the response frequency is fitted here, after the run, so that simulate_s stays
         # the time of the integration alone
         dynamic.pop("frequency_of", None)

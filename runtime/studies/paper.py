@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import csv
 import json
+import math
 import tempfile
 import tomllib
 from pathlib import Path
@@ -49,8 +50,10 @@ def scene_data(elements: int, t_end: float, step: float | None = None) -> dict:
     dynamic = data["analysis"]["dynamic"]
     if step is not None:
         dynamic["step"] = step
+    # outputs at a whole number of steps, at most 2000 of them
+    every = max(dynamic["output_every"], t_end / 2000, dynamic["step"])
     dynamic.update(t_end=t_end, frequency_after=t_c,
-                   output_every=max(dynamic["output_every"], t_end / 2000, dynamic["step"]))
+                   output_every=dynamic["step"] * math.ceil(every / dynamic["step"] - 1e-9))
     return data
 
 

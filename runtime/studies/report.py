@@ -119,7 +119,7 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
               "", paper.markdown(results)]
     parts += ["## 4. Shipped scenes (`ancf run`)", "", _scenes(work, figures),
               "![rotating beam tip](figures/rotating_beam_tip_transverse.png)", "",
-              "![rotating beam strain energy](figures/rotating_beam_strain_energy.png)", ""]
+              "![rotating beam energies](figures/rotating_beam_energies.png)", ""]
     parts += ["## 5. Cost of a dynamic step against model size (`ancf bench steps`)", "",
               bench.steps_table((10, 100) if quick else (10, 100, 1000, 10_000))]
     parts += ["## 6. Error against run time (`ancf study error-vs-time`)", ""]
