@@ -37,6 +37,8 @@ from runtime.linear import single_threaded_blas
 from runtime.model import Model
 
 STEPPER_VERSION = "1"
+#: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
+CHUNK = 64
 _C_TYPES = {"batch": "const double *, long", "shared": "const double *",
             "csr": "const int *, const int *, const double *", "table": "long, const double *",
             "output": "double *"}
@@ -52,14 +54,14 @@ def _environment() -> jinja2.Environment:
 
 def _kernel_call(arrays: list[dict], slots: dict[str, int]) -> tuple[str, str]:
     """(C parameter types, C arguments) of a generated kernel, from its signature."""
-    params, args = ["long"], ["g->elements"]
+    params, args = ["long"], ["count"]
     for a in arrays:
         role, name = a["role"], a["name"]
         if role == "local":
             continue
         params.append(_C_TYPES[role])
         if role == "batch":
-            args.append(f"g->{'e' if name == 'e' else 'e0'}, n")
+            args.append("g->e, n" if name == "e" else "g->e0 + first * n, n")
         elif role == "shared":
             args.append(f"g->real[{slots[name]}]")
         elif role == "csr":
@@ -101,7 +103,7 @@ def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
     header = env.get_template("stepper_header.h.j2").render(
         banner=banner, groups=groups, slots=slots_needed)
     source = env.get_template("stepper.c.j2").render(
-        banner=banner, header=header, groups=groups, integrator=integrator)
+        banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK)
     return source, header
 
 
@@ -187,7 +189,7 @@ class CompiledEngine:
         for name in ("force", "residual", "x", "a_old", "base", "abar_new"):
             setattr(m, name, self._work(nf))
         m.band = self._work(nf * ld)
-        m.lu = self._work(nf * ld + nf * (3 * bw + 1))
+        m.lu = self._work(nf * (3 * bw + 1))
         m.lu_pivots = self._work(nf, "int")
         m.coupling = self._work(nf * nj)
         m.schur = self._work(nj * nj)
@@ -220,9 +222,10 @@ class CompiledEngine:
                               ("force_jacobian", "force_jacobian_kernel")):
             address = family.address(kernel)
             setattr(target, field, self._ffi.cast("void *", address))
-        target.e = self._work(elements * ndof)
-        target.force = self._work(elements * ndof)
-        target.jacobian = self._work(elements * ndof * ndof)
+        chunk = min(elements, CHUNK)
+        target.e = self._work(chunk * ndof)
+        target.force = self._work(chunk * ndof)
+        target.jacobian = self._work(chunk * ndof * ndof)
 
     def _state(self, state):
         s = self._ffi.new("ancf_state *")
