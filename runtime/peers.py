@@ -75,14 +75,15 @@ def exudyn_available() -> bool:
 
 @contextlib.contextmanager
 def _quiet() -> Iterator[None]:
-    """Silence Exudyn's console output for the duration (then switch it back on)."""
+    """Silence Exudyn's console output for the duration."""
     import exudyn as exu
 
-    exu.SetWriteToConsole(False)
+    saved = exu.config.printToConsole
+    exu.config.printToConsole = False
     try:
         yield
     finally:
-        exu.SetWriteToConsole(True)
+        exu.config.printToConsole = saved
 
 
 def _check(newton: str, integrator: str) -> None:
@@ -131,7 +132,9 @@ def _solve(mbs: Any, size: float, t_end: float, step: float, newton: str, integr
     try:
         mbs.SolveDynamic(s, solverType=solver)
     except exu.SolverError as error:
-        raise RuntimeError(f"Exudyn dynamic solve failed: {error}") from error
+        reached = mbs.sys["dynamicSolver"].it.currentTime
+        raise RuntimeError(f"Exudyn dynamic solve failed at t = {reached:g} s: {error}") \
+            from error
     return time.perf_counter() - start, mbs.sys["dynamicSolver"]
 
 
