@@ -18,8 +18,9 @@ the closest it offers, with the data of DESIGN.md section 6:
 Time integration mirrors the project's: ``trapezoidal`` is Exudyn's TrapezoidalIndex2
 (Newmark beta = 1/4, gamma = 1/2, velocity-level constraints), ``generalized_alpha`` its
 generalized-alpha (index 3) with spectral radius ``rho_inf``.  Fixed step, Newton converged on
-the increment (``residualMode = 1``) to 1e-10 times the model size, as our default tolerance
-(Exudyn measures the 2-norm divided by the number of coordinates, we the largest entry).  The
+the increment (``residualMode = 1``) with 1e-10 times the model size as its absolute and
+relative tolerance, after our default (which bounds the largest entry of the increment; Exudyn
+uses its own norm of the increment, so iteration counts may differ for the same accuracy).  The
 clamp and the hub are coordinate constraints (Lagrange multipliers); Exudyn has no coordinate
 elimination.  Time laws are Exudyn symbolic user functions (expression trees evaluated in C++,
 no Python call during the solve).  Nothing is written to files or the console.
