@@ -1,0 +1,360 @@
+"""Exudyn models of the paper's cantilever and rotating beam, for timing our solvers against a
+peer (``ancf bench solvers``, issue 7).
+
+Exudyn (optional: ``pip install exudyn==1.13.6``) has no element equal to ours, so these are
+the closest it offers, with the data of DESIGN.md section 6:
+
+* cantilever: ``ObjectANCFBeam`` (Nachbagauer-Gruber-Gerstmayr shear-deformable 3D ANCF beam:
+  nodes r, r_y, r_z (18 coordinates per element), centre line linear between the nodes,
+  section-resultant material law: a 6x6 section stiffness on axial, shear, torsion and
+  bending strains plus a penalty on cross-section deformation; only the rotary inertia of the
+  section has mass) against our beam3d (3243: r, r_x, r_y, r_z, cubic along the axis, St.
+  Venant-Kirchhoff continuum integrated over the volume).  The section stiffness mirrors a
+  continuum with nu = 0: EA, GA (no shear correction), G (Iy + Iz), EIy, EIz, and the default
+  cross-section penalty EA, EA, 2 GA;
+* rotating beam: ``ObjectANCFCable2D`` (Euler-Bernoulli ANCF cable, r and r_x per node, EA and
+  EI) against our beam2d (Omar-Shabana shear-deformable continuum, r, r_x, r_y per node).
+
+Time integration mirrors the project's: ``trapezoidal`` is Exudyn's TrapezoidalIndex2
+(Newmark beta = 1/4, gamma = 1/2, velocity-level constraints), ``generalized_alpha`` its
+generalized-alpha (index 3) with spectral radius ``rho_inf``.  Fixed step, Newton converged on
+the increment (``residualMode = 1``) with 1e-10 times the model size as its absolute and
+relative tolerance, after our default (which bounds the largest entry of the increment; Exudyn
+uses its own norm of the increment, so iteration counts may differ for the same accuracy).  The
+clamp and the hub are coordinate constraints (Lagrange multipliers); Exudyn has no coordinate
+elimination.  Time laws are Exudyn symbolic user functions (expression trees evaluated in C++,
+no Python call during the solve).  Nothing is written to files or the console.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import math
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+# paper cantilever (DESIGN.md section 6, scenes/cantilever.toml)
+CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 8245.2,
+              "force": 300.0, "ramp": 3.5}
+# paper rotating beam (DESIGN.md section 6, scenes/rotating_beam.toml)
+ROTATING_BEAM = {"length": 8.0, "area": 7.299e-5, "inertia": 8.215e-9, "E": 68.95e9,
+                 "rho": 2766.67, "omega": 4.0, "t_ramp": 15.0}
+TOLERANCE = 1e-10           # Newton, relative to the model size, as the project's default
+NEWTON = ("modified", "full")
+INTEGRATORS = ("trapezoidal", "generalized_alpha")
+
+
+@dataclass
+class PeerRun:
+    """One Exudyn dynamic run: wall times (s) of the solve and of building the model, work
+    counters from Exudyn's solver, the final tip displacement (m) and the settings used."""
+
+    simulate_s: float
+    build_s: float
+    steps: int
+    newton_iterations: int
+    jacobian_evaluations: int
+    tip_displacement: float
+    note: str
+
+
+@functools.cache
+def exudyn_available() -> bool:
+    """True if Exudyn can be imported."""
+    try:
+        import exudyn  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+@contextlib.contextmanager
+def _quiet() -> Iterator[None]:
+    """Silence Exudyn's console output for the duration."""
+    import exudyn as exu
+
+    saved = exu.config.printToConsole
+    exu.config.printToConsole = False
+    try:
+        yield
+    finally:
+        exu.config.printToConsole = saved
+
+
+def _check(newton: str, integrator: str) -> None:
+    if newton not in NEWTON:
+        raise ValueError(f"newton: expected one of {', '.join(NEWTON)}, got {newton!r}")
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator: expected one of {', '.join(INTEGRATORS)}, "
+                         f"got {integrator!r}")
+
+
+def _settings(size: float) -> Any:
+    """Exudyn settings without file output, console output or timers."""
+    import exudyn as exu
+
+    s = exu.SimulationSettings()
+    s.solution.file.write = False
+    s.solution.sensors.active = False
+    s.show.globalTimers = False
+    s.staticSolver.verboseMode = 0
+    s.timeIntegration.verboseMode = 0
+    newton = s.timeIntegration.newton
+    newton.residualMode = 1
+    newton.relativeTolerance = newton.absoluteTolerance = TOLERANCE * max(size, 1.0)
+    s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    return s
+
+
+def _solve(mbs: Any, size: float, t_end: float, step: float, newton: str, integrator: str,
+           rho_inf: float) -> tuple[float, Any]:
+    """Run a fixed-step dynamic solve from rest; returns (wall time, Exudyn solver)."""
+    import exudyn as exu
+
+    s = _settings(size)
+    ti = s.timeIntegration
+    ti.endTime = t_end
+    ti.numberOfSteps = int(round(t_end / step))
+    ti.adaptiveStep = False
+    ti.newton.useModifiedNewton = newton == "modified"
+    # both models start at rest with zero loads and hub acceleration: a(0) = 0 is exact (and
+    # Exudyn cannot solve M a = F for ANCFBeam, whose section deformation modes have no mass)
+    ti.generalizedAlpha.computeInitialAccelerations = False
+    ti.generalizedAlpha.spectralRadius = rho_inf
+    solver = (exu.DynamicSolverType.TrapezoidalIndex2 if integrator == "trapezoidal"
+              else exu.DynamicSolverType.GeneralizedAlpha)
+    start = time.perf_counter()
+    try:
+        mbs.SolveDynamic(s, solverType=solver)
+    except exu.SolverError as error:
+        reached = mbs.sys["dynamicSolver"].it.currentTime
+        raise RuntimeError(f"Exudyn dynamic solve failed at t = {reached:g} s: {error}") \
+            from error
+    return time.perf_counter() - start, mbs.sys["dynamicSolver"]
+
+
+def _note(model: str, newton: str, integrator: str, rho_inf: float, step: float) -> str:
+    scheme = ("TrapezoidalIndex2 (Newmark 1/4, 1/2)" if integrator == "trapezoidal"
+              else f"GeneralizedAlpha index 3, rho_inf = {rho_inf:g}")
+    mode = ("modified Newton (Jacobian reused while it converges)" if newton == "modified"
+            else "full Newton (Jacobian every iteration)")
+    return (f"Exudyn {_version()} {model}; {scheme}; {mode}; step {step:g} s; "
+            f"increment tolerance {TOLERANCE:g} x size; EigenSparse; symbolic time law")
+
+
+def _version() -> str:
+    import exudyn as exu
+
+    return exu.__version__
+
+
+# --------------------------------------------------------------------------- cantilever
+
+def _cantilever(elements: int, ramp: bool) -> tuple[Any, Any, list]:
+    """The paper cantilever as Exudyn ANCFBeam elements, clamped at x = 0, tip load in -y
+    (constant, or the cosine ramp of eq. 42).  Returns (container, system, nodes): keep the
+    container alive while the system is used."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    p = CANTILEVER
+    area = p["height"] * p["width"]
+    iz = p["width"] * p["height"] ** 3 / 12.0    # bending in x-y (load along y)
+    iy = p["height"] * p["width"] ** 3 / 12.0
+    shear = p["E"] / 2.0                          # nu = 0
+    section = exu.BeamSection()
+    section.stiffnessMatrix = np.diag([p["E"] * area, shear * area, shear * area,
+                                       shear * (iy + iz), p["E"] * iy, p["E"] * iz])
+    section.inertia = np.diag([p["rho"] * (iy + iz), p["rho"] * iy, p["rho"] * iz])
+    section.massPerLength = p["rho"] * area
+
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground = mbs.AddMarker(ei.MarkerNodeCoordinate(
+        nodeNumber=mbs.AddNode(ei.NodePointGround()), coordinate=0))
+    h = p["length"] / elements
+    nodes = [mbs.AddNode(ei.NodePointSlope23(referenceCoordinates=[i * h, 0, 0, 0, 1, 0, 0, 0, 1],
+                                             visualization=ei.VNodePointSlope23(show=False)))
+             for i in range(elements + 1)]
+    for a, b in zip(nodes, nodes[1:], strict=False):
+        mbs.AddObject(ei.ObjectANCFBeam(nodeNumbers=[a, b], length=h, sectionData=section,
+                                        visualization=ei.VObjectANCFBeam(show=False)))
+    for c in range(9):  # clamp: position and both section slopes of the first node
+        marker = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))
+        mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[ground, marker],
+                                              visualization=ei.VCoordinateConstraint(show=False)))
+    tip = mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[-1]))
+    load = [0.0, -p["force"], 0.0]
+    if ramp:
+        esym, tc = exu.symbolic, p["ramp"]
+
+        def cosine_ramp(mbs, t, load):
+            f = esym.IfThenElse(t <= tc, 0.5 * (1.0 - esym.cos(t * (math.pi / tc))),
+                                esym.Real(1.0))
+            return [load[0] * f, load[1] * f, load[2] * f]
+
+        law = CreateSymbolicUserFunction(mbs, cosine_ramp, "loadVectorUserFunction",
+                                         itemTypeName="LoadForceVector")
+        mbs.sys["peer_laws"] = [law]  # the expression tree must live as long as the system
+        mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load,
+                                       loadVectorUserFunction=law))
+    else:
+        mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load))
+    mbs.Assemble()
+    return container, mbs, nodes
+
+
+def exudyn_cantilever(elements: int, t_end: float = 4.0, step: float = 1e-3,
+                      newton: str = "modified", integrator: str = "trapezoidal",
+                      rho_inf: float = 0.8) -> PeerRun:
+    """The paper cantilever (scenes/cantilever.toml) run in Exudyn; ``tip_displacement`` is
+    the final tip y displacement (m).  ``integrator`` and ``rho_inf`` as in a scene's
+    [analysis.dynamic]; ``newton`` is ``modified`` (Exudyn's default) or ``full``."""
+    import exudyn as exu
+
+    _check(newton, integrator)
+    with _quiet():
+        start = time.perf_counter()
+        container, mbs, nodes = _cantilever(elements, ramp=True)
+        build_s = time.perf_counter() - start
+        simulate_s, solver = _solve(mbs, CANTILEVER["length"], t_end, step, newton,
+                                    integrator, rho_inf)
+        tip = mbs.GetNodeOutput(nodes[-1], exu.OutputVariableType.Displacement)[1]
+    return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount, float(tip),
+                   _note(f"ANCFBeam x {elements}", newton, integrator, rho_inf, step))
+
+
+def exudyn_cantilever_static(elements: int = 10) -> float:
+    """Static tip y displacement (m) of the Exudyn cantilever under the full 300 N."""
+    import exudyn as exu
+
+    with _quiet():
+        container, mbs, nodes = _cantilever(elements, ramp=False)
+        try:
+            mbs.SolveStatic(_settings(CANTILEVER["length"]))
+        except exu.SolverError as error:
+            raise RuntimeError(f"Exudyn static solve failed: {error}") from error
+        return float(mbs.GetNodeOutput(nodes[-1], exu.OutputVariableType.Displacement)[1])
+
+
+def exudyn_cantilever_frequencies(elements: int = 10, modes: int = 4) -> np.ndarray:
+    """Lowest ``modes`` natural frequencies (rad/s) of the Exudyn cantilever about the
+    reference.  Solved as K^-1 M (M is singular: section deformation modes have no mass, so
+    Exudyn's own ComputeODE2Eigenvalues cannot be used)."""
+    with _quiet():
+        container, mbs, _ = _cantilever(elements, ramp=False)
+        mass, stiffness, _ = mbs.ComputeLinearizedSystem(_settings(CANTILEVER["length"]))
+    free = slice(9, None)  # the clamped first node holds coordinates 0..8
+    mu = scipy.linalg.eigh(mass[free, free], stiffness[free, free], eigvals_only=True)
+    mu = mu[mu > 1e-12 * mu.max()]
+    return np.sort(1.0 / np.sqrt(mu))[:modes]
+
+
+# --------------------------------------------------------------------------- rotating beam
+
+def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
+    """The paper rotating beam as Exudyn ANCFCable2D elements; the first node stays at the
+    origin and its slope is driven to (cos a, sin a) by the spin-up law a(t) of eq. 45.
+    Returns (container, system, nodes)."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    p = ROTATING_BEAM
+    esym, w, T = exu.symbolic, p["omega"], p["t_ramp"]
+    c = T / (2.0 * math.pi)
+
+    def angle(t):
+        ramp = (w / T) * (0.5 * t * t - 2.0 * c * c * esym.sin(t * (math.pi / T)) ** 2)
+        return esym.IfThenElse(t <= T, ramp, w * (t - 0.5 * T))
+
+    def rate(t):
+        ramp = (w / T) * (t - c * esym.sin(t * (2.0 * math.pi / T)))
+        return esym.IfThenElse(t <= T, ramp, esym.Real(w))
+
+    # offsets of the slope displacements (reference slope (1, 0)) and their time derivatives;
+    # Exudyn records each law once with symbolic arguments (mbs, t, item, offset)
+    def slope_x(mbs, t, item, offset):
+        return esym.cos(angle(t)) - 1.0
+
+    def slope_y(mbs, t, item, offset):
+        return esym.sin(angle(t))
+
+    def slope_x_t(mbs, t, item, offset):
+        return -esym.sin(angle(t)) * rate(t)
+
+    def slope_y_t(mbs, t, item, offset):
+        return esym.cos(angle(t)) * rate(t)
+
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground = mbs.AddMarker(ei.MarkerNodeCoordinate(
+        nodeNumber=mbs.AddNode(ei.NodePointGround()), coordinate=0))
+    h = p["length"] / elements
+    nodes = [mbs.AddNode(ei.NodePoint2DSlope1(referenceCoordinates=[i * h, 0, 1, 0],
+                                              visualization=ei.VNodePoint2DSlope1(show=False)))
+             for i in range(elements + 1)]
+    for a, b in zip(nodes, nodes[1:], strict=False):
+        mbs.AddObject(ei.ObjectANCFCable2D(
+            nodeNumbers=[a, b], length=h, massPerLength=p["rho"] * p["area"],
+            bendingStiffness=p["E"] * p["inertia"], axialStiffness=p["E"] * p["area"],
+            visualization=ei.VObjectANCFCable2D(show=False)))
+    mbs.sys["peer_laws"] = []  # the expression trees must live as long as the system
+    laws = [None, None, (slope_x, slope_x_t), (slope_y, slope_y_t)]
+    for coordinate, law in enumerate(laws):
+        marker = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=nodes[0],
+                                                       coordinate=coordinate))
+        kwargs = {}
+        if law is not None:
+            kwargs = {name: CreateSymbolicUserFunction(mbs, f, name,
+                                                       itemTypeName="ObjectConnectorCoordinate")
+                      for name, f in zip(("offsetUserFunction", "offsetUserFunction_t"), law,
+                                         strict=True)}
+            mbs.sys["peer_laws"].extend(kwargs.values())
+        mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[ground, marker],
+                                              visualization=ei.VCoordinateConstraint(show=False),
+                                              **kwargs))
+    mbs.Assemble()
+    return container, mbs, nodes
+
+
+def _tip_transverse(mbs: Any, nodes: list) -> float:
+    """Tip displacement across the hub frame (our sensor ``tip_transverse``): the frame is the
+    first node's slope, normalised, about the first node."""
+    import exudyn as exu
+
+    def coordinates(node):
+        return (np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+                + np.asarray(mbs.GetNodeParameter(node, "referenceCoordinates")))
+
+    hub, tip = coordinates(nodes[0]), coordinates(nodes[-1])
+    axis = hub[2:] / np.linalg.norm(hub[2:])
+    return float(-axis[1] * (tip[0] - hub[0]) + axis[0] * (tip[1] - hub[1]))
+
+
+def exudyn_rotating_beam(elements: int = 10, t_end: float = 20.0, step: float = 1e-3,
+                         newton: str = "modified", integrator: str = "generalized_alpha",
+                         rho_inf: float = 0.8) -> PeerRun:
+    """The paper rotating beam (scenes/rotating_beam.toml) run in Exudyn; ``tip_displacement`` is
+    the final tip deflection across the hub frame (m), as our sensor ``tip_transverse``.
+    Generalized-alpha by default: Exudyn's undamped TrapezoidalIndex2 loses Newton convergence
+    after the spin-up (t = 16.9 s with a 5e-3 s step; it holds with 1e-3 s)."""
+    _check(newton, integrator)
+    with _quiet():
+        start = time.perf_counter()
+        container, mbs, nodes = _rotating_beam(elements)
+        build_s = time.perf_counter() - start
+        simulate_s, solver = _solve(mbs, ROTATING_BEAM["length"], t_end, step, newton,
+                                    integrator, rho_inf)
+        tip = _tip_transverse(mbs, nodes)
+    return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount, tip,
+                   _note(f"ANCFCable2D x {elements}", newton, integrator, rho_inf, step))

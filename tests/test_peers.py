@@ -1,0 +1,66 @@
+"""The Exudyn peer models of runtime/peers.py are faithful to the paper problems: the
+cantilever's static deflection and first frequency against the closed forms, short dynamic
+runs, and the rotating beam against our own solver.  Skipped without Exudyn."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+from scenes_small import cantilever_frequency, simulate, tip_deflection
+
+from runtime import peers
+
+pytestmark = pytest.mark.skipif(
+    not peers.exudyn_available(),
+    reason="exudyn is not importable (optional peer: pip install exudyn==1.13.6)")
+
+SCENES = Path(__file__).resolve().parent.parent / "scenes"
+C = peers.CANTILEVER
+
+
+def test_cantilever_static_deflection_is_the_closed_form():
+    closed = tip_deflection(C["force"], C["E"], C["height"], C["width"], C["length"])
+    assert closed == pytest.approx(1.136e-2, abs=1e-5)
+    assert peers.exudyn_cantilever_static(10) == pytest.approx(-closed, rel=0.01)
+
+
+def test_cantilever_first_frequency_is_the_closed_form():
+    closed = cantilever_frequency(C["E"], C["rho"], C["height"], C["width"], C["length"])
+    omega = peers.exudyn_cantilever_frequencies(10, modes=2)
+    assert closed == pytest.approx(16.24, abs=0.01)
+    assert omega == pytest.approx([closed, closed], rel=0.005)  # bending in y and in z
+
+
+@pytest.mark.parametrize("integrator", peers.INTEGRATORS)
+def test_cantilever_short_run_modified_and_full_newton_agree(integrator):
+    modified = peers.exudyn_cantilever(10, t_end=0.05, integrator=integrator)
+    full = peers.exudyn_cantilever(10, t_end=0.05, newton="full", integrator=integrator)
+    assert modified.steps == full.steps == 50
+    assert full.jacobian_evaluations == full.newton_iterations
+    assert modified.jacobian_evaluations < modified.newton_iterations
+    assert modified.tip_displacement < 0  # the load pulls the tip down (-y)
+    assert modified.tip_displacement == pytest.approx(full.tip_displacement, rel=1e-4)
+    assert modified.simulate_s > 0 and modified.build_s > 0
+    assert "modified Newton" in modified.note and "full Newton" in full.note
+
+
+def test_rotating_beam_matches_our_solver_at_two_seconds():
+    data = tomllib.loads((SCENES / "rotating_beam.toml").read_text())
+    dynamic = data["analysis"]["dynamic"]
+    dynamic.update(t_end=2.0, integrator="generalized_alpha")  # rho_inf 0.8 on both sides
+    ours = simulate(data)["tip_transverse"][-1]
+    peer = peers.exudyn_rotating_beam(10, t_end=2.0, step=dynamic["step"], rho_inf=0.8)
+    assert peer.steps == 400
+    # the beam lags behind the spinning hub: a few cm, the same in both models (the peer is an
+    # Euler-Bernoulli cable, ours a shear-deformable continuum beam)
+    assert -0.2 < ours < -0.05
+    assert peer.tip_displacement == pytest.approx(ours, rel=0.02)
+
+
+def test_unknown_settings_are_refused():
+    with pytest.raises(ValueError, match="newton"):
+        peers.exudyn_cantilever(2, t_end=0.01, newton="quasi")
+    with pytest.raises(ValueError, match="integrator"):
+        peers.exudyn_rotating_beam(2, t_end=0.01, integrator="euler")
