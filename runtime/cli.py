@@ -191,10 +191,20 @@ def cmd_report(args) -> int:
 
 
 def cmd_bench_steps(args) -> int:
-    from runtime import bench
+    from runtime import bench_solvers
 
-    print(bench.steps_table(tuple(args.elements or (10, 100, 1000, 10_000)), args.method,
-                            args.backend))
+    print(bench_solvers.step_table(tuple(args.elements or (10, 100, 1000, 10_000)),
+                                   method=args.method, progress=not args.quiet))
+    return 0
+
+
+def cmd_bench_solvers(args) -> int:
+    from runtime import bench_solvers
+
+    text = bench_solvers.run(quick=args.quick, repeats=args.repeats, progress=not args.quiet)
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
     return 0
 
 
@@ -275,8 +285,15 @@ def parser() -> argparse.ArgumentParser:
     steps.add_argument("--elements", type=int, action="append",
                        help="beam3d elements (repeatable; default 10, 100, 1000, 10000)")
     steps.add_argument("--method", choices=list(METHODS), default="gram")
-    steps.add_argument("--backend", choices=list(BACKENDS), default="c")
+    steps.add_argument("--quiet", action="store_true", help="no progress lines")
     steps.set_defaults(run=cmd_bench_steps)
+    solvers = bench_sub.add_parser(
+        "solvers", help="whole runs: engines, Newton modes, quadrature, Exudyn; step cost")
+    solvers.add_argument("--repeats", type=int, default=3, help="interleaved repeats (min 1)")
+    solvers.add_argument("--quick", action="store_true", help="short runs (smoke test)")
+    solvers.add_argument("--out", help="also write the Markdown tables to this file")
+    solvers.add_argument("--quiet", action="store_true", help="no progress lines")
+    solvers.set_defaults(run=cmd_bench_solvers)
     return main
 
 

@@ -109,9 +109,7 @@ class DAESystem:
         n = times.size
         q, v, a = (np.zeros((n, self.size)) for _ in range(3))
         for hub in self.hubs:
-            theta = np.array([hub.law.value(t) for t in times])
-            rate = np.array([hub.law.rate(t) for t in times])
-            acc = np.array([hub.law.acceleration(t) for t in times])
+            theta, rate, acc = hub.law.sample(times)
             rot, d_rot, dd_rot = rotations(self.dim, hub.axis, theta)
             for k, rotated in enumerate(hub.rotated):
                 cols = hub.coordinates[k]
@@ -128,8 +126,10 @@ class DAESystem:
     def load_factors(self, times: np.ndarray) -> np.ndarray:
         """(len(times), loads) values of the loads' time laws at ``times`` (s)."""
         times = np.atleast_1d(np.asarray(times, float))
-        return np.array([[law.value(t) for law in self.load_laws] for t in times]
-                        ).reshape(times.size, len(self.load_laws))
+        factors = np.zeros((times.size, len(self.load_laws)))
+        for k, law in enumerate(self.load_laws):
+            factors[:, k] = law.sample(times)[0]
+        return factors
 
     # --- full vectors ------------------------------------------------------------------
 

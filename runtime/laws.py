@@ -14,12 +14,13 @@ of a ramp the formula of the ramp is used (``t <= duration``), as in eqs. 42 and
 
 from __future__ import annotations
 
-import bisect
 import dataclasses
 import datetime
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
+
+import numpy as np
 
 __all__ = [
     "LAWS",
@@ -42,23 +43,29 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class Law:
-    """Base class of the time laws; ``type`` is the name used in scenes."""
+    """Base class of the time laws; ``type`` is the name used in scenes.  A law implements
+    ``sample`` (vectorised over an array of times, one formula per law); ``value``, ``rate``
+    and ``acceleration`` at one time are read from it."""
 
     type: ClassVar[str] = ""
     # per field: "number" (finite), "positive" (finite > 0) or "points" (table points)
     checks: ClassVar[dict[str, str]] = {}
 
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(value, rate, acceleration) at every time of the array ``t`` (s), each t.shape."""
+        raise NotImplementedError
+
     def value(self, t: float) -> float:
         """The law at time t (s)."""
-        raise NotImplementedError
+        return float(self.sample(np.array([t], float))[0][0])
 
     def rate(self, t: float) -> float:
         """First time derivative at t (s), per second."""
-        raise NotImplementedError
+        return float(self.sample(np.array([t], float))[1][0])
 
     def acceleration(self, t: float) -> float:
         """Second time derivative at t (s), per second squared."""
-        raise NotImplementedError
+        return float(self.sample(np.array([t], float))[2][0])
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table that builds this law (``parse_law(law.to_dict(), ...) == law``)."""
@@ -78,14 +85,9 @@ class Constant(Law):
     checks: ClassVar[dict[str, str]] = {"value": "number"}
     scale: float = dataclasses.field(default=1.0, metadata={"key": "value"})
 
-    def value(self, t: float) -> float:
-        return self.scale
-
-    def rate(self, t: float) -> float:
-        return 0.0
-
-    def acceleration(self, t: float) -> float:
-        return 0.0
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        zero = np.zeros_like(t)
+        return zero + self.scale, zero, zero
 
 
 @dataclass(frozen=True)
@@ -98,24 +100,15 @@ class CosineRamp(Law):
     duration: float
     scale: float = dataclasses.field(default=1.0, metadata={"key": "value"})
 
-    def value(self, t: float) -> float:
-        if t <= 0.0:
-            return 0.0
-        if t <= self.duration:
-            return 0.5 * self.scale * (1.0 - math.cos(math.pi * t / self.duration))
-        return self.scale
-
-    def rate(self, t: float) -> float:
-        if t <= 0.0 or t > self.duration:
-            return 0.0
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         w = math.pi / self.duration
-        return 0.5 * self.scale * w * math.sin(w * t)
-
-    def acceleration(self, t: float) -> float:
-        if t < 0.0 or t > self.duration:
-            return 0.0
-        w = math.pi / self.duration
-        return 0.5 * self.scale * w * w * math.cos(w * t)
+        inside = (t > 0.0) & (t <= self.duration)
+        value = np.where(t <= 0.0, 0.0, np.where(inside, 0.5 * self.scale
+                                                  * (1.0 - np.cos(w * t)), self.scale))
+        rate = np.where(inside, 0.5 * self.scale * w * np.sin(w * t), 0.0)
+        acceleration = np.where((t >= 0.0) & (t <= self.duration),
+                                0.5 * self.scale * w * w * np.cos(w * t), 0.0)
+        return value, rate, acceleration
 
 
 @dataclass(frozen=True)
@@ -127,16 +120,11 @@ class LinearRamp(Law):
     duration: float
     scale: float = dataclasses.field(default=1.0, metadata={"key": "value"})
 
-    def value(self, t: float) -> float:
-        if t <= 0.0:
-            return 0.0
-        return self.scale * t / self.duration if t <= self.duration else self.scale
-
-    def rate(self, t: float) -> float:
-        return self.scale / self.duration if 0.0 <= t <= self.duration else 0.0
-
-    def acceleration(self, t: float) -> float:
-        return 0.0
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        value = np.where(t <= 0.0, 0.0, np.where(t <= self.duration,
+                                                  self.scale * t / self.duration, self.scale))
+        rate = np.where((t >= 0.0) & (t <= self.duration), self.scale / self.duration, 0.0)
+        return value, rate, np.zeros_like(t)
 
 
 @dataclass(frozen=True)
@@ -151,19 +139,12 @@ class Sine(Law):
     phase_deg: float = 0.0
     offset: float = 0.0
 
-    def _angle(self, t: float) -> float:
-        return 2.0 * math.pi * self.frequency_hz * t + math.radians(self.phase_deg)
-
-    def value(self, t: float) -> float:
-        return self.offset + self.amplitude * math.sin(self._angle(t))
-
-    def rate(self, t: float) -> float:
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         w = 2.0 * math.pi * self.frequency_hz
-        return self.amplitude * w * math.cos(self._angle(t))
-
-    def acceleration(self, t: float) -> float:
-        w = 2.0 * math.pi * self.frequency_hz
-        return -self.amplitude * w * w * math.sin(self._angle(t))
+        angle = w * t + math.radians(self.phase_deg)
+        sin, cos = np.sin(angle), np.cos(angle)
+        return (self.offset + self.amplitude * sin, self.amplitude * w * cos,
+                -self.amplitude * w * w * sin)
 
 
 @dataclass(frozen=True)
@@ -183,30 +164,20 @@ class Table(Law):
         if any(b[0] <= a[0] for a, b in zip(points, points[1:], strict=False)):
             raise ValueError("points: times must be strictly increasing")
         object.__setattr__(self, "points", points)
-        object.__setattr__(self, "_times", [p[0] for p in points])
 
-    def _segment(self, t: float) -> int:
-        """Index i of the segment [t_i, t_i+1] holding t; -1 before, len-1 from the end."""
-        return bisect.bisect_right(self._times, t) - 1  # type: ignore[attr-defined]
-
-    def value(self, t: float) -> float:
-        i = self._segment(t)
-        if i < 0:
-            return self.points[0][1]
-        if i >= len(self.points) - 1:
-            return self.points[-1][1]
-        (t0, v0), (t1, v1) = self.points[i], self.points[i + 1]
-        return v0 + (v1 - v0) * (t - t0) / (t1 - t0)
-
-    def rate(self, t: float) -> float:
-        i = self._segment(t)
-        if i < 0 or i >= len(self.points) - 1:
-            return 0.0
-        (t0, v0), (t1, v1) = self.points[i], self.points[i + 1]
-        return (v1 - v0) / (t1 - t0)
-
-    def acceleration(self, t: float) -> float:
-        return 0.0
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        times = np.array([p[0] for p in self.points])
+        values = np.array([p[1] for p in self.points])
+        # segment [t_i, t_i+1] holding t: -1 before the first point, last index after
+        segment = np.searchsorted(times, t, side="right") - 1
+        inside = (segment >= 0) & (segment < len(times) - 1)
+        i = np.clip(segment, 0, max(len(times) - 2, 0))
+        j = np.minimum(i + 1, len(times) - 1)
+        span = np.where(j > i, times[j] - times[i], 1.0)
+        slope = (values[j] - values[i]) / span
+        value = np.where(inside, values[i] + (values[j] - values[i]) * (t - times[i]) / span,
+                         np.where(segment < 0, values[0], values[-1]))
+        return value, np.where(inside, slope, 0.0), np.zeros_like(t)
 
 
 @dataclass(frozen=True)
@@ -220,29 +191,18 @@ class SpinUp(Law):
     omega: float
     t_ramp: float
 
-    def value(self, t: float) -> float:
-        T = self.t_ramp
-        if t <= 0.0:
-            return 0.0
-        if t <= T:
-            c = T / (2.0 * math.pi)
-            # (cos x - 1) = -2 sin^2(x/2): no cancellation for small t
-            return (self.omega / T) * (0.5 * t * t - 2.0 * c * c * math.sin(math.pi * t / T) ** 2)
-        return self.omega * (t - 0.5 * T)
-
-    def rate(self, t: float) -> float:
-        T = self.t_ramp
-        if t <= 0.0:
-            return 0.0
-        if t <= T:
-            return (self.omega / T) * (t - T / (2.0 * math.pi) * math.sin(2.0 * math.pi * t / T))
-        return self.omega
-
-    def acceleration(self, t: float) -> float:
-        T = self.t_ramp
-        if t <= 0.0 or t > T:
-            return 0.0
-        return (self.omega / T) * 2.0 * math.sin(math.pi * t / T) ** 2
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        T, omega = self.t_ramp, self.omega
+        c = T / (2.0 * math.pi)
+        ramp = (t > 0.0) & (t <= T)
+        half = np.sin(math.pi * t / T)
+        # (cos x - 1) = -2 sin^2(x/2): no cancellation for small t
+        value = np.where(t <= 0.0, 0.0, np.where(
+            ramp, (omega / T) * (0.5 * t * t - 2.0 * c * c * half**2), omega * (t - 0.5 * T)))
+        rate = np.where(t <= 0.0, 0.0, np.where(
+            ramp, (omega / T) * (t - c * np.sin(2.0 * math.pi * t / T)), omega))
+        acceleration = np.where(ramp, (omega / T) * 2.0 * half**2, 0.0)
+        return value, rate, acceleration
 
 
 @dataclass(frozen=True)
@@ -253,14 +213,9 @@ class ConstantRate(Law):
     checks: ClassVar[dict[str, str]] = {"omega": "number"}
     omega: float
 
-    def value(self, t: float) -> float:
-        return self.omega * t
-
-    def rate(self, t: float) -> float:
-        return self.omega
-
-    def acceleration(self, t: float) -> float:
-        return 0.0
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        zero = np.zeros_like(t)
+        return self.omega * t, zero + self.omega, zero
 
 
 LAWS: dict[str, type[Law]] = {cls.type: cls for cls in (

@@ -144,11 +144,12 @@ def _note(model: str, newton: str, integrator: str, rho_inf: float, step: float)
               else f"GeneralizedAlpha index 3, rho_inf = {rho_inf:g}")
     mode = ("modified Newton (Jacobian reused while it converges)" if newton == "modified"
             else "full Newton (Jacobian every iteration)")
-    return (f"Exudyn {_version()} {model}; {scheme}; {mode}; step {step:g} s; "
+    return (f"Exudyn {exudyn_version()} {model}; {scheme}; {mode}; step {step:g} s; "
             f"increment tolerance {TOLERANCE:g} x size; EigenSparse; symbolic time law")
 
 
-def _version() -> str:
+def exudyn_version() -> str:
+    """The installed Exudyn's version."""
     import exudyn as exu
 
     return exu.__version__

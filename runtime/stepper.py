@@ -103,7 +103,8 @@ def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
     header = env.get_template("stepper_header.h.j2").render(
         banner=banner, groups=groups, slots=slots_needed)
     source = env.get_template("stepper.c.j2").render(
-        banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK)
+        banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
+        bandwidth=dae.bandwidth)
     return source, header
 
 

@@ -22,7 +22,7 @@ import scipy
 import sympy
 
 import scenes
-from runtime import bench, invariant_report, jit
+from runtime import bench, bench_solvers, invariant_report, jit
 from runtime.run import run
 from runtime.studies import error_vs_time, paper, stability
 
@@ -121,7 +121,7 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
               "![rotating beam tip](figures/rotating_beam_tip_transverse.png)", "",
               "![rotating beam energies](figures/rotating_beam_energies.png)", ""]
     parts += ["## 5. Cost of a dynamic step against model size (`ancf bench steps`)", "",
-              bench.steps_table((10, 100) if quick else (10, 100, 1000, 10_000))]
+              bench_solvers.step_table((10, 100) if quick else (10, 100, 1000, 10_000))]
     parts += ["## 6. Error against run time (`ancf study error-vs-time`)", ""]
     parts += _error_vs_time(work, figures, quick, scheduler, workers)
     parts += ["## 7. Stability on stiff and extreme cases (`ancf study stability`)", ""]

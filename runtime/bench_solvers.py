@@ -1,0 +1,228 @@
+"""``ancf bench solvers``: the cost of whole dynamic runs, engine against engine and against
+Exudyn, measured in one process with the cases interleaved (the machine is shared: only
+ratios inside one run mean something).
+
+Tables (Markdown):
+
+1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3) and rotating beam
+   (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3): simulate time of each
+   engine and Newton mode, the same run with the quadrature method (the paper's "without
+   invariants"), and Exudyn (``runtime.peers``, when installed) with modified and full
+   Newton; min and median of the repeats, and ratios to Exudyn's default (modified Newton);
+2. the cost of a step from 10 to 100,000 beam3d elements: microseconds per step and per
+   element-step, Newton iterations per step, and the shares of the element kernels and of
+   the factorisations in the step.
+
+Simulate time is the engine's ``run`` from the initial state to ``t_end`` (the models are
+built and the stepper compiled before; sensors are not evaluated), as Exudyn's solve time.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import statistics
+import sys
+import time
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import scenes
+from runtime import engines, peers
+from runtime.model import Model
+from runtime.scene import parse_scene
+from runtime.sensors import Sensors
+
+
+@dataclass
+class Case:
+    """One timed configuration: ``prepare()`` builds it (untimed) and returns a function
+    that runs it and returns (simulate seconds, Newton iterations, Jacobians, tip value)."""
+
+    table: str
+    label: str
+    prepare: Callable[[], Callable[[], tuple[float, int, int, float]]]
+    times: list[float] = dataclasses.field(default_factory=list)
+    counts: tuple[int, int] = (0, 0)
+    tip: float = float("nan")
+
+
+def _scene(name: str, elements: int | None = None, **dynamic) -> dict:
+    data = tomllib.loads(scenes.path(name).read_text())
+    data.pop("study", None)
+    if elements is not None:
+        body = data["body"][0]
+        body["end"] = [body["end"][0] * elements / body["elements"], *body["end"][1:]]
+        body["elements"] = elements
+    settings = data["analysis"]["dynamic"]
+    for key in ("frequency_of", "frequency_after"):
+        settings.pop(key, None)
+    settings.update(dynamic)
+    settings["output_every"] = settings["t_end"]
+    data["analysis"] = {"dynamic": settings}
+    return data
+
+
+def _ours(data: dict, engine: str, newton: str, method: str = "gram", tip: str | None = None):
+    """A case of the project: builds the model and the engine, returns the timed run."""
+
+    def prepare():
+        scene = parse_scene(copy.deepcopy(data))
+        settings = dataclasses.replace(scene.dynamic, newton=newton)
+        model = Model(scene, method=method)
+        sensors = Sensors(model)
+
+        def go():
+            runner = engines.make(engine, model, settings, model.reference)
+            final = {}
+
+            def observe(t, q, v):
+                final["q"] = q
+
+            start = time.perf_counter()
+            runner.run(settings.t_end, settings.step, observe)
+            seconds = time.perf_counter() - start
+            value = sensors.values(final["q"], None, settings.t_end)[tip] if tip else float("nan")
+            c = runner.counters
+            return seconds, c.newton_iterations, c.jacobian_evaluations, value
+
+        return go
+
+    return prepare
+
+
+def _exudyn(function, **arguments):
+    def prepare():
+        def go():
+            run = function(**arguments)
+            return (run.simulate_s, run.newton_iterations, run.jacobian_evaluations,
+                    run.tip_displacement)
+        return go
+    return prepare
+
+
+def whole_run_cases(quick: bool = False) -> list[Case]:
+    """The cases of table 1 (``quick``: short runs, for tests)."""
+    t_cantilever, t_rotating = (0.2, 0.5) if quick else (4.0, 20.0)
+    cases: list[Case] = []
+    with_peer = peers.exudyn_available()
+    for elements in ((2,) if quick else (2, 5, 10)):
+        table = f"cantilever, {elements} beam3d, {t_cantilever:g} s"
+        data = _scene("cantilever", t_end=t_cantilever)
+        data["body"][0]["elements"] = elements
+        for engine, newton, method in (("compiled", "full", "gram"),
+                                       ("compiled", "modified", "gram"),
+                                       ("compiled", "full", "quadrature"),
+                                       ("python", "full", "gram")):
+            cases.append(Case(table, f"{engine} {newton} {method}",
+                              _ours(data, engine, newton, method, "tip_y")))
+        if with_peer:
+            for newton in ("modified", "full"):
+                cases.append(Case(table, f"Exudyn ANCFBeam {newton}", _exudyn(
+                    peers.exudyn_cantilever, elements=elements, t_end=t_cantilever,
+                    step=1e-3, newton=newton)))
+    table = f"rotating beam, 10 beam2d, {t_rotating:g} s, generalized-alpha, h = 1e-3"
+    data = _scene("rotating_beam", t_end=t_rotating, step=1e-3, integrator="generalized_alpha",
+                  rho_inf=0.8)
+    for engine, newton in (("compiled", "full"), ("compiled", "modified"),
+                           ("python", "full"), ("python", "modified")):
+        cases.append(Case(table, f"{engine} {newton} gram",
+                          _ours(data, engine, newton, tip="tip_transverse")))
+    if with_peer:
+        for newton in ("modified", "full"):
+            cases.append(Case(table, f"Exudyn ANCFCable2D {newton}", _exudyn(
+                peers.exudyn_rotating_beam, elements=10, t_end=t_rotating, step=1e-3,
+                newton=newton, integrator="generalized_alpha", rho_inf=0.8)))
+    return cases
+
+
+def measure(cases: list[Case], repeats: int, progress: bool = True) -> None:
+    """Run every case ``repeats`` times, interleaved (round after round)."""
+    runs = [(case, case.prepare()) for case in cases]
+    total = repeats * len(runs)
+    done, start = 0, time.perf_counter()
+    for _ in range(repeats):
+        for case, go in runs:
+            seconds, iterations, jacobians, tip = go()
+            case.times.append(seconds)
+            case.counts, case.tip = (iterations, jacobians), tip
+            done += 1
+            if progress:
+                elapsed = time.perf_counter() - start
+                print(f"  [{done}/{total}] {case.table}: {case.label} {seconds:.3f} s "
+                      f"(elapsed {elapsed:.0f} s, ETA {elapsed / done * (total - done):.0f} s)",
+                      file=sys.stderr, flush=True)
+
+
+def whole_run_table(cases: list[Case]) -> str:
+    """Markdown table of measured whole-run cases, ratios against Exudyn's default and
+    against the compiled gram run of the same problem."""
+    lines = ["| problem | run | simulate s (min) | median | Newton iterations | Jacobians | "
+             "tip (m) | / compiled full gram | / Exudyn modified |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for table in dict.fromkeys(c.table for c in cases):
+        group = [c for c in cases if c.table == table]
+        ours = next(c for c in group if c.label == "compiled full gram")
+        peer = next((c for c in group if "Exudyn" in c.label and "modified" in c.label), None)
+        for case in group:
+            best, median = min(case.times), statistics.median(case.times)
+            to_peer = f"{best / min(peer.times):.3g}" if peer else "-"
+            lines.append(f"| {table} | {case.label} | {best:.4g} | {median:.4g} | "
+                         f"{case.counts[0]} | {case.counts[1]} | {case.tip:.6g} | "
+                         f"{best / min(ours.times):.3g} | {to_peer} |")
+    return "\n".join(lines) + "\n"
+
+
+def step_cost(elements: int, engine: str, steps: int = 10, method: str = "gram") -> dict:
+    """Cost of a trapezoidal step of the paper cantilever meshed with ``elements`` beam3d
+    elements of the same length (the beam grows with them), loaded from the first step."""
+    data = _scene("cantilever", elements=elements, t_end=steps * 1e-3, step=1e-3)
+    data["load"][0]["time_law"] = {"type": "constant"}
+    scene = parse_scene(data)
+    start = time.perf_counter()
+    model = Model(scene, method=method)
+    runner = engines.make(engine, model, scene.dynamic, model.reference)
+    build = time.perf_counter() - start
+    runner.run(scene.dynamic.t_end, scene.dynamic.step, lambda t, q, v: None)
+    timing, counters = runner.timing, runner.counters
+    per_step = timing["steps_s"] / counters.steps
+    return {"elements": elements, "engine": engine, "coordinates": model.free.size,
+            "build_s": build, "step_us": per_step * 1e6,
+            "element_step_us": per_step * 1e6 / elements,
+            "newton_per_step": counters.newton_iterations / counters.steps,
+            "kernel_share": timing["kernel_s"] / timing["steps_s"],
+            "factorisation_share": timing["factorisation_s"] / timing["steps_s"]}
+
+
+def step_table(sizes=(10, 100, 1000, 10_000, 100_000), python_limit: int = 10_000,
+               method: str = "gram", progress: bool = True) -> str:
+    """Markdown table of ``step_cost`` for both engines (Python up to ``python_limit``)."""
+    lines = ["| beam3d elements | engine | free coordinates | us per step | "
+             "us per element-step | Newton per step | kernel share | factorisation share |",
+             "|---:|---|---:|---:|---:|---:|---:|---:|"]
+    for size in sizes:
+        for engine in ("compiled", "python"):
+            if engine == "python" and size > python_limit:
+                continue
+            if progress:
+                print(f"  step cost: {size} elements, {engine} engine", file=sys.stderr,
+                      flush=True)
+            r = step_cost(size, engine, method=method)
+            lines.append(f"| {size} | {engine} | {r['coordinates']} | {r['step_us']:.4g} | "
+                         f"{r['element_step_us']:.3g} | {r['newton_per_step']:.1f} | "
+                         f"{r['kernel_share']:.0%} | {r['factorisation_share']:.0%} |")
+    return "\n".join(lines) + "\n"
+
+
+def run(quick: bool = False, repeats: int = 3, progress: bool = True) -> str:
+    """Both tables as Markdown (``quick``: short runs and small sizes, for tests)."""
+    cases = whole_run_cases(quick)
+    measure(cases, repeats, progress)
+    peer = (f"Exudyn {peers.exudyn_version()}" if peers.exudyn_available()
+            else "Exudyn not installed (pip install -e \".[peers]\")")
+    sizes = (10, 100) if quick else (10, 100, 1000, 10_000, 100_000)
+    return (f"## Whole runs ({repeats} interleaved repeats; peer: {peer})\n\n"
+            + whole_run_table(cases)
+            + "\n## Cost of a step (trapezoidal, full Newton, gram, C kernels)\n\n"
+            + step_table(sizes, progress=progress))
