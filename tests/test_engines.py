@@ -23,9 +23,10 @@ from runtime.scene import parse_scene
 ALUMINIUM = {"E": 7.0e10, "nu": 0.0, "rho": 2700.0}
 
 
-def _shipped(name: str, t_end: float) -> dict:
+def _shipped(name: str, t_end: float | None = None) -> dict:
     data = tomllib.loads(scenes.path(name).read_text())
-    data["analysis"]["dynamic"]["t_end"] = t_end
+    if t_end is not None:
+        data["analysis"]["dynamic"]["t_end"] = t_end
     data["analysis"]["dynamic"].pop("frequency_of", None)
     data["analysis"]["dynamic"].pop("frequency_after", None)
     data.pop("study", None)
@@ -76,7 +77,10 @@ def _history(model: Model, settings, engine: str):
     return states, dataclasses.asdict(runner.counters), failure
 
 
-def _compare(data: dict, **dynamic) -> tuple[dict, list, tuple | None]:
+def _compare(data: dict, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
+             **dynamic) -> tuple[dict, list, tuple | None]:
+    """Run both engines; assert equal counters and failures, and states equal to q_rtol of
+    the largest coordinate and velocities to v_rtol of the largest velocity."""
     scene_ = parse_scene(data)
     settings = dataclasses.replace(scene_.dynamic, **dynamic)
     model = Model(scene_)
@@ -89,15 +93,19 @@ def _compare(data: dict, **dynamic) -> tuple[dict, list, tuple | None]:
     v_scale = max(max(np.abs(v).max() for _, _, v in python[0]), 1e-3)
     for (tp, qp, vp), (tc, qc, vc) in zip(python[0], compiled[0], strict=True):
         assert tc == tp
-        assert np.abs(qc - qp).max() <= 1e-12 * q_scale
-        assert np.abs(vc - vp).max() <= 1e-9 * v_scale
+        assert np.abs(qc - qp).max() <= q_rtol * q_scale
+        assert np.abs(vc - vp).max() <= v_rtol * v_scale
     return python[1], python[0], python[2]
 
 
-@pytest.mark.parametrize("name,t_end", [("cantilever", 0.2), ("rotating_beam", 0.5),
-                                        ("pendulum", 0.2), ("arc_cantilever", 0.1)])
-def test_engines_agree_on_the_shipped_scenes(name, t_end):
-    _compare(_shipped(name, t_end))
+@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever"])
+def test_engines_agree_on_the_shipped_scenes(name):
+    # The whole run: thousands of steps of schemes that do not damp (trapezoidal), in which
+    # round-off differences of the two engines (other summation orders, SIMD) grow - in the
+    # rotating beam after the spin-up by about 5x per 2 s.  Positions still agree to 1e-11
+    # of their scale (worst seen: 4e-13), velocities to 1e-6 of theirs (worst: 1.5e-7, the
+    # quasi-static cantilever, where they are 1e-4 m/s), the Newton counters exactly.
+    _compare(_shipped(name), q_rtol=1e-11, v_rtol=1e-6)
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
