@@ -12,7 +12,7 @@ def test_quick_report(tmp_path, capsys):
     assert "cores" in text and "gcc" in text
     for section in ("## 1. Kernel cost", "## 2. Closed-form against quadrature",
                     "## 3. The paper's Tables I and II", "## 4. Shipped scenes",
-                    "## 5. Cost of a dynamic step", "## 6. Error against run time",
+                    "## 5. Whole runs and the cost of a step", "## 6. Error against run time",
                     "## 7. Stability"):
         assert section in text
     # every image the page shows exists
