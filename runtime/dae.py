@@ -75,6 +75,10 @@ class DAESystem:
         self.load_vectors = (np.array([vector[self.free] for _, vector in loads])
                              if loads else np.zeros((0, self.free.size)))
         self.hubs = [self._hub(node, law, axis) for node, law, axis in model.hubs]
+        # initial velocities of the free coordinates (m/s; the model's initial conditions)
+        initial = getattr(model, "initial_velocities", None)
+        self.initial_velocity = (np.asarray(initial(), float)[self.free] if initial
+                                 else np.zeros(self.free.size))
         self.projector = self._projector()
 
     @property

@@ -73,15 +73,16 @@ SINGULAR = "singular iteration matrix"
 
 
 def initial_state(dae: DAESystem, t: float = 0.0) -> State:
-    """Consistent initial state at rest (except prescribed motions): M a = F - M_fp a_p with
-    the joints' accelerations A_f a + A_p a_p = 0."""
+    """Consistent initial state: the model's initial velocities (at rest by default, except
+    prescribed motions), M a = F - M_fp a_p with the joints' accelerations
+    A_f a + A_p a_p = 0."""
     qp, _, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     force, _ = dae.model.internal_forces(dae.full_coordinates(q, qp), jacobian=False)
     force = force[dae.free] + dae.load_factors([t])[0] @ dae.load_vectors
     solver = SchurSolver(dae.mass_band, dae.joints_free)
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
-    return State(t, q, np.zeros_like(q), a, lam)
+    return State(t, q, dae.initial_velocity.copy(), a, lam)
 
 
 class Integrator:
