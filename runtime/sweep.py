@@ -8,6 +8,7 @@ cache safely (``runtime.jit`` compiles each kernel once, whatever the number of 
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Sequence
 
 
@@ -15,14 +16,42 @@ class SchedulerError(ValueError):
     """The requested dask scheduler cannot be reached."""
 
 
+def _connect(scheduler: str, timeout_s: float):
+    """A dask Client of ``scheduler``; SchedulerError when it cannot connect or when the peer
+    accepts the connection but does not answer as a scheduler within ``timeout_s`` (dask's own
+    timeout does not bound that wait)."""
+    from dask.distributed import Client
+
+    outcome: dict = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = Client(scheduler, timeout=f"{timeout_s}s")
+        except Exception as error:  # noqa: BLE001 - reported below, in the caller's thread
+            outcome["error"] = error
+
+    thread = threading.Thread(target=connect, name="dask-connect", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 5.0)
+    if "client" in outcome:
+        return outcome["client"]
+    reason = (f"{outcome['error']}" if "error" in outcome else
+              f"the address accepted the connection but no dask scheduler answered within "
+              f"{timeout_s + 5.0:g} s")
+    raise SchedulerError(f"--scheduler {scheduler}: cannot connect to a dask scheduler there "
+                         f"({reason})")
+
+
 def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None = None,
-              workers: int | None = None, serial: bool = False) -> list:
+              workers: int | None = None, serial: bool = False,
+              connect_timeout_s: float = 10.0) -> list:
     """``[function(**case) for case in cases]``, computed in parallel.
 
     function: a module-level (picklable) function; cases: keyword arguments of each call.
     scheduler: address of an existing dask scheduler (e.g. ``tcp://host:8786``); None starts
     a local cluster with ``workers`` processes (default: the number of cores).
     serial: run in this process instead (debugging, or a single case).
+    connect_timeout_s: the longest wait (plus 5 s of grace) for ``scheduler`` to answer.
     Results come back in the order of ``cases``; an exception in a case is raised here.
     """
     if not cases:
@@ -32,11 +61,7 @@ def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None =
     from dask.distributed import Client, LocalCluster
 
     if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError, ValueError) as error:
-            raise SchedulerError(f"--scheduler {scheduler}: cannot connect to a dask scheduler "
-                                 f"there ({error})") from None
+        client = _connect(scheduler, connect_timeout_s)
         cluster = None
     else:
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
