@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import numbers
+import reprlib
 import time
 
 import numpy as np
 
 from runtime import invariants as inv
-from runtime.kernels import BACKENDS, element_kind, kernel_family
+from runtime.kernels import BACKENDS, element_kind, kernel_family, output_array, real_array
 
 METHODS = ("gram", "cij", "quadrature")
+MAGNITUDE = 1e30  # length, height, width, E and rho lie in [1 / MAGNITUDE, MAGNITUDE]
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:
@@ -18,11 +20,28 @@ def lame(E: float, nu: float) -> tuple[float, float]:
     return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
 
 
+def _real(name: str, value, expected: str) -> float:
+    """``value`` (a real number, NumPy scalars included; bools rejected) as a float."""
+    if not isinstance(value, bool) and isinstance(value, numbers.Real):
+        try:
+            return float(value)
+        except OverflowError:  # an int beyond the float range
+            pass
+    raise ValueError(f"{name}: expected {expected}, got {reprlib.repr(value)}")
+
+
 def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) \
-            or value <= 0:
-        raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
-    return float(value)
+    expected = f"a positive finite number between {1 / MAGNITUDE:g} and {MAGNITUDE:g}"
+    number = _real(name, value, expected)
+    if not 1 / MAGNITUDE <= number <= MAGNITUDE:
+        raise ValueError(f"{name}: expected {expected}, got {reprlib.repr(value)}")
+    return number
+
+
+def _choice(name: str, value, choices: tuple[str, ...]) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name}: expected one of {choices}, got {reprlib.repr(value)}")
+    return str(value)
 
 
 class Element:
@@ -34,6 +53,14 @@ class Element:
     (curved) reference uses Gauss quadrature of order ``quadrature`` (default: the kind's).
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
 
+    Every invalid argument raises ValueError naming it (wrong types included, so callers catch
+    one class): numbers are real (NumPy scalars accepted; bools, strings, NaN and inf
+    rejected), length/height/width/E/rho within [1e-30, 1e30], and parameters whose
+    invariants overflow float64 are rejected.  Coordinates ``e`` are real arrays (integers
+    accepted; complex, bool, object, string, ragged and non-finite values rejected); an empty
+    batch (0, ndof) gives empty results.  ``out`` buffers must be writable C-contiguous float64
+    arrays of the result's shape (they are filled in place, never copied).
+
     ``timing`` records the seconds spent loading/compiling kernels and pre-processing.
     """
 
@@ -44,17 +71,14 @@ class Element:
         self.geometry = (_positive("length", length), _positive("height", height),
                          _positive("width", width))
         self.E, self.rho = _positive("E", E), _positive("rho", rho)
-        if isinstance(nu, bool) or not isinstance(nu, numbers.Real) or not -1 < nu < 0.5:
+        self.nu = _real("nu", nu, "Poisson's ratio in (-1, 0.5)")
+        if not -1 < self.nu < 0.5:
             raise ValueError(f"nu: expected Poisson's ratio in (-1, 0.5), got {nu!r}")
-        self.nu = float(nu)
-        if method not in METHODS:
-            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-        if backend not in BACKENDS:
-            raise ValueError(f"backend: expected one of {BACKENDS}, got {backend!r}")
-        self.method, self.backend = method, backend
+        self.method = _choice("method", method, METHODS)
+        self.backend = _choice("backend", backend, BACKENDS)
         self.quadrature = self._orders(quadrature)
         self.e0 = (self.kind.straight_reference(self.geometry[0]) if e0 is None
-                   else self._coordinates(e0, "e0", batch=False)[0])
+                   else self._coordinates(e0, "e0", batch=False))
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry[0])
         self.variant = "straight" if self.straight else "general"
         self.lam, self.shear = lame(self.E, self.nu)
@@ -71,6 +95,7 @@ class Element:
         self.invariants = inv.stored_invariants(mapping, self.variant, integrals,
                                                 (self.lam, self.shear, self.rho))
         self._inputs = self._method_inputs(builders)
+        self._check_finite(e0 is not None)
         self.timing["preprocess_s"] += time.perf_counter() - start
         family = {"gram": f"gram_{self.variant}"}.get(method, method)
         kernels = self._family(family)
@@ -90,9 +115,10 @@ class Element:
     def _orders(self, quadrature) -> tuple[int, ...]:
         if quadrature is None:
             return self.kind.quadrature
-        orders = tuple(quadrature) if np.iterable(quadrature) else ()
+        orders = tuple(quadrature) if isinstance(quadrature, (list, tuple, np.ndarray)) else ()
         if len(orders) != self.kind.dim or not all(
-                isinstance(o, numbers.Integral) and 1 <= o <= 64 for o in orders):
+                isinstance(o, numbers.Integral) and not isinstance(o, bool) and 1 <= o <= 64
+                for o in orders):
             raise ValueError(f"quadrature: expected {self.kind.dim} Gauss orders between 1 "
                              f"and 64 (e.g. {self.kind.quadrature}), got {quadrature!r}")
         return tuple(int(o) for o in orders)
@@ -109,22 +135,31 @@ class Element:
                 "table": inv.quadrature_table(self.kind, builders, self.geometry,
                                               self.quadrature)}
 
+    def _check_finite(self, own_reference: bool) -> None:
+        """ValueError naming the parameters when the invariants overflow float64."""
+        values = [self.lam, self.shear, *self.invariants.values(),
+                  *(v for v in self._inputs.values() if isinstance(v, np.ndarray))]
+        if not all(np.isfinite(v).all() for v in values):
+            length, height, width = self.geometry
+            raise ValueError(
+                f"length, height, width, E, nu, rho{', e0' if own_reference else ''}: the "
+                f"invariants overflow float64 (length={length:g}, height={height:g}, "
+                f"width={width:g}, E={self.E:g}, nu={self.nu:g}, rho={self.rho:g}); expected "
+                "values of ordinary magnitude (rescale the units)")
+
     def _coordinates(self, e, name: str = "e", batch: bool = True) -> np.ndarray:
+        """``e`` as a finite C-contiguous float64 array, (ndof,) or (m, ndof) (m >= 0)."""
         ndof = self.kind.ndof
-        try:
-            array = np.asarray(e, dtype=float)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"{name}: expected numbers, shape ({ndof},)"
-                             f"{f' or (m, {ndof})' if batch else ''}: {error}") from None
-        if array.ndim == 1 and array.shape[0] == ndof:
-            array = array[None, :]
-        elif not (batch and array.ndim == 2 and array.shape[1] == ndof and array.shape[0] > 0):
-            expected = f"({ndof},) or (m, {ndof})" if batch else f"({ndof},)"
+        expected = f"({ndof},) or (m, {ndof})" if batch else f"({ndof},)"
+        array = real_array(name, e, f"shape {expected} for {self.kind.name}")
+        if not (array.ndim == 1 and array.shape[0] == ndof
+                or batch and array.ndim == 2 and array.shape[1] == ndof):
             raise ValueError(f"{name}: expected shape {expected} for {self.kind.name}, got "
                              f"{array.shape}")
+        array = np.ascontiguousarray(array, dtype=np.float64)
         if not np.isfinite(array).all():
             raise ValueError(f"{name}: contains NaN or infinite values")
-        return np.ascontiguousarray(array)
+        return array
 
     # --- public API ----------------------------------------------------------------------
 
@@ -134,26 +169,37 @@ class Element:
         return self.kind.ndof
 
     def _run(self, kernel: str, e, out: dict | None = None) -> tuple[dict, bool]:
+        """Run ``kernel`` on coordinates ``e``; out: {output: (argument name, array | None)}.
+
+        Returns the (m, size) outputs and whether ``e`` was one element."""
         coordinates = self._coordinates(e)
-        buffers = {}
-        for name, target in (out or {}).items():
-            if target is not None:
-                if not isinstance(target, np.ndarray):
-                    raise ValueError("out: expected a numpy array")
-                buffers[name] = target.reshape(coordinates.shape[0], -1)
-        return self._bound[kernel]({"e": coordinates}, buffers), np.ndim(e) == 1
+        single = coordinates.ndim == 1
+        batch = coordinates[None, :] if single else coordinates
+        m, ndof = batch.shape[0], self.ndof
+        bound = self._bound[kernel]
+        outputs = {}
+        for name, size in bound.outputs:
+            argument, target = (out or {}).get(name, (None, None))
+            if target is None:
+                outputs[name] = np.empty((m, size))
+            else:
+                shape = (ndof,) if name == "force" else (ndof, ndof)
+                output_array(argument, target, shape if single else (m, *shape))
+                outputs[name] = target.reshape(m, size)
+        return bound.unchecked(m, {"e": batch}, outputs), single
 
     def elastic_force(self, e, out: np.ndarray | None = None) -> np.ndarray:
         """Elastic force -dU/de (N): shape (ndof,) for one e, (m, ndof) for a batch.
 
-        out: optional C-contiguous float64 array of the result's shape, filled and returned.
+        out: optional writable C-contiguous float64 array of the result's shape, filled and
+        returned (anything else raises ValueError).
         """
-        result, single = self._run("force", e, {"force": out})
+        result, single = self._run("force", e, {"force": ("out", out)})
         return result["force"][0] if single else result["force"]
 
     def elastic_jacobian(self, e, out: np.ndarray | None = None) -> np.ndarray:
         """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch (``out`` as above)."""
-        result, single = self._run("jacobian", e, {"jacobian": out})
+        result, single = self._run("jacobian", e, {"jacobian": ("out", out)})
         jacobian = result["jacobian"].reshape(-1, self.ndof, self.ndof)
         return jacobian[0] if single else jacobian
 
@@ -161,8 +207,9 @@ class Element:
                                    out_jacobian: np.ndarray | None = None):
         """(force, Jacobian) in one kernel pass, which shares their common part (what a
         Newton iteration needs); shapes and ``out_*`` buffers as the two methods above."""
-        result, single = self._run("force_jacobian", e,
-                                   {"force": out_force, "jacobian": out_jacobian})
+        result, single = self._run("force_jacobian", e, {"force": ("out_force", out_force),
+                                                         "jacobian": ("out_jacobian",
+                                                                      out_jacobian)})
         force, jacobian = result["force"], result["jacobian"].reshape(-1, self.ndof, self.ndof)
         return (force[0], jacobian[0]) if single else (force, jacobian)
 
@@ -175,7 +222,8 @@ class Element:
     def group_kernel(self, kernel: str):
         """``kernel`` (force, jacobian, energy, force_jacobian) for a group of elements that
         share this element's invariants but each have their own reference: call it with
-        ``{"e": (m, ndof), "e0": (m, ndof)}`` (C-contiguous float64) and optional ``out``.
+        ``{"e": (m, ndof), "e0": (m, ndof) or (1, ndof)}`` and optional ``out``, checked as
+        ``runtime.kernels.BoundKernel`` documents (C-contiguous float64 input is not copied).
 
         Valid for rigid placements of this element's reference (invariants are rotation
         and translation invariant), e.g. the elements of a uniformly meshed line or arc.
