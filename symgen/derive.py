@@ -387,3 +387,37 @@ def law_invariant_values(spec: ElementSpec, pattern: Patterns, parts, mass,
         "cij": [law_cij_value(spec, parts, *kpmq) for kpmq in pattern.cij],
         "u0": [law_u0_value(spec, parts)],
     }
+
+
+def check_law_patterns(spec: ElementSpec) -> None:
+    """Raise ValueError unless every law of the orthotropic form (any coefficients on any
+    domain) is zero outside the straight storage patterns, so the straight kernels (found
+    for the isotropic law) serve every law.  Exact rational values stand in for l, h, w and
+    the coefficients (a nonzero polynomial vanishes there with probability zero)."""
+    from symgen import laws
+
+    size = len(laws.coefficient_layout(spec.dim))
+    generic = {domain: sp.symbols(f"c_{domain}_0:{size}") for domain in laws.DOMAINS}
+    parts = [(straight_domain_integrals(spec, domain), generic[domain])
+             for domain in laws.DOMAINS]
+    values = [sp.Rational(p, q) for p, q in zip(range(3, 200, 7), range(2, 200, 3),
+                                                strict=False)]
+    symbols = [length, height, width, *[c for domain in laws.DOMAINS for c in generic[domain]]]
+    numbers = dict(zip(symbols, values, strict=False))
+    pattern = patterns(spec, "straight")
+    n = spec.n_shape
+    npairs = len(pairs(n))
+    stored = set(pattern.gram)
+    for a in range(npairs):
+        for b in range(a, npairs):
+            if (a, b) not in stored and sp.sympify(
+                    law_gram_value(spec, parts, a, b)).subs(numbers) != 0:
+                raise ValueError(f"{spec.name}: gram entry {(a, b)} of a law is outside the "
+                                 "straight pattern")
+    stored = set(pattern.cij)
+    for kpmq in ((k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
+                 for q in range(n)):
+        if kpmq not in stored and sp.sympify(
+                law_cij_value(spec, parts, *kpmq)).subs(numbers) != 0:
+            raise ValueError(f"{spec.name}: cij entry {kpmq} of a law is outside the straight "
+                             "pattern")

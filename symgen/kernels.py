@@ -334,6 +334,7 @@ def _law_correction_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
 
 
 def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
+    derive.check_law_patterns(spec)  # the straight patterns of svk serve every law
     pattern = derive.patterns(spec, "straight")
     npairs = len(derive.pairs(spec.n_shape))
     size = len(laws.coefficient_layout(spec.dim))
