@@ -45,13 +45,19 @@ def _choice(name: str, value, choices: tuple[str, ...]) -> str:
 
 
 class Element:
-    """An ANCF element of kind ``kind`` with a St. Venant-Kirchhoff material.
+    """An ANCF element of kind ``kind`` with a material law (docs/laws.md).
 
     length, height, width in m; E in Pa; nu dimensionless in (-1, 0.5); rho in kg/m^3.
     e0: reference coordinates (ndof,), default the straight element along x from the origin;
     any rigid placement of a straight element uses the closed-form invariants, any other
-    (curved) reference uses Gauss quadrature of order ``quadrature`` (default: the kind's).
+    (curved) reference uses Gauss quadrature of order ``quadrature`` (default: the kind's;
+    the axis part of a law uses the first order along the axis).
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
+    law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
+    Poisson locking); shear_correction: the ECM shear-correction factors, one number for every
+    transverse shear or a tuple (k1 on 2E13, k2 on 2E12 in 3D; k on 2E12 in 2D), default
+    10 (1 + nu) / (12 + 11 nu); damping: Kelvin-Voigt alpha in s (stress = D (eps + alpha
+    eps_dot)), used by ``damping_force``, ``damping_jacobians``, ``internal_force_and_jacobians``.
 
     Every invalid argument raises ValueError naming it (wrong types included, so callers catch
     one class): numbers are real (NumPy scalars accepted; bools, strings, NaN and inf
@@ -66,7 +72,8 @@ class Element:
 
     def __init__(self, kind: str, length: float, height: float, width: float, E: float,
                  nu: float, rho: float, e0=None, method: str = "gram", backend: str = "c",
-                 quadrature=None) -> None:
+                 quadrature=None, law: str = "svk", shear_correction=None,
+                 damping: float = 0.0) -> None:
         self.kind = element_kind(kind)
         self.geometry = (_positive("length", length), _positive("height", height),
                          _positive("width", width))
@@ -83,26 +90,181 @@ class Element:
         self.variant = "straight" if self.straight else "general"
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
+        self.law, self.damping = self._law(law), self._damping(damping)
         builders = self._family("invariants")
-        mapping = builders if self.straight else self._family("invariants_general")
         start = time.perf_counter()
+        self.shear_correction = self._shear_correction(shear_correction)
+        if self.law == "svk":
+            self.invariants = self._svk_invariants(builders)
+        else:
+            self.invariants = self._law_invariants(builders)
+        self._inputs = self._method_inputs(builders)
+        self._check_finite(e0 is not None)
+        self.timing["preprocess_s"] += time.perf_counter() - start
+        family = {"gram": f"gram_{self.variant}"}.get(method, method)
+        if method == "quadrature" and self.law != "svk":
+            family = "quadrature_law"
+        kernels = self._family(family)
+        self.family = family
+        self._method_kernels = kernels
+        fixed = dict(self._inputs, e0=self.e0[None, :])
+        self._bound = {name: kernels.bind(name, fixed) for name in kernels.signatures}
+        self._damping_bound: dict | None = None
+        if self.damping > 0:
+            self._damping_kernels()
+
+    # --- material law and damping (docs/laws.md) ------------------------------------------
+
+    def _law(self, law) -> str:
+        known = list(self.kind.meta["laws"])
+        if not isinstance(law, str) or law not in known:
+            raise ValueError(f"law: expected one of {tuple(known)}, got {law!r}")
+        return law
+
+    @staticmethod
+    def _damping(damping) -> float:
+        if isinstance(damping, bool) or not isinstance(damping, numbers.Real) \
+                or not np.isfinite(damping) or damping < 0:
+            raise ValueError(f"damping: expected the Kelvin-Voigt coefficient alpha in s, a "
+                             f"finite number >= 0, got {damping!r}")
+        return float(damping)
+
+    def _shear_correction(self, value) -> tuple[float, ...]:
+        names = self.kind.meta["laws"][self.law]["corrections"]
+        if not names:
+            if value is not None:
+                raise ValueError(f"shear_correction: law {self.law!r} takes none (only a law "
+                                 "with shear corrections, e.g. 'ecm')")
+            return ()
+        if value is None:
+            return inv.default_corrections(self._family("laws"), self.law, self.E, self.nu)
+        values = tuple(value) if np.iterable(value) else (value,) * len(names)
+        if len(values) != len(names) or not all(
+                not isinstance(k, bool) and isinstance(k, numbers.Real) and np.isfinite(k)
+                and k > 0 for k in values):
+            raise ValueError(f"shear_correction: expected a positive number or "
+                             f"{len(names)} positive numbers ({', '.join(names)}), got {value!r}")
+        return tuple(float(k) for k in values)
+
+    def _svk_invariants(self, builders) -> dict:
+        mapping = builders if self.straight else self._family("invariants_general")
         if self.straight:
             inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
             integrals = inv.straight_integrals(self.kind, builders, self.geometry)
         else:
             integrals = inv.pattern_integrals(self.kind, self.variant, inv.numeric_integrals(
                 self.kind, builders, self.geometry, self.e0, self.quadrature))
-        self.invariants = inv.stored_invariants(mapping, self.variant, integrals,
-                                                (self.lam, self.shear, self.rho))
-        self._inputs = self._method_inputs(builders)
-        self._check_finite(e0 is not None)
-        self.timing["preprocess_s"] += time.perf_counter() - start
-        family = {"gram": f"gram_{self.variant}"}.get(method, method)
-        kernels = self._family(family)
-        self.family = family
-        self._method_kernels = kernels
-        fixed = dict(self._inputs, e0=self.e0[None, :])
-        self._bound = {name: kernels.bind(name, fixed) for name in kernels.signatures}
+        return inv.stored_invariants(mapping, self.variant, integrals,
+                                     (self.lam, self.shear, self.rho))
+
+    def _law_invariants(self, builders) -> dict:
+        laws = self._family("laws")
+        coefficients = self.law_coefficients()
+        if self.straight:
+            inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
+            return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho)
+        rules = self._law_rules(builders)
+        return inv.numeric_law_invariants(self.kind, builders, self.variant, self.geometry,
+                                          rules, coefficients, self.rho)
+
+    def law_coefficients(self) -> dict[str, np.ndarray]:
+        """The law's coefficients (Pa) per domain (``volume``, ``axis``): the upper triangle
+        of the normal block of its Voigt matrix, then the shear diagonal (docs/laws.md)."""
+        return inv.law_coefficients(self.kind, self._family("laws"), self.law, self.E,
+                                    self.nu, self.shear_correction)
+
+    def _law_rules(self, builders) -> dict:
+        return inv.law_rules(self.kind, builders, self.geometry, self.e0, self.quadrature)
+
+    def _law_table(self, builders) -> np.ndarray:
+        return inv.law_table(self.kind, self._law_rules(builders), self.law_coefficients())
+
+    def _damping_kernels(self) -> dict:
+        """The bound damping kernels (compiled on first use): through the gram invariant for
+        gram and cij, by quadrature of the law for quadrature."""
+        if self._damping_bound is None:
+            start = time.perf_counter()
+            alpha = np.array([self.damping])
+            if self.method == "quadrature":
+                family = "quadrature_law"
+                table = (self._inputs["table"] if self.law != "svk"
+                         else self._law_table(self._family("invariants")))
+                fixed = {"table": table, "alpha": alpha}
+            else:
+                family = f"damping_{self.variant}"
+                fixed = {"gram": self.invariants["gram"], "alpha": alpha}
+            self.timing["preprocess_s"] += time.perf_counter() - start
+            kernels = self._family(family)
+            self._damping_family = kernels
+            self._damping_fixed = fixed
+            bound = dict(fixed, e0=self.e0[None, :])
+            self._damping_bound = {name: kernels.bind(name, bound)
+                                   for name in ("damping_force", "damping_jacobians",
+                                                "damped_force_jacobians")}
+        return self._damping_bound
+
+    def _run_damped(self, kernel: str, e, e_dot, out: dict) -> tuple[dict, bool]:
+        coordinates = np.atleast_2d(self._coordinates(e))
+        velocities = np.atleast_2d(self._coordinates(e_dot, "e_dot"))
+        if coordinates.shape[0] != velocities.shape[0] and 1 not in (coordinates.shape[0],
+                                                                     velocities.shape[0]):
+            raise ValueError(f"e_dot: expected as many rows as e ({coordinates.shape[0]}), got "
+                             f"{velocities.shape[0]}")
+        m = max(coordinates.shape[0], velocities.shape[0])
+        coordinates, velocities = (np.ascontiguousarray(np.broadcast_to(x, (m, self.ndof)))
+                                   for x in (coordinates, velocities))
+        single = np.ndim(e) == 1 and np.ndim(e_dot) == 1
+        buffers = {}
+        for name, (argument, target) in out.items():
+            if target is not None:
+                shape = (self.ndof,) if name == "force" else (self.ndof, self.ndof)
+                output_array(argument, target, shape if single else (m, *shape))
+                buffers[name] = target.reshape(m, -1)
+        result = self._damping_kernels()[kernel]({"e": coordinates, "e_dot": velocities},
+                                                 buffers)
+        return result, single
+
+    def damping_force(self, e, e_dot, out: np.ndarray | None = None) -> np.ndarray:
+        """Kelvin-Voigt damping force -alpha int (deps/de)^T D eps_dot dV0 (N), the
+        derivative of minus the dissipation potential with respect to e_dot: (ndof,) for one
+        (e, e_dot), (m, ndof) for a batch (either may be one row); ``out`` as elastic_force."""
+        result, single = self._run_damped("damping_force", e, e_dot, {"force": ("out", out)})
+        return result["force"][0] if single else result["force"]
+
+    def damping_jacobians(self, e, e_dot, out_jacobian: np.ndarray | None = None,
+                          out_jacobian_dot: np.ndarray | None = None):
+        """(d/de, d/de_dot) of ``damping_force`` (N/m, N s/m): two (ndof, ndof) arrays, or
+        (m, ndof, ndof) for a batch; d/de_dot is symmetric."""
+        result, single = self._run_damped("damping_jacobians", e, e_dot,
+                                          {"jacobian": ("out_jacobian", out_jacobian),
+                                           "jacobian_dot": ("out_jacobian_dot",
+                                                            out_jacobian_dot)})
+        shape = (-1, self.ndof, self.ndof)
+        de, de_dot = (result["jacobian"].reshape(shape), result["jacobian_dot"].reshape(shape))
+        return (de[0], de_dot[0]) if single else (de, de_dot)
+
+    def internal_force_and_jacobians(self, e, e_dot, out_force: np.ndarray | None = None,
+                                     out_jacobian: np.ndarray | None = None,
+                                     out_jacobian_dot: np.ndarray | None = None):
+        """(force, d force/de, d force/de_dot) of the elastic plus damping force in one kernel
+        pass (what an implicit integrator needs); shapes as ``elastic_force_and_jacobian`` and
+        ``damping_jacobians``."""
+        result, single = self._run_damped("damped_force_jacobians", e, e_dot,
+                                          {"force": ("out_force", out_force),
+                                           "jacobian": ("out_jacobian", out_jacobian),
+                                           "jacobian_dot": ("out_jacobian_dot",
+                                                            out_jacobian_dot)})
+        shape = (-1, self.ndof, self.ndof)
+        force = result["force"]
+        de, de_dot = (result["jacobian"].reshape(shape), result["jacobian_dot"].reshape(shape))
+        return (force[0], de[0], de_dot[0]) if single else (force, de, de_dot)
+
+    def damping_group_kernel(self, kernel: str):
+        """``kernel`` (damping_force, damping_jacobians, damped_force_jacobians) for a group
+        of elements sharing this element's invariants (as ``group_kernel``): call it with
+        ``{"e": (m, ndof), "e0": (m, ndof), "e_dot": (m, ndof)}`` and optional ``out``."""
+        self._damping_kernels()
+        return self._damping_family.bind(kernel, dict(self._damping_fixed))
 
     # --- construction helpers ------------------------------------------------------------
 
@@ -131,6 +293,8 @@ class Element:
             k2, jacobian = inv.cij_operators(self.kind, self.variant, stored["cij"])
             return {"k1": stored["k1"], "u0": stored["u0"], "k2_matrix": k2,
                     "jacobian_matrix": jacobian}
+        if self.law != "svk":  # quadrature_law also holds the damping kernels (alpha)
+            return {"table": self._law_table(builders), "alpha": np.array([self.damping])}
         return {"material": np.array([self.lam, self.shear]),
                 "table": inv.quadrature_table(self.kind, builders, self.geometry,
                                               self.quadrature)}
@@ -252,4 +416,5 @@ class Element:
         length, height, width = self.geometry
         return (f"Element({self.kind.name!r}, length={length}, height={height}, width={width}, "
                 f"E={self.E}, nu={self.nu}, rho={self.rho}, method={self.method!r}, "
-                f"backend={self.backend!r}, {'straight' if self.straight else 'curved'})")
+                f"backend={self.backend!r}, law={self.law!r}, damping={self.damping}, "
+                f"{'straight' if self.straight else 'curved'})")

@@ -40,14 +40,59 @@ def _symbolic_derivation_s(kind: str) -> float | None:
     return _timed(derive.straight_integrals, spec)[1]
 
 
-def compare(kind: str, reference: str = "straight", orders=None, backend: str = "numpy") -> dict:
-    """Rows of the comparison and the storage counts, as a dict (see ``report``)."""
+def _law_pair(meta, builders, law: str, backend: str, reference: str, e0, orders):
+    """(exact, numeric) law invariants and their times, the exact label, and a function giving
+    the straight reference's entries outside the straight gram pattern (relative)."""
+    laws = kernel_family(meta.name, "laws", backend)
+    corrections = (inv.default_corrections(laws, law, MATERIAL["E"], MATERIAL["nu"])
+                   if meta.meta["laws"][law]["corrections"] else ())
+    coefficients = inv.law_coefficients(meta, laws, law, MATERIAL["E"], MATERIAL["nu"],
+                                        corrections)
+    variant = "straight" if reference == "straight" else "general"
+
+    def by_quadrature(variant_, orders_):
+        rules = inv.law_rules(meta, builders, GEOMETRY, e0, orders_)
+        return inv.numeric_law_invariants(meta, builders, variant_, GEOMETRY, rules,
+                                          coefficients, MATERIAL["rho"])
+
+    if reference == "straight":
+        exact, exact_s = _timed(lambda: inv.straight_law_invariants(
+            laws, GEOMETRY, coefficients, MATERIAL["rho"]))
+        label = "closed form"
+    else:
+        orders_exact = tuple(4 * o for o in orders)
+        exact, exact_s = _timed(by_quadrature, variant, orders_exact)
+        label = f"quadrature {'x'.join(map(str, orders_exact))}"
+    numeric, numeric_s = _timed(by_quadrature, variant, orders)
+
+    def off_pattern() -> float:
+        full = by_quadrature("general", orders)["gram"]
+        keys = [tuple(k) for k in meta.meta["patterns"]["general"]["gram"]]
+        stored = {tuple(k) for k in meta.meta["patterns"]["straight"]["gram"]}
+        outside = np.array([key not in stored for key in keys])
+        return float(np.abs(full[outside]).max() / np.abs(full).max())
+
+    return exact, exact_s, numeric, numeric_s, label, off_pattern
+
+
+def compare(kind: str, reference: str = "straight", orders=None, backend: str = "numpy",
+            law: str = "svk") -> dict:
+    """Rows of the comparison and the storage counts, as a dict (see ``report``).
+
+    law: a material law of docs/laws.md; ``svk`` compares the integrals of the isotropic
+    path, any other law its closed-form (straight) or high-order quadrature (curved)
+    invariants against quadrature with its volume and axis rules.
+    """
     meta = element_kind(kind)
     orders = tuple(orders or meta.quadrature)
     if len(orders) != meta.dim or min(orders) < 1:
         raise ValueError(f"--quadrature: expected {meta.dim} positive orders, got {orders}")
     if reference not in ("straight", "curved"):
         raise ValueError(f"--reference: expected straight or curved, got {reference!r}")
+    if law not in meta.meta["laws"]:
+        raise ValueError(f"--law: expected one of {', '.join(meta.meta['laws'])}, got {law!r}")
+    if law != "svk":
+        return _compare_law(meta, reference, orders, backend, law)
     lam, shear = lame(MATERIAL["E"], MATERIAL["nu"])
     material = (lam, shear, MATERIAL["rho"])
     builders = kernel_family(kind, "invariants", backend)
@@ -88,27 +133,54 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
         mask[keys[:, 0], keys[:, 1]] = False
         full = integrals.i4[rows_[:, None], cols_[:, None], rows_[None, :], cols_[None, :]]
         off_pattern = float(np.abs(full[np.triu(mask)]).max() / np.abs(full).max())
+    return {
+        "kind": kind, "reference": reference, "orders": orders, "exact_label": exact_label,
+        "law": "svk", "rows": rows, "exact_s": exact_s, "quadrature_s": numeric_s,
+        "sympy_s": _symbolic_derivation_s(kind) if reference == "straight" else None,
+        "structural_zeros_rel": off_pattern, "storage": _storage(meta, variant),
+    }
+
+
+def _storage(meta, variant: str) -> dict:
     npairs_dof = meta.ndof * (meta.ndof + 1) // 2
     npairs = meta.n_shape * (meta.n_shape + 1) // 2
     return {
-        "kind": kind, "reference": reference, "orders": orders, "exact_label": exact_label,
-        "rows": rows, "exact_s": exact_s, "quadrature_s": numeric_s,
-        "sympy_s": _symbolic_derivation_s(kind) if reference == "straight" else None,
-        "structural_zeros_rel": off_pattern,
-        "storage": {
-            "cij_nonzeros": meta.meta["cij_sizes"][variant]["k2_nnz"],
-            "cij_dense": npairs_dof * meta.ndof**2,
-            "gram_nonzeros": len(meta.meta["patterns"][variant]["gram"]),
-            "gram_dense": npairs * npairs,
-            "k1_mass_entries": npairs,
-        },
+        "cij_nonzeros": meta.meta["cij_sizes"][variant]["k2_nnz"],
+        "cij_dense": npairs_dof * meta.ndof**2,
+        "gram_nonzeros": len(meta.meta["patterns"][variant]["gram"]),
+        "gram_dense": npairs * npairs,
+        "k1_mass_entries": npairs,
+    }
+
+
+def _compare_law(meta, reference: str, orders, backend: str, law: str) -> dict:
+    builders = kernel_family(meta.name, "invariants", backend)
+    if reference == "straight":
+        variant, e0 = "straight", meta.straight_reference(GEOMETRY[0])
+    else:
+        variant = "general"
+        e0 = arc_reference(meta, [0.0, 2.0, 0.0], 2.0, -np.pi / 2, GEOMETRY[0] / 2.0)
+    exact, exact_s, numeric, numeric_s, label, off_pattern = _law_pair(
+        meta, builders, law, backend, reference, e0, orders)
+    rows = []
+    for name, key in FAMILIES.items():
+        a, b = exact[key], numeric[key]
+        diff = float(np.abs(a - b).max())
+        rows.append({"family": name, "entries": int(a.size), "max_abs_diff": diff,
+                     "max_rel_diff": diff / float(np.abs(a).max())})
+    return {
+        "kind": meta.name, "reference": reference, "orders": orders, "exact_label": label,
+        "law": law, "rows": rows, "exact_s": exact_s, "quadrature_s": numeric_s,
+        "sympy_s": None, "structural_zeros_rel": off_pattern() if variant == "straight" else None,
+        "storage": _storage(meta, variant),
     }
 
 
 def report(result: dict) -> str:
     """Markdown text of ``compare``'s result."""
     orders = "x".join(map(str, result["orders"]))
-    lines = [f"### {result['kind']}, {result['reference']} reference: "
+    law = f", law {result['law']}" if result.get("law", "svk") != "svk" else ""
+    lines = [f"### {result['kind']}, {result['reference']} reference{law}: "
              f"{result['exact_label']} vs quadrature {orders}", "",
              "| invariant | stored entries | max abs diff | max rel diff |",
              "|---|---:|---:|---:|"]

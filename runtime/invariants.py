@@ -192,3 +192,156 @@ def cij_operators(kind: ElementKind, variant: str, cij: np.ndarray):
     jv = np.concatenate([value, value, value[mirror], value[mirror]])
     jacobian = scipy.sparse.coo_matrix((jv, (jr, jc)), shape=(ndof * ndof, rows.size))
     return csr(k2), csr(jacobian)
+
+
+# --- material laws (symgen/laws.py): coefficients, Gauss rules per domain, invariants -----------
+
+
+def law_coefficients(kind: ElementKind, laws: KernelFamily, law: str, E: float, nu: float,
+                     corrections=()) -> dict[str, np.ndarray]:
+    """Law coefficients (Pa) per domain (``volume``, ``axis``) of ``law`` for E (Pa), nu and
+    the shear corrections (only for laws that take them)."""
+    inputs = {"material": np.array([[E, nu]], dtype=float)}
+    if kind.meta["laws"][law]["corrections"]:
+        inputs["correction"] = np.asarray(corrections, dtype=float)[None, :]
+    out = laws(f"law_{law}", inputs)
+    return {domain: out[domain][0] for domain in kind.meta["law_domains"]}
+
+
+def default_corrections(laws: KernelFamily, law: str, E: float, nu: float) -> tuple:
+    """The law's default shear-correction factors for E (Pa) and nu."""
+    out = laws(f"law_{law}_correction", {"material": np.array([[E, nu]], dtype=float)})
+    return tuple(float(k) for k in out["correction"][0])
+
+
+@dataclass(frozen=True)
+class LawRule:
+    """Gauss rule of one law domain for a reference: local points (p, dim), the local
+    gradient table (p, pattern), U^-1 (p, dim, dim) with J0 = R0 U (R0 the local frame: the
+    Gram-Schmidt orthonormalisation of dr0/dx, dr0/dy[, dr0/dz]) and weights times det J0
+    (p,), in m^3 (the axis rule includes the cross-section area h w)."""
+
+    domain: str
+    points: np.ndarray
+    table: np.ndarray
+    u_inv: np.ndarray
+    wdet: np.ndarray
+
+
+def axis_rule(kind: ElementKind, geometry, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points on the axis (y = z = 0) and weights times the area h w."""
+    length, height, width = geometry
+    x, w = np.polynomial.legendre.leggauss(order)
+    points = np.zeros((order, kind.dim))
+    points[:, 0] = (x + 1) * length / 2
+    return points, w * length / 2 * height * width
+
+
+def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
+              orders: tuple[int, ...]) -> dict[str, LawRule]:
+    """The volume rule (Gauss orders ``orders``) and the axis rule (order ``orders[0]``).
+
+    Raises ValueError when the reference mapping is degenerate or inverted at a point.
+    """
+    rules = {}
+    for domain in kind.meta["law_domains"]:
+        if domain == "volume":
+            points, weights = gauss_rule(kind, geometry, orders)
+        else:
+            points, weights = axis_rule(kind, geometry, orders[0])
+        table = shape_gradient_table(kind, family, geometry, points)
+        j0, det = reference_mapping(kind, e0, full_gradients(kind, table))
+        if not (det > 1e-12 * np.abs(j0).max() ** kind.dim).all():
+            raise ValueError("e0: the reference mapping is degenerate or inverted on the "
+                             f"{domain} rule; expected gradients spanning a right-handed frame")
+        upper = np.swapaxes(np.linalg.cholesky(np.einsum("pab,pac->pbc", j0, j0)), 1, 2)
+        rules[domain] = LawRule(domain, points, table, np.linalg.inv(upper), weights * det)
+    return rules
+
+
+def law_table(kind: ElementKind, rules: dict[str, LawRule],
+              coefficients: dict[str, np.ndarray]) -> np.ndarray:
+    """Per-point table of the ``quadrature_law`` kernels: local gradients, U^-1 upper
+    triangle, law coefficients times weight and det J0; domains without a part are left out."""
+    rows, cols = np.triu_indices(kind.dim)
+    blocks = []
+    for domain, rule in rules.items():
+        coefficient = np.asarray(coefficients[domain], float)
+        if not coefficient.any():
+            continue
+        blocks.append(np.column_stack([rule.table, rule.u_inv[:, rows, cols],
+                                       rule.wdet[:, None] * coefficient[None, :]]))
+    return np.ascontiguousarray(np.concatenate(blocks))
+
+
+def _law_blocks(kind: ElementKind, coefficient: np.ndarray):
+    """(normal block (dim, dim), shear list) of a domain's law coefficients."""
+    d = kind.dim
+    normal = np.zeros((d, d))
+    rows, cols = np.triu_indices(d)
+    count = rows.size
+    normal[rows, cols] = normal[cols, rows] = coefficient[:count]
+    return normal, coefficient[count:]
+
+
+def shear_pairs(dim: int) -> list[tuple[int, int]]:
+    """Local axes of the shear strains in Voigt order (as symgen.laws.shear_pairs)."""
+    return [(0, 1)] if dim == 2 else [(1, 2), (0, 2), (0, 1)]
+
+
+def numeric_law_invariants(kind: ElementKind, family: KernelFamily, variant: str, geometry,
+                           rules: dict[str, LawRule], coefficients: dict[str, np.ndarray],
+                           density: float) -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij and U0 (as ``stored_invariants``) of a law by quadrature.
+
+    With b the shape gradients in the local frame and T^ab_klmn = sum_p w P^a_kl P^b_mn
+    (P^a_kl = b_ka b_la), per domain (symgen.derive.law_gram_value and friends):
+    Dsym = 1/8 sum DN_ab T^ab_klmn + 1/8 sum_shear DS (T^ab_kmln + T^ab_knlm + T^ab_lmkn
+    + T^ab_lnkm); c^{kp}_{mq} = 1/2 sum DN_ab T^ab_kmpq + sum_shear DS (T^ab + T^ba)_kqmp;
+    K1 = -1/2 sum_a (sum_c DN_ac) int P^a; U0 = 1/8 sum DN times the domain's measure.
+    """
+    n, d = kind.n_shape, kind.dim
+    dsym = np.zeros((n, n, n, n))
+    cfull = np.zeros((n, n, n, n))         # c[k, p, m, q]
+    k1 = np.zeros((n, n))
+    u0 = 0.0
+    for domain, rule in rules.items():
+        normal, shear = _law_blocks(kind, np.asarray(coefficients[domain], float))
+        if not (normal.any() or shear.any()):
+            continue
+        b = np.einsum("pka,pab->pkb", full_gradients(kind, rule.table), rule.u_inv)
+        p_dir = np.einsum("pka,pla->pakl", b, b)
+        t = np.einsum("p,pakl,pbmn->abklmn", rule.wdet, p_dir, p_dir, optimize=True)
+        dsym += np.einsum("ab,abklmn->klmn", normal, t) / 8
+        cfull += np.einsum("ab,abkmpq->kpmq", normal, t) / 2
+        for value, (x, y) in zip(shear, shear_pairs(d), strict=True):
+            txy = t[x, y]
+            dsym += value / 8 * (np.einsum("kmln->klmn", txy) + np.einsum("knlm->klmn", txy)
+                                 + np.einsum("lmkn->klmn", txy) + np.einsum("lnkm->klmn", txy))
+            both = txy + t[y, x]
+            cfull += value * np.einsum("kqmp->kpmq", both)
+        k1 -= np.einsum("a,akl->kl", normal.sum(axis=1),
+                        np.einsum("p,pakl->akl", rule.wdet, p_dir)) / 2
+        u0 += normal.sum() * rule.wdet.sum() / 8
+    volume = rules["volume"]
+    values = family("shape_values", {"point": volume.points,
+                                     "geometry": np.asarray(geometry, float)})["values"]
+    mass = np.einsum("p,pk,pl->kl", volume.wdet, values, values) * density
+    rows, cols = np.triu_indices(n)
+    gram = kind.pattern(variant, "gram")
+    a_k, a_m = rows[gram[:, 0]], cols[gram[:, 0]]
+    b_k, b_m = rows[gram[:, 1]], cols[gram[:, 1]]
+    mu = np.where(a_k == a_m, 1, 2) * np.where(b_k == b_m, 1, 2)
+    cij = kind.pattern(variant, "cij")
+    return {"mass": mass[rows, cols], "k1": k1[rows, cols],
+            "gram": mu * dsym[a_k, a_m, b_k, b_m],
+            "cij": cfull[cij[:, 0], cij[:, 1], cij[:, 2], cij[:, 3]],
+            "u0": np.array([u0])}
+
+
+def straight_law_invariants(family: KernelFamily, geometry, coefficients: dict[str, np.ndarray],
+                            density: float) -> dict[str, np.ndarray]:
+    """Closed-form invariants of a law for the straight reference (``law_invariants_straight``)."""
+    inputs = {"geometry": np.asarray(geometry, float)[None, :], "density": np.array([density]),
+              **{domain: np.asarray(value, float) for domain, value in coefficients.items()}}
+    return {name: value[0] for name, value in family("law_invariants_straight", inputs).items()}

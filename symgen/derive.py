@@ -211,3 +211,213 @@ def invariant_values(
         "cij": [cij_value(spec, integrals.i4, *kpmq) for kpmq in pattern.cij],
         "u0": [strain_energy_constant(spec, integrals.volume)],
     }
+
+
+# --- material laws: directional integrals per domain and the law algebra ----------------------
+#
+# With b = ds/dr0 expressed in the local element frame (b = ds/dx for a straight element) and
+# P^a_kl = b_ka b_la (one matrix per local direction a), every invariant of a law of the
+# orthotropic form (symgen/laws.py) is a combination of
+#   measure  = int dV0,   pi^a_kl = int P^a_kl dV0,   psi^ab_(kl),(mn) = int P^a_kl P^b_mn dV0
+# over the domain of each part.  The isotropic i4 above is sum_ab psi^ab.
+
+
+@dataclass(frozen=True)
+class DomainIntegrals:
+    """Directional integrals of one domain: ``measure``, ``pi(a, k, l)``,
+    ``psi(a, b, (k, l), (m, n))`` (symbolic or numeric; missing entries are zero)."""
+
+    measure: object
+    pi: Callable[[int, int, int], object]
+    psi: Callable[[int, int, tuple[int, int], tuple[int, int]], object]
+
+
+def _integrate_poly(spec: ElementSpec, poly: sp.Poly, domain: str) -> sp.Expr:
+    """Exact integral of a polynomial (a ``Poly`` in the local coordinates) over ``domain``
+    of the straight element: ``volume`` as ``box_integral``, or ``axis``: over x at
+    y = z = 0, times the cross-section area h w."""
+    total = sp.Integer(0)
+    for powers, coeff in poly.terms():
+        term = coeff * length ** (powers[0] + 1) / (powers[0] + 1)
+        if domain == "axis":
+            if any(powers[1:]):
+                continue
+            term *= height * width
+        else:
+            for power, size in zip(powers[1:], (height, width), strict=False):
+                if power % 2:
+                    term = 0
+                    break
+                term *= 2 * (size / 2) ** (power + 1) / (power + 1)
+            if spec.dim == 2:
+                term *= width
+        total += term
+    return total
+
+
+def _psi_key(a: int, b: int, kl: tuple[int, int], mn: tuple[int, int]):
+    """Canonical key of psi^ab_(kl),(mn): a <= b, sorted pairs, (kl) <= (mn) when a == b."""
+    kl, mn = tuple(sorted(kl)), tuple(sorted(mn))
+    if a > b:
+        a, b, kl, mn = b, a, mn, kl
+    if a == b and mn < kl:
+        kl, mn = mn, kl
+    return a, b, kl, mn
+
+
+@cache
+def straight_domain_integrals(spec: ElementSpec, domain: str) -> DomainIntegrals:
+    """Closed-form directional integrals of the straight reference over ``domain``."""
+    def integrate(spec, expr):
+        return sp.factor(_integrate_poly(spec, sp.Poly(expr, *spec.coordinates), domain))
+
+    grads = shape_gradients(spec)
+    n, d = spec.n_shape, spec.dim
+    p_dir = [{(k, m): sp.Poly(grads[k, a] * grads[m, a], *spec.coordinates)
+              for k, m in pairs(n) if grads[k, a] != 0 and grads[m, a] != 0}
+             for a in range(d)]
+    pi = {(a, k, m): integrate(spec, value.as_expr()) for a in range(d)
+          for (k, m), value in p_dir[a].items()}
+    psi = {}
+    for a in range(d):
+        for b in range(a, d):
+            for kl, first in p_dir[a].items():
+                for mn, second in p_dir[b].items():
+                    key = _psi_key(a, b, kl, mn)
+                    if key not in psi:
+                        value = _integrate_poly(spec, first * second, domain)
+                        if value != 0:
+                            psi[key] = value
+    zero = sp.Integer(0)
+    return DomainIntegrals(
+        integrate(spec, sp.Integer(1)),
+        lambda a, k, m: pi.get((a, min(k, m), max(k, m)), zero),
+        lambda a, b, kl, mn: psi.get(_psi_key(a, b, kl, mn), zero))
+
+
+def _law_blocks(dim: int, coefficients):
+    """(normal dim x dim, shear list) of a domain's law coefficients."""
+    from symgen import laws
+
+    normal = [[0] * dim for _ in range(dim)]
+    shear = []
+    for (i, j), value in zip(laws.coefficient_layout(dim), coefficients, strict=True):
+        if i < dim:
+            normal[i][j] = normal[j][i] = value
+        else:
+            shear.append(value)
+    return normal, shear
+
+
+def law_gram_value(spec: ElementSpec, parts, a: int, b: int) -> object:
+    """Entry (a, b) of the gram matrix Dm of a law, from ``parts`` = [(DomainIntegrals,
+    coefficients)].  Dm_ab = mu_a mu_b Dsym_klmn with, per domain,
+    Dsym = 1/8 sum_ab DN_ab psi^ab_(kl)(mn)
+         + 1/8 sum_shear DS (psi^ab_(km)(ln) + psi^ab_(kn)(lm) + psi^ab_(lm)(kn) + psi^ab_(ln)(km)).
+    """
+    from symgen import laws
+
+    d = spec.dim
+    (k, m), (p, q) = pairs(spec.n_shape)[a], pairs(spec.n_shape)[b]
+    mu = (1 if k == m else 2) * (1 if p == q else 2)
+    total = 0
+    for integrals, coefficients in parts:
+        normal, shear = _law_blocks(d, coefficients)
+        psi = integrals.psi
+        for x in range(d):
+            for y in range(d):
+                if normal[x][y] != 0:
+                    total += normal[x][y] * psi(x, y, (k, m), (p, q)) / 8
+        for (x, y), value in zip(laws.shear_pairs(d), shear, strict=True):
+            if value != 0:
+                total += value / 8 * (psi(x, y, (k, p), (m, q)) + psi(x, y, (k, q), (m, p))
+                                      + psi(x, y, (m, p), (k, q)) + psi(x, y, (m, q), (k, p)))
+    return mu * total
+
+
+def law_cij_value(spec: ElementSpec, parts, k: int, p: int, m: int, q: int) -> object:
+    """Entry c^{kp}_{mq} of a law (see ``cij_value``); per domain
+    c = 1/2 sum_ab DN_ab psi^ab_(km)(pq) + sum_shear DS (psi^ab + psi^ba)_(kq)(mp),
+    which for the isotropic law is exactly ``cij_value``."""
+    from symgen import laws
+
+    d = spec.dim
+    total = 0
+    for integrals, coefficients in parts:
+        normal, shear = _law_blocks(d, coefficients)
+        psi = integrals.psi
+        for x in range(d):
+            for y in range(d):
+                if normal[x][y] != 0:
+                    total += normal[x][y] * psi(x, y, (k, m), (p, q)) / 2
+        for (x, y), value in zip(laws.shear_pairs(d), shear, strict=True):
+            if value != 0:
+                total += value * (psi(x, y, (k, q), (m, p)) + psi(y, x, (k, q), (m, p)))
+    return total
+
+
+def law_k1_value(spec: ElementSpec, parts, k: int, m: int) -> object:
+    """Shape-level K1 of a law: -1/2 sum_a (sum_c DN_ac) pi^a_km, summed over domains."""
+    total = 0
+    for integrals, coefficients in parts:
+        normal, _ = _law_blocks(spec.dim, coefficients)
+        for x in range(spec.dim):
+            total -= sum(normal[x]) * integrals.pi(x, k, m) / 2
+    return total
+
+
+def law_u0_value(spec: ElementSpec, parts) -> object:
+    """U0 of a law (the energy of e = 0): 1/8 sum_ab DN_ab times each domain's measure."""
+    total = 0
+    for integrals, coefficients in parts:
+        normal, _ = _law_blocks(spec.dim, coefficients)
+        total += sum(sum(row) for row in normal) * integrals.measure / 8
+    return total
+
+
+def law_invariant_values(spec: ElementSpec, pattern: Patterns, parts, mass,
+                         density) -> dict[str, Sequence[object]]:
+    """What the kernels store for a law (keys as ``invariant_values``); ``mass`` is the
+    shape-level int s s^T dV0 (n x n) and ``parts`` = [(DomainIntegrals, coefficients)]."""
+    n = spec.n_shape
+    return {
+        "mass": [density * mass[k, m] for k, m in pairs(n)],
+        "k1": [law_k1_value(spec, parts, k, m) for k, m in pairs(n)],
+        "gram": [law_gram_value(spec, parts, a, b) for a, b in pattern.gram],
+        "cij": [law_cij_value(spec, parts, *kpmq) for kpmq in pattern.cij],
+        "u0": [law_u0_value(spec, parts)],
+    }
+
+
+def check_law_patterns(spec: ElementSpec) -> None:
+    """Raise ValueError unless every law of the orthotropic form (any coefficients on any
+    domain) is zero outside the straight storage patterns, so the straight kernels (found
+    for the isotropic law) serve every law.  Exact rational values stand in for l, h, w and
+    the coefficients (a nonzero polynomial vanishes there with probability zero)."""
+    from symgen import laws
+
+    size = len(laws.coefficient_layout(spec.dim))
+    generic = {domain: sp.symbols(f"c_{domain}_0:{size}") for domain in laws.DOMAINS}
+    parts = [(straight_domain_integrals(spec, domain), generic[domain])
+             for domain in laws.DOMAINS]
+    values = [sp.Rational(p, q) for p, q in zip(range(3, 200, 7), range(2, 200, 3),
+                                                strict=False)]
+    symbols = [length, height, width, *[c for domain in laws.DOMAINS for c in generic[domain]]]
+    numbers = dict(zip(symbols, values, strict=False))
+    pattern = patterns(spec, "straight")
+    n = spec.n_shape
+    npairs = len(pairs(n))
+    stored = set(pattern.gram)
+    for a in range(npairs):
+        for b in range(a, npairs):
+            if (a, b) not in stored and sp.sympify(
+                    law_gram_value(spec, parts, a, b)).subs(numbers) != 0:
+                raise ValueError(f"{spec.name}: gram entry {(a, b)} of a law is outside the "
+                                 "straight pattern")
+    stored = set(pattern.cij)
+    for kpmq in ((k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
+                 for q in range(n)):
+        if kpmq not in stored and sp.sympify(
+                law_cij_value(spec, parts, *kpmq)).subs(numbers) != 0:
+            raise ValueError(f"{spec.name}: cij entry {kpmq} of a law is outside the straight "
+                             "pattern")

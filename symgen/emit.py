@@ -15,7 +15,7 @@ from pathlib import Path
 import jinja2
 import sympy as sp
 
-from symgen import derive, kernels
+from symgen import derive, kernels, laws
 from symgen.element import ElementSpec, length
 from symgen.ir import Assign, Kernel, PointLoop, SparseProduct, kernel_operations
 from symgen.printing import code
@@ -171,6 +171,16 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
             for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
         },
         "cij_sizes": {v: kernels.cij_sizes(spec, v) for v in derive.VARIANTS},
+        "laws": {
+            law.name: {"description": law.description,
+                       "parts": [{"name": part.name, "domain": part.domain}
+                                 for part in law.parts(spec.dim)],
+                       "corrections": (laws.correction_names(spec.dim)
+                                       if law.default_corrections is not None else [])}
+            for law in laws.LAWS.values()
+        },
+        "law_domains": list(laws.DOMAINS),
+        "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
         "generator": {"version": GENERATOR_VERSION, "sympy": sp.__version__},
     }

@@ -8,7 +8,14 @@ Families (one generated module each, so a scene compiles only what it uses):
 * ``quadrature``       - Gauss quadrature of eq. 23 at every call (the paper's baseline);
 * ``cij``              - the paper's invariants C^ij, K1, U0 (eqs. 27-41); the storage
                          pattern only changes the sparse operators built at run time;
-* ``gram_<variant>``   - the compact gram tensor Dm with U = g^T Dm g, g = DeltaG.
+* ``gram_<variant>``   - the compact gram tensor Dm with U = g^T Dm g, g = DeltaG;
+* ``laws``             - the material laws (symgen/laws.py): each law's coefficients per
+                         domain, default shear corrections, and the closed-form straight
+                         invariants of any law from its coefficients;
+* ``quadrature_law``   - Gauss quadrature of any material law (symgen/laws.py) at every call,
+                         with Kelvin-Voigt damping;
+* ``damping_<variant>``   - Kelvin-Voigt damping through the gram tensor Dm (its own family,
+                         so undamped models never compile it).
 
 Each method family has ``force``, ``jacobian`` and ``energy`` kernels.  All translate the
 positions to the element's first node first; ``gram`` and ``quadrature`` work in the
@@ -19,7 +26,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive
+from symgen import derive, laws
 from symgen.element import ElementSpec, height, length, width
 from symgen.ir import (
     Array,
@@ -43,20 +50,34 @@ def _kernel_name(quantities) -> str:
     return "_".join(quantities)
 
 
+#: Kelvin-Voigt damping kernels (stress = D (eps + alpha eps_dot)) of the gram and
+#: quadrature_law families: the damping force alone, its two Jacobians, and the elastic plus
+#: damping force with both Jacobians in one pass.
+DAMPING_KERNELS = ("damping_force", "damping_jacobians", "damped_force_jacobians")
+
+
 def families(spec: ElementSpec) -> list[str]:
     """Names of every kernel family generated for an element."""
     return ["invariants", "invariants_general", "quadrature", "cij"] + [
-        f"gram_{v}" for v in derive.VARIANTS]
+        f"gram_{v}" for v in derive.VARIANTS] + ["laws", "quadrature_law"] + [
+        f"damping_{v}" for v in derive.VARIANTS]
 
 
 def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     """All kernels of one family."""
     if family == "invariants":
         return invariant_kernels(spec)
+    if family == "laws":
+        return law_kernels(spec)
     if family == "invariants_general":
         return [_invariants_kernel(spec, "general")]
+    if family == "quadrature_law":
+        return [quadrature_law_kernel(spec, name)
+                for name in [_kernel_name(q) for q in KERNELS] + list(DAMPING_KERNELS)]
     method, _, variant = family.partition("_")
     variant = variant or "straight"
+    if method == "damping":
+        return [gram_damping_kernel(spec, name, variant) for name in DAMPING_KERNELS]
     builder = {"quadrature": quadrature_kernel, "cij": cij_kernel, "gram": gram_kernel}[method]
     return [builder(spec, quantities, variant) for quantities in KERNELS]
 
@@ -258,6 +279,88 @@ def _invariants_kernel(spec: ElementSpec, variant: str) -> Kernel:
     emit_cse(body, outputs, Temporaries())
     return Kernel(f"invariants_{variant}",
                   f"Stored invariants from integrals ({variant} storage pattern).", arrays, body)
+
+
+# --- material laws (symgen/laws.py) -------------------------------------------------------------
+
+
+def law_kernels(spec: ElementSpec) -> list[Kernel]:
+    """Per law its coefficients per domain (and default shear corrections), and the closed-form
+    straight invariants of any law from its coefficients."""
+    built = [_law_coefficients_kernel(spec, law) for law in laws.LAWS.values()]
+    built += [_law_correction_kernel(spec, law) for law in laws.LAWS.values()
+              if law.default_corrections is not None]
+    return built + [_law_invariants_straight_kernel(spec)]
+
+
+def _law_material(spec: ElementSpec, law: laws.Law) -> tuple[list[Array], dict]:
+    arrays = [Array("material", 2, "batch", "Young's modulus E (Pa), Poisson's ratio nu")]
+    subs = dict(zip((laws.young, laws.poisson), refs("material", 2), strict=True))
+    if law.default_corrections is not None:
+        names = laws.correction_names(spec.dim)
+        arrays.append(Array("correction", len(names), "batch",
+                            f"shear correction factors {', '.join(names)}"))
+        subs.update(zip(laws.corrections(spec.dim), refs("correction", len(names)),
+                        strict=True))
+    return arrays, subs
+
+
+def _law_coefficients_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
+    size = len(laws.coefficient_layout(spec.dim))
+    arrays, subs = _law_material(spec, law)
+    names = ", ".join(laws.coefficient_names(spec.dim))
+    arrays += [Array(domain, size, "output", f"law coefficients ({names}) on the {domain} (Pa)")
+               for domain in laws.DOMAINS]
+    coefficients = law.domain_coefficients(spec.dim)
+    body: list = []
+    emit_cse(body, [(f"{domain}[{i}]", sp.sympify(value).subs(subs), False)
+                    for domain in laws.DOMAINS for i, value in enumerate(coefficients[domain])],
+             Temporaries())
+    return Kernel(f"law_{law.name}", f"Law coefficients per domain of {law.name}: "
+                  f"{law.description}.", arrays, body)
+
+
+def _law_correction_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
+    names = laws.correction_names(spec.dim)
+    arrays = [Array("material", 2, "batch", "Young's modulus E (Pa), Poisson's ratio nu"),
+              Array("correction", len(names), "output",
+                    f"default shear correction factors {', '.join(names)}")]
+    subs = dict(zip((laws.young, laws.poisson), refs("material", 2), strict=True))
+    body: list = []
+    emit_cse(body, [(f"correction[{i}]", sp.sympify(value).subs(subs), False)
+                    for i, value in enumerate(law.default_corrections(spec.dim))], Temporaries())
+    return Kernel(f"law_{law.name}_correction",
+                  f"Default shear correction factors of {law.name}.", arrays, body)
+
+
+def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
+    derive.check_law_patterns(spec)  # the straight patterns of svk serve every law
+    pattern = derive.patterns(spec, "straight")
+    npairs = len(derive.pairs(spec.n_shape))
+    size = len(laws.coefficient_layout(spec.dim))
+    parts = [(derive.straight_domain_integrals(spec, domain), refs(domain, size))
+             for domain in laws.DOMAINS]
+    density = ref("density", 0)
+    values = derive.law_invariant_values(spec, pattern, parts,
+                                         derive.straight_integrals(spec).mass, density)
+    subs = _geometry_subs("geometry")
+    names = ", ".join(laws.coefficient_names(spec.dim))
+    arrays = [Array("geometry", 3, "batch", "length, height, width in m"),
+              *[Array(domain, size, "shared", f"law coefficients ({names}) on the {domain} "
+                      "(Pa)") for domain in laws.DOMAINS],
+              Array("density", 1, "shared", "density rho (kg/m^3)"),
+              Array("mass", npairs, "output", "shape-level mass matrix (kg), upper triangle"),
+              Array("k1", npairs, "output", "shape-level K1 (N/m), upper triangle"),
+              Array("gram", len(pattern.gram), "output", "gram matrix Dm, gram-pattern order"),
+              Array("cij", len(pattern.cij), "output", "c^{kp}_{mq} of C^ij, cij-pattern order"),
+              Array("u0", 1, "output", "energy of e = 0 (J)")]
+    outputs = [(f"{name}[{i}]", sp.sympify(v).subs(subs), False)
+               for name, vals in values.items() for i, v in enumerate(vals)]
+    body: list = []
+    emit_cse(body, outputs, Temporaries())
+    return Kernel("law_invariants_straight",
+                  "Stored invariants of any law of the straight element, closed form from its "
+                  "law coefficients per domain.", arrays, body)
 
 
 # --- quadrature: eq. 23 at every call ----------------------------------------------------------
@@ -500,3 +603,306 @@ def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     names = _materialize(body, temps, list(upper.values()))
     _store_symmetric(body, "jacobian", ndof, dict(zip(upper, names, strict=True)), False)
     return kernel
+
+
+# --- Kelvin-Voigt damping in gram form ---------------------------------------------------------
+
+
+def _velocities(spec: ElementSpec) -> list:
+    """Velocities relative to the element's first node (its position rows become zero)."""
+    d = spec.dim
+    v = refs("e_dot", spec.ndof)
+    first = spec.position_vectors[0]
+    out = list(v)
+    for k in spec.position_vectors:
+        for c in range(d):
+            out[k * d + c] = sp.Integer(0) if k == first else v[k * d + c] - v[first * d + c]
+    return out
+
+
+def _damping_arrays(spec: ElementSpec, name: str) -> tuple[Array, list[Array]]:
+    """The e_dot input, alpha, and the outputs of a damping kernel ``name``."""
+    e_dot = Array("e_dot", spec.ndof, "batch", "element velocities de/dt, node-major")
+    alpha = Array("alpha", 1, "shared", "Kelvin-Voigt damping coefficient alpha (s)")
+    force_doc = {"damping_force": "damping force -alpha int (deps/de)^T D eps_dot dV0 (N)",
+                 "damped_force_jacobians": "elastic plus damping force (N)"}
+    outputs = []
+    if name in force_doc:
+        outputs.append(Array("force", spec.ndof, "output", force_doc[name]))
+    if name != "damping_force":
+        which = "damping force" if name == "damping_jacobians" else "elastic plus damping force"
+        outputs += [Array("jacobian", spec.ndof**2, "output",
+                          f"d({which})/de (N/m), row-major ndof x ndof"),
+                    Array("jacobian_dot", spec.ndof**2, "output",
+                          f"d({which})/d(e_dot) (N s/m), row-major ndof x ndof")]
+    return e_dot, [alpha, *outputs]
+
+
+def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
+    """Kelvin-Voigt damping through the gram invariant: the dissipation is alpha gd^T Dm gd
+    with gd = dG/dt = Qdot Q^T + Q Qdot^T (upper), so with hd = Dm (alpha gd) the damping
+    force is -T'(hd) Q, d/de_dot = -2 alpha Gamma^T Dm Gamma and d/de = -(2 alpha Gamma^T Dm
+    Gammadot + T'(hd) kron I) (Gammadot = Gamma of Qdot).  The one-pass kernel uses
+    h = Dm (g + alpha gd) for the elastic plus damping force and its Jacobian."""
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    pattern = derive.patterns(spec, variant)
+    e_dot, tail = _damping_arrays(spec, name)
+    arrays = [*_coordinates(spec, True), e_dot,
+              Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
+              *tail]
+    temps = Temporaries()
+    body: list = []
+    q, q0, dq = _translate(spec, body, temps, with_reference=True)
+    qd = _velocities(spec)
+    alpha = ref("alpha", 0)
+    pairs = derive.pairs(n)
+    pidx = derive.pair_index(n)
+    node = lambda vec, k: [vec[k * d + c] for c in range(d)]  # noqa: E731
+    combined = name == "damped_force_jacobians"
+    gd = _materialize(body, temps, [
+        alpha * sum(a * b + c * e for a, b, c, e in
+                    zip(node(qd, k), node(q, m), node(q, k), node(qd, m), strict=True))
+        for k, m in pairs])
+    if combined:
+        g = _materialize(body, temps, [
+            sum(a0 * b1 + a1 * b2 for a0, b1, a1, b2 in
+                zip(node(q0, k), node(dq, m), node(dq, k), node(q, m), strict=True))
+            for k, m in pairs])
+        strain = _materialize(body, temps, [x + y for x, y in zip(g, gd, strict=True)])
+    else:
+        strain = gd
+    dm = {}
+    for v, (a, b) in enumerate(pattern.gram):
+        dm[(a, b)] = dm[(b, a)] = ref("gram", v)
+    hvec = _materialize(body, temps, [
+        sum(dm[(a, b)] * strain[b] for b in range(len(pairs)) if (a, b) in dm)
+        for a in range(len(pairs))])
+
+    def tprime(k: int, m: int):
+        return (4 if k == m else 2) * hvec[pidx[(k, m)]]
+
+    doc = {"damping_force": "Kelvin-Voigt damping force -T'(Dm alpha gd) Q",
+           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
+           "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
+           "respect to e and e_dot, in one pass"}[name]
+    kernel = Kernel(name, doc + " (gram form).", arrays, body)
+    if name != "damping_jacobians":
+        _store(body, "force", [-sum(tprime(k, m) * q[m * d + c] for m in range(n))
+                               for k in range(n) for c in range(d)])
+    if name == "damping_force":
+        return kernel
+
+    def gamma(vec, a: int, p: int, c: int):
+        """d g_a / d Q_pc with the matrix ``vec`` for Q (Gamma, or Gammadot with Qdot)."""
+        k, m = pairs[a]
+        if k == m == p:
+            return 2 * vec[p * d + c]
+        if k == p:
+            return vec[m * d + c]
+        if m == p:
+            return vec[k * d + c]
+        return 0
+
+    def dm_times(vec, scale):
+        exprs = {}
+        for a in range(len(pairs)):
+            for p in range(n):
+                for c in range(d):
+                    exprs[(a, p, c)] = scale * sum(
+                        dm[(a, b)] * gamma(vec, b, p, c) for b in range(len(pairs))
+                        if (a, b) in dm and p in pairs[b])
+        return dict(zip(exprs, _materialize(body, temps, list(exprs.values())), strict=True))
+
+    w = dm_times(q, 1)              # Dm Gamma
+    wd = dm_times(qd, alpha)        # Dm alpha Gammadot
+
+    def gamma_t(other, i: int, j: int):
+        (p, b), (qn, c) = divmod(i, d), divmod(j, d)
+        return sum(gamma(q, a, p, b) * other[(a, qn, c)] for a in range(len(pairs))
+                   if p in pairs[a])
+
+    material = dict(zip(derive.pairs(ndof), _materialize(
+        body, temps, [gamma_t(w, i, j) for i, j in derive.pairs(ndof)]), strict=True))
+    full = []
+    for i in range(ndof):
+        for j in range(ndof):
+            (p, b), (qn, c) = divmod(i, d), divmod(j, d)
+            value = 2 * gamma_t(wd, i, j)
+            if combined:
+                value += 2 * material[(min(i, j), max(i, j))]
+            if b == c:
+                value += tprime(p, qn)
+            full.append(-value)
+    _store(body, "jacobian", _materialize(body, temps, full))
+    upper = {ij: -2 * alpha * value for ij, value in material.items()}
+    names = _materialize(body, temps, list(upper.values()))
+    _store_symmetric(body, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)), False)
+    return kernel
+
+
+# --- quadrature of any law at every call ------------------------------------------------------
+
+
+def quadrature_law_table_width(spec: ElementSpec) -> int:
+    """Doubles per point of the quadrature_law table: nonzero ds/dx, U^-1 upper, coefficients."""
+    return (len(derive.gradient_pattern(spec)) + laws.voigt_size(spec.dim)
+            + len(laws.coefficient_layout(spec.dim)))
+
+
+def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
+    """Gauss quadrature of any law (symgen/laws.py) at every call, with Kelvin-Voigt damping.
+
+    Each table row is a point of a domain's rule (volume points, then axis points): the local
+    shape gradients ds/dx, the inverse of U (J0 = R0 U, R0 the local frame, U upper
+    triangular), and the point's law coefficients times weight and det J0.  With b = ds U^-1
+    (gradients in the local frame), F0 = Q0^T b, dF = dQ^T b, F = F0 + dF, the local strain is
+    E = (F0^T dF + dF^T F0 + dF^T dF)/2, eps its Voigt form, sigma = D eps, and (Z_I the
+    derivative of eps_I with respect to the coordinates)
+      force = -b S F^T,  Jacobian = -(sum_IJ D_IJ Z_I Z_J + b S b^T kron I).
+    Damping: eps_dot = Z edot, sigma_d = alpha D eps_dot; its force is -b S_d F^T,
+    d/de_dot = -alpha sum D Z Z and d/de = -(alpha sum_J Y_J Zdot_J + b S_d b^T kron I) with
+    Y_J = sum_I D_IJ Z_I and Zdot = Z with Fdot = Qdot^T b in place of F.
+    """
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    pattern = derive.gradient_pattern(spec)
+    layout = laws.coefficient_layout(d)
+    shears = laws.shear_pairs(d)
+    upper_d = derive.pairs(d)
+    width_ = quadrature_law_table_width(spec)
+    damped = name in DAMPING_KERNELS
+    quantities = {"damping_force": ("force",), "damping_jacobians": ("jacobian", "jacobian_dot"),
+                  "damped_force_jacobians": ("force", "jacobian", "jacobian_dot")}.get(
+        name, tuple(name.split("_")))
+    arrays = [*_coordinates(spec, True)]
+    if damped:
+        e_dot, tail = _damping_arrays(spec, name)
+        arrays.append(e_dot)
+    table = Array("table", width_, "table",
+                  "per point: nonzero ds/dx (gradient-pattern order), U^-1 upper triangle, "
+                  "law coefficients times weight and det J0 (N m)")
+    arrays.append(table)
+    if damped:
+        arrays += tail
+    else:
+        arrays += [_output(spec, quantity) for quantity in quantities]
+    temps = Temporaries()
+    body: list = []
+    _, q0, dq = _translate(spec, body, temps, with_reference=True)
+    qd = _velocities(spec) if damped else None
+    alpha = ref("alpha", 0)
+    tab = refs("tab", width_)
+    ds = sp.zeros(n, d)
+    for j, (k, c) in enumerate(pattern):
+        ds[k, c] = tab[j]
+    offset = len(pattern)
+    u_inv = sp.zeros(d, d)
+    for j, (a, b) in enumerate(upper_d):
+        u_inv[a, b] = tab[offset + j]
+    offset += len(upper_d)
+    coefficient = dict(zip(layout, tab[offset:], strict=True))
+    dn = sp.Matrix(d, d, lambda a, b: coefficient[(min(a, b), max(a, b))])
+    dshear = [coefficient[(d + s, d + s)] for s in range(len(shears))]
+    point: list = []
+    bmat = sp.Matrix(n, d, _materialize(point, temps, list(ds * u_inv)))
+    f0 = sp.Matrix(d, d, _materialize(point, temps, list(sp.Matrix(n, d, q0).T * bmat)))
+    df = sp.Matrix(d, d, _materialize(point, temps, list(sp.Matrix(n, d, dq).T * bmat)))
+    strain = (f0.T * df + df.T * f0 + df.T * df) / 2
+    f = sp.Matrix(d, d, _materialize(point, temps, list(f0 + df)))
+    eps = _materialize(point, temps, [strain[a, a] for a in range(d)]
+                       + [2 * strain[a, b] for a, b in shears])
+
+    def stress_of(voigt):
+        normal = [sum(dn[a, b] * voigt[b] for b in range(d)) for a in range(d)]
+        return normal + [dshear[s] * voigt[d + s] for s in range(len(shears))]
+
+    def tensor(voigt):
+        s_mat = sp.zeros(d, d)
+        for a in range(d):
+            s_mat[a, a] = voigt[a]
+        for s, (a, b) in enumerate(shears):
+            s_mat[a, b] = s_mat[b, a] = voigt[d + s]
+        return s_mat
+
+    def z_of(fmat):
+        """Z_I(k, c) = d eps_I / d Q_kc with the deformation gradient ``fmat``."""
+        rows = [[bmat[k, a] * fmat[c, a] for k in range(n) for c in range(d)] for a in range(d)]
+        rows += [[bmat[k, a] * fmat[c, b] + bmat[k, b] * fmat[c, a] for k in range(n)
+                  for c in range(d)] for a, b in shears]
+        return rows
+
+    sigma = stress_of(eps) if not name.startswith("damping") else None
+    if name == "energy":
+        _store(point, "energy", [sum(x * y for x, y in zip(eps, sigma, strict=True)) / 2],
+               accumulate=True)
+    if damped:
+        fdot = sp.Matrix(d, d, _materialize(point, temps, list(sp.Matrix(n, d, qd).T * bmat)))
+        eps_dot = _materialize(point, temps, [
+            sum(f[c, a] * fdot[c, a] for c in range(d)) for a in range(d)] + [
+            sum(f[c, a] * fdot[c, b] + fdot[c, a] * f[c, b] for c in range(d))
+            for a, b in shears])
+        sigma_d = [alpha * x for x in stress_of(eps_dot)]
+        total = sigma_d if sigma is None else [x + y for x, y in zip(sigma, sigma_d, strict=True)]
+    else:
+        total = sigma
+    if "force" in quantities or "jacobian" in quantities:
+        s_total = sp.Matrix(d, d, _materialize(point, temps, list(tensor(total))))
+    if "force" in quantities:
+        bs = sp.Matrix(n, d, _materialize(point, temps, list(bmat * s_total)))
+        _store(point, "force", list(-(bs * f.T)), accumulate=True)
+    if "jacobian" in quantities:
+        z = [_materialize(point, temps, row) for row in z_of(f)]
+        y = [_materialize(point, temps, row) for row in _law_rows(dn, dshear, z, d)]
+        geometric = _materialize(point, temps, [(bmat[k, :] * s_total * bmat[p, :].T)[0]
+                                                for k, p in derive.pairs(n)])
+        pidx = derive.pair_index(n)
+
+        def geo(i: int, j: int):
+            (k, a), (p, b) = divmod(i, d), divmod(j, d)
+            return geometric[pidx[(k, p)]] if a == b else 0
+
+        if not damped:
+            upper = {(i, j): -(sum(zi[i] * yi[j] for zi, yi in zip(z, y, strict=True))
+                               + geo(i, j)) for i, j in derive.pairs(ndof)}
+            names = _materialize(point, temps, list(upper.values()))
+            _store_symmetric(point, "jacobian", ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+        else:
+            zdot = [_materialize(point, temps, row) for row in z_of(fdot)]
+            material = dict(zip(derive.pairs(ndof), _materialize(point, temps, [
+                sum(zi[i] * yi[j] for zi, yi in zip(z, y, strict=True))
+                for i, j in derive.pairs(ndof)]), strict=True))
+            full = []
+            for i in range(ndof):
+                for j in range(ndof):
+                    value = alpha * sum(yi[i] * zd[j] for yi, zd in zip(y, zdot, strict=True))
+                    if name == "damped_force_jacobians":
+                        value += material[(min(i, j), max(i, j))]
+                    full.append(-(value + geo(i, j)))
+            _store(point, "jacobian", _materialize(point, temps, full), accumulate=True)
+            upper = {ij: -alpha * value for ij, value in material.items()}
+            names = _materialize(point, temps, list(upper.values()))
+            _store_symmetric(point, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+    body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
+    doc = {"force": "elastic force", "jacobian": "elastic Jacobian", "energy": "strain energy",
+           "force_jacobian": "elastic force and Jacobian",
+           "damping_force": "Kelvin-Voigt damping force",
+           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
+           "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
+           "respect to e and e_dot"}[name]
+    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
+                  "call (volume and axis rules).", arrays, body)
+
+
+def _law_rows(dn, dshear, z, d: int) -> list:
+    """Y_J = sum_I D_IJ Z_I for rows Z_I of an orthotropic-form law (normal block, shear
+    diagonal)."""
+    rows = [[sum(dn[a, b] * z[b][i] for b in range(d)) for i in range(len(z[0]))]
+            for a in range(d)]
+    rows += [[dshear[s] * x for x in z[d + s]] for s in range(len(dshear))]
+    return rows
+
+
+def _default_law_points(spec: ElementSpec) -> int:
+    """Volume points plus axis points of the default rule."""
+    return _default_points(spec) + spec.quadrature[0]

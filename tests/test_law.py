@@ -1,0 +1,470 @@
+"""Material laws inside the invariants (issue 8): the ECM law (no Poisson locking) and
+Kelvin-Voigt damping, in every method and backend, straight and curved.
+
+Expected values come from first principles written out here (Voigt matrices, Euler-Bernoulli
+deflections, finite differences, rigid motions), never from the code under test.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+from conftest import (
+    BACKENDS,
+    E_MODULUS,
+    HEIGHT,
+    KINDS,
+    LENGTH,
+    METHODS,
+    NU,
+    RHO,
+    WIDTH,
+    arc_reference,
+    dim_of,
+    force_scale,
+    lame,
+    random_rotation,
+    rel_diff,
+    rigid_motion,
+)
+
+from runtime import Element
+from runtime import invariants as inv
+from runtime.kernels import kernel_family
+
+SHAPES = ["straight", "curved"]
+ALPHA = 0.01  # s
+
+all_kinds = pytest.mark.parametrize("kind", KINDS)
+all_methods = pytest.mark.parametrize("method", METHODS)
+all_backends = pytest.mark.parametrize("backend", BACKENDS)
+all_shapes = pytest.mark.parametrize("shape", SHAPES)
+
+
+@functools.cache
+def law_element(kind: str, law: str = "ecm", method: str = "gram", backend: str = "c",
+                shape: str = "straight", damping: float = ALPHA) -> Element:
+    """The typical element of conftest (straight, or the arc) with a law and damping."""
+    e0 = arc_reference(kind) if shape == "curved" else None
+    return Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, e0=e0, method=method,
+                   backend=backend, law=law, damping=damping)
+
+
+def timoshenko(nu: float) -> float:
+    return 10 * (1 + nu) / (12 + 11 * nu)
+
+
+@functools.cache
+def states(kind: str, shape: str):
+    """Three large-rotation configurations (rotated reference plus 1e-2 noise) and random
+    velocities of 1 m/s size."""
+    rng = np.random.default_rng([KINDS.index(kind), SHAPES.index(shape), 3])
+    e0 = law_element(kind, shape=shape).e0
+    d = dim_of(kind)
+    e = np.array([rigid_motion(kind, e0, random_rotation(d, rng), rng.normal(size=d))
+                  + 1e-2 * rng.standard_normal(e0.size) for _ in range(3)])
+    return e, rng.standard_normal(e.shape)
+
+
+@functools.cache
+def evaluate(kind: str, law: str, method: str, backend: str, shape: str):
+    el = law_element(kind, law, method, backend, shape)
+    e, e_dot = states(kind, shape)
+    damping_de, damping_de_dot = el.damping_jacobians(e, e_dot)
+    total = el.internal_force_and_jacobians(e, e_dot)
+    return {"force": el.elastic_force(e), "jacobian": el.elastic_jacobian(e),
+            "energy": el.strain_energy(e), "damping_force": el.damping_force(e, e_dot),
+            "damping_de": damping_de, "damping_de_dot": damping_de_dot,
+            "total_force": total[0], "total_de": total[1], "total_de_dot": total[2]}
+
+
+# --- the law as data --------------------------------------------------------------------------
+
+
+def voigt_ecm(dim: int, E: float, nu: float, k: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """(D0, Dv) of ECM written out (docs/laws.md): Voigt [E11, E22, E33, 2E23, 2E13, 2E12]
+    with k1 on 2E13 and k2 on 2E12, or [E11, E22, 2E12] with k on 2E12."""
+    lam, G = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    shears = [G, k[0] * G, k[1] * G] if dim == 3 else [k[0] * G]
+    d0 = np.diag([E] * dim + shears)
+    dv = np.zeros_like(d0)
+    dv[:dim, :dim] = lam + 2 * G * np.eye(dim) - E * np.eye(dim)
+    return d0, dv
+
+
+def packed(dim: int, matrix: np.ndarray) -> np.ndarray:
+    """Law coefficients: upper triangle of the normal block, then the shear diagonal."""
+    rows, cols = np.triu_indices(dim)
+    return np.concatenate([matrix[rows, cols], np.diag(matrix)[dim:]])
+
+
+@all_kinds
+def test_law_coefficients_are_the_documented_voigt_matrices(kind):
+    d = dim_of(kind)
+    el = law_element(kind)
+    k = (timoshenko(NU),) * (d - 1)
+    assert el.shear_correction == pytest.approx(k, rel=1e-15)
+    d0, dv = voigt_ecm(d, E_MODULUS, NU, k)
+    coefficients = el.law_coefficients()
+    assert rel_diff(coefficients["volume"], packed(d, d0)) <= 1e-15
+    assert rel_diff(coefficients["axis"], packed(d, dv)) <= 1e-15
+    lam, G = lame()
+    iso = np.diag([0.0] * d + [G] * (1 if d == 2 else 3))
+    iso[:d, :d] = lam + 2 * G * np.eye(d)
+    svk = law_element(kind, "svk").law_coefficients()
+    assert rel_diff(svk["volume"], packed(d, iso)) <= 1e-15 and not svk["axis"].any()
+    if d == 3:  # Chrono's order: k1 scales 2E13, k2 scales 2E12
+        chosen = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm",
+                         shear_correction=(0.5, 0.7), backend="numpy")
+        G = E_MODULUS / (2 * (1 + NU))
+        assert chosen.law_coefficients()["volume"][-3:] == pytest.approx([G, 0.5 * G, 0.7 * G])
+
+
+@all_kinds
+def test_svk_is_the_default_and_unchanged(kind):
+    default = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, backend="numpy")
+    explicit = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, backend="numpy",
+                       law="svk")
+    assert default.law == "svk" and default.damping == 0.0 and default.shear_correction == ()
+    for name, value in default.invariants.items():
+        np.testing.assert_array_equal(value, explicit.invariants[name])
+    assert default.family == "gram_straight"
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"law": "neo-hooke"}, "law: expected one of"),
+    ({"law": None}, "law: expected one of"),
+    ({"damping": -1.0}, "damping: expected"),
+    ({"damping": float("nan")}, "damping: expected"),
+    ({"damping": True}, "damping: expected"),
+    ({"shear_correction": 0.8}, "shear_correction: law 'svk' takes none"),
+    ({"law": "ecm", "shear_correction": 0.0}, "shear_correction: expected"),
+    ({"law": "ecm", "shear_correction": (0.8, 0.8, 0.8)}, "shear_correction: expected"),
+    ({"law": "ecm", "shear_correction": "k"}, "shear_correction: expected"),
+])
+def test_bad_law_parameters(changes, match):
+    with pytest.raises(ValueError, match=match):
+        Element("beam3d", LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, backend="numpy", **changes)
+
+
+# --- agreement of methods and backends, every law --------------------------------------------
+
+
+@pytest.mark.parametrize("law", ["svk", "ecm"])
+@all_kinds
+@all_methods
+@all_backends
+@all_shapes
+def test_methods_and_backends_agree(law, kind, method, backend, shape):
+    """Every law, method and backend gives the same elastic and damping forces and Jacobians
+    as quadrature in NumPy (the law evaluated at the Gauss points), to round-off."""
+    baseline = ("quadrature", "numpy") if (method, backend) != ("quadrature", "numpy") \
+        else ("gram", "c")
+    results = evaluate(kind, law, method, backend, shape)
+    expected = evaluate(kind, law, *baseline, shape)
+    m, ndof = states(kind, shape)[0].shape
+    for name, value in results.items():
+        assert value.shape == expected[name].shape
+        # cij's energy sums large terms that cancel (eq. 39): a digit or two fewer
+        tolerance = 1e-9 if (name == "energy" and "cij" in (method, baseline[0])) else 1e-10
+        assert rel_diff(value, expected[name]) <= tolerance, name
+    assert results["total_force"].shape == (m, ndof)
+    assert results["total_de_dot"].shape == (m, ndof, ndof)
+
+
+@all_kinds
+@all_shapes
+def test_ecm_and_svk_differ(kind, shape):
+    ecm, svk = evaluate(kind, "ecm", "gram", "c", shape), evaluate(kind, "svk", "gram", "c",
+                                                                    shape)
+    assert rel_diff(ecm["force"], svk["force"]) > 1e-3
+
+
+@all_kinds
+def test_closed_form_and_quadrature_invariants_of_ecm_agree(kind):
+    """The straight element's closed-form ECM invariants against the quadrature (volume and
+    axis rules) that curved references use, which is exact for straight ones."""
+    el = law_element(kind, backend="numpy")
+    builders = kernel_family(kind, "invariants", "numpy")
+    rules = inv.law_rules(el.kind, builders, el.geometry, el.e0, el.quadrature)
+    numeric = inv.numeric_law_invariants(el.kind, builders, "straight", el.geometry, rules,
+                                         el.law_coefficients(), RHO)
+    for name, value in el.invariants.items():
+        assert rel_diff(numeric[name], value) <= 1e-12, name
+    # and the ECM invariants differ from svk's where the law does
+    assert rel_diff(law_element(kind, "svk", backend="numpy").invariants["gram"],
+                    el.invariants["gram"]) > 1e-3
+
+
+@all_kinds
+@all_methods
+def test_rigidly_placed_straight_reference_uses_the_local_frame(kind, method, rng):
+    """ECM is not isotropic: it acts in the element's local frame, so a rotated element gives
+    the rotated forces (and the closed-form invariants apply to any rigid placement)."""
+    d = dim_of(kind)
+    R, t = random_rotation(d, rng), rng.normal(size=d)
+    base = law_element(kind, method=method)
+    placed = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm", method=method,
+                     e0=rigid_motion(kind, base.e0, R, t), damping=ALPHA)
+    assert placed.straight
+    e = base.e0 + 1e-2 * rng.standard_normal(base.ndof)
+    e_dot = rng.standard_normal(base.ndof)
+    moved, moved_dot = rigid_motion(kind, e, R, t), rigid_motion(kind, e_dot, R, np.zeros(d))
+    rotate = lambda f: rigid_motion(kind, f, R, np.zeros(d))  # noqa: E731
+    assert rel_diff(placed.elastic_force(moved), rotate(base.elastic_force(e))) <= 1e-11
+    assert rel_diff(placed.damping_force(moved, moved_dot),
+                    rotate(base.damping_force(e, e_dot))) <= 1e-11
+
+
+# --- derivatives ------------------------------------------------------------------------------
+
+
+def central_difference(function, x: np.ndarray, step: float) -> np.ndarray:
+    """Rows d function / d x_j (2 ndof evaluations in one batch): returns (ndof, out)."""
+    shifts = step * np.eye(x.size)
+    values = function(np.concatenate([x + shifts, x - shifts]))
+    return (values[: x.size] - values[x.size:]) / (2 * step)
+
+
+@all_kinds
+@all_methods
+@all_shapes
+def test_ecm_force_is_minus_energy_gradient_and_jacobian_its_derivative(kind, method, shape,
+                                                                         rng):
+    el = law_element(kind, method=method, shape=shape)
+    e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
+    step = 1e-6 * np.abs(e).max()
+    assert rel_diff(el.elastic_force(e), -central_difference(el.strain_energy, e, step)) <= 1e-6
+    jacobian = el.elastic_jacobian(e)
+    assert rel_diff(jacobian, central_difference(el.elastic_force, e, step).T) <= 1e-6
+    assert np.abs(jacobian - jacobian.T).max() <= 1e-12 * np.abs(jacobian).max()
+
+
+@all_kinds
+@all_methods
+@all_shapes
+def test_damping_jacobians_are_the_damping_force_derivatives(kind, method, shape, rng):
+    el = law_element(kind, method=method, shape=shape)
+    e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
+    e_dot = rng.standard_normal(el.ndof)
+    de, de_dot = el.damping_jacobians(e, e_dot)
+    step = 1e-6 * np.abs(e).max()
+    by_e = central_difference(lambda x: el.damping_force(x, e_dot[None, :]), e, step).T
+    by_e_dot = central_difference(lambda v: el.damping_force(e[None, :], v), e_dot, 1e-3).T
+    assert rel_diff(de, by_e) <= 1e-6
+    assert rel_diff(de_dot, by_e_dot) <= 1e-9          # linear in e_dot
+    assert np.abs(de_dot - de_dot.T).max() <= 1e-12 * np.abs(de_dot).max()
+    # d/de_dot is alpha times the material part of the elastic stiffness: at zero velocity
+    # the damping Jacobian d/de vanishes and the combined kernel adds up the two forces
+    at_rest = el.damping_jacobians(e, np.zeros(el.ndof))[0]
+    assert np.abs(at_rest).max() <= 1e-12 * np.abs(de).max()
+    force, total_de, total_de_dot = el.internal_force_and_jacobians(e, e_dot)
+    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= 1e-12
+    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= 1e-12
+    assert rel_diff(total_de_dot, de_dot) <= 1e-14
+
+
+@pytest.mark.parametrize("law", ["svk", "ecm"])
+@all_kinds
+@all_methods
+@all_shapes
+def test_rigid_body_velocity_gives_zero_damping_force(law, kind, method, shape, rng):
+    """de/dt of a rigid motion (any configuration, deformed included) does not change the
+    strain, so it dissipates nothing: qdot_k = W q_k for gradients and relative positions."""
+    el = law_element(kind, law, method, "c", shape)
+    d = dim_of(kind)
+    e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
+    skew = rng.normal(size=(d, d))
+    skew -= skew.T
+    q = e.reshape(-1, d)
+    velocity = q @ skew.T
+    positions = [0, d + 1]
+    velocity[positions] = (q[positions] - q[0]) @ skew.T + rng.normal(size=d)
+    force = el.damping_force(e, velocity.ravel())
+    scale = ALPHA * force_scale() * np.abs(skew).max() * 1e3  # alpha E A times a 1/s rate
+    assert np.abs(force).max() <= 1e-9 * scale
+    assert np.abs(el.damping_force(e, np.zeros(el.ndof))).max() == 0.0
+
+
+@all_kinds
+def test_damping_scales_with_alpha_and_zero_damping_gives_zero(kind, rng):
+    el = law_element(kind, method="gram", backend="numpy")
+    undamped = law_element(kind, method="gram", backend="numpy", damping=0.0)
+    e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
+    e_dot = rng.standard_normal(el.ndof)
+    assert np.abs(undamped.damping_force(e, e_dot)).max() == 0.0
+    double = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm",
+                     backend="numpy", damping=2 * ALPHA)
+    assert rel_diff(double.damping_force(e, e_dot), 2 * el.damping_force(e, e_dot)) <= 1e-14
+
+
+# --- shapes, buffers, groups ------------------------------------------------------------------
+
+
+@all_kinds
+@all_backends
+def test_damping_batches_buffers_and_group_kernel(kind, backend):
+    el = law_element(kind, method="gram", backend=backend)
+    e, e_dot = states(kind, "straight")
+    m, ndof = e.shape
+    force = el.damping_force(e, e_dot)
+    de, de_dot = el.damping_jacobians(e, e_dot)
+    assert force.shape == (m, ndof) and de.shape == de_dot.shape == (m, ndof, ndof)
+    single = el.damping_force(e[1], e_dot[1])
+    assert single.shape == (ndof,) and rel_diff(single, force[1]) <= 1e-14
+    one_de, one_de_dot = el.damping_jacobians(e[1], e_dot[1])
+    assert one_de.shape == (ndof, ndof) and rel_diff(one_de_dot, de_dot[1]) <= 1e-14
+    # one configuration against several velocities
+    broadcast = el.damping_force(e[1], e_dot)
+    assert rel_diff(broadcast[0], el.damping_force(e[1], e_dot[0])) <= 1e-14
+    out = np.full((m, ndof), np.nan)
+    assert np.shares_memory(el.damping_force(e, e_dot, out=out), out)
+    assert rel_diff(out, force) <= 1e-14
+    buffers = [np.full((m, ndof), np.nan), np.full((m, ndof, ndof), np.nan),
+               np.full((m, ndof, ndof), np.nan)]
+    total = el.internal_force_and_jacobians(e, e_dot, *buffers)
+    assert all(np.shares_memory(a, b) for a, b in zip(total, buffers, strict=True))
+    group = el.damping_group_kernel("damping_force")
+    grouped = group({"e": e, "e0": np.repeat(el.e0[None, :], m, axis=0), "e_dot": e_dot})
+    assert rel_diff(grouped["force"], force) <= 1e-14
+    with pytest.raises(ValueError, match="e_dot"):
+        el.damping_force(e, e_dot[:2])
+    with pytest.raises(ValueError, match="e_dot"):
+        el.damping_force(e[0], np.zeros(ndof + 1))
+
+
+# --- Poisson locking: cantilevers against Euler-Bernoulli -----------------------------------
+
+INCH = 0.0254
+
+
+def static_tip_displacement(kind: str, law: str, nu: float, E: float, rho: float,
+                            length: float, height: float, width: float, elements: int,
+                            tip=None, gravity=None) -> np.ndarray:
+    """Tip displacement of a cantilever (first node clamped) by Newton on the free
+    coordinates, assembled here from elastic_force_and_jacobian of identical elements."""
+    dx = length / elements
+    el = Element(kind, dx, height, width, E, nu, rho, law=law)
+    d, per_node = dim_of(kind), el.ndof // 2
+    nodes = elements + 1
+    q0 = np.concatenate([np.concatenate([[i * dx] + [0.0] * (d - 1), np.eye(d).ravel()])
+                         for i in range(nodes)])
+    index = np.array([np.arange(i * per_node, (i + 2) * per_node) for i in range(elements)])
+    external = np.zeros(q0.size)
+    if tip is not None:
+        external[(nodes - 1) * per_node:][:d] += tip
+    if gravity is not None:  # consistent gravity force: mass matrix times a uniform translation
+        translation = np.zeros(el.ndof)
+        translation[:d] = translation[per_node:per_node + d] = gravity
+        for rows in index:
+            external[rows] += el.mass_matrix() @ translation
+    free = np.arange(per_node, q0.size)
+    q = q0.copy()
+    for _ in range(20):
+        force, jacobian = el.elastic_force_and_jacobian(q[index])
+        residual = external.copy()
+        stiffness = np.zeros((q0.size, q0.size))
+        for rows, f, block in zip(index, force, jacobian, strict=True):
+            residual[rows] += f
+            stiffness[np.ix_(rows, rows)] -= block
+        step = np.linalg.solve(stiffness[np.ix_(free, free)], residual[free])
+        q[free] += step
+        if np.abs(step).max() <= 1e-13 * length:
+            break
+    else:
+        raise AssertionError("Newton did not converge")
+    return (q - q0)[(nodes - 1) * per_node:][:d]
+
+
+@functools.cache
+def chrono_cantilevers(law: str) -> dict[str, float]:
+    """Chrono's ANCF 3243 cantilever checks (aluminium 7075, nu = 0.33, 20 elements, 20 in
+    long): deflection over the Euler-Bernoulli value, for a 10 N tip load on a 0.125 x 0.5 in
+    section and for gravity on a 0.5 x 0.125 in section (bending about the thin side)."""
+    E, rho, nu, length, g = 71.7e9, 2810.0, 0.33, 20 * INCH, 9.80665
+    height, width = 0.125 * INCH, 0.5 * INCH            # local y, local z
+    tip = static_tip_displacement("beam3d", law, nu, E, rho, length, height, width, 20,
+                                  tip=np.array([0.0, 0.0, 10.0]))
+    inertia = height * width**3 / 12
+    out = {"tip": tip[2] / (10.0 * length**3 / (3 * E * inertia))}
+    height, width = 0.5 * INCH, 0.125 * INCH
+    sag = static_tip_displacement("beam3d", law, nu, E, rho, length, height, width, 20,
+                                  gravity=np.array([0.0, 0.0, -g]))
+    inertia = height * width**3 / 12
+    q = rho * height * width * g
+    out["gravity"] = -sag[2] / (q * length**4 / (8 * E * inertia))
+    return out
+
+
+def test_ecm_cantilever_matches_euler_bernoulli_and_svk_locks():
+    ecm, svk = chrono_cantilevers("ecm"), chrono_cantilevers("svk")
+    for load in ("tip", "gravity"):
+        assert abs(ecm[load] - 1) <= 0.02, (load, ecm[load])
+        # Poisson locking: svk is stiffer (smaller deflection) by more than 10 %
+        assert 1 / svk[load] > 1.10, (load, svk[load])
+
+
+def test_planar_ecm_cantilever_matches_euler_bernoulli():
+    """The issue's case: a clamped beam2d cantilever at nu = 0.3 (10 elements, 2 m long,
+    0.1 x 0.1 m, 1 kN tip load) within 2 % of P L^3 / 3EI with ECM; svk locks."""
+    E, length, height, width, load = 2.1e11, 2.0, 0.1, 0.1, 1000.0
+    theory = load * length**3 / (3 * E * width * height**3 / 12)
+    ratios = {law: -static_tip_displacement("beam2d", law, 0.3, E, 7800.0, length, height,
+                                            width, 10, tip=np.array([0.0, -load]))[1] / theory
+              for law in ("ecm", "svk")}
+    assert abs(ratios["ecm"] - 1) <= 0.02
+    assert 1 / ratios["svk"] > 1.10
+
+
+# --- the symbolic law algebra -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["beam2d"])
+def test_law_algebra_reproduces_the_isotropic_formulas(kind):
+    """symgen's law algebra (directional integrals per domain) with the svk coefficients gives
+    the existing isotropic gram, C^ij, K1 and U0 exactly (checked at exact rational values)."""
+    import sympy as sp
+
+    from symgen import derive, laws
+    from symgen.elements import get
+
+    spec = get(kind)
+    svk = laws.get("svk").domain_coefficients(spec.dim)
+    parts = [(derive.straight_domain_integrals(spec, domain), svk[domain])
+             for domain in laws.DOMAINS]
+    i4 = derive.straight_integrals(spec)
+    numbers = {derive.length: sp.Rational(7, 5), derive.height: sp.Rational(2, 9),
+               derive.width: sp.Rational(3, 11), laws.young: sp.Rational(13, 2),
+               laws.poisson: sp.Rational(2, 7)}
+    isotropic = {derive.lam: laws.LAME, derive.shear: laws.SHEAR}
+
+    def same(a, b):
+        return sp.sympify(a).subs(numbers) == sp.sympify(b).subs(isotropic).subs(numbers)
+
+    n = spec.n_shape
+    pattern = derive.patterns(spec, "straight")
+    assert all(same(derive.law_gram_value(spec, parts, *ab), derive.gram_value(spec, i4.i4, *ab))
+               for ab in pattern.gram)
+    assert all(same(derive.law_cij_value(spec, parts, *x), derive.cij_value(spec, i4.i4, *x))
+               for x in pattern.cij)
+    assert all(same(derive.law_k1_value(spec, parts, k, m), derive.k1_value(spec, i4.i2, k, m))
+               for k, m in derive.pairs(n))
+    assert same(derive.law_u0_value(spec, parts),
+                derive.strain_energy_constant(spec, i4.volume))
+    derive.check_law_patterns(spec)
+
+
+def test_invariant_report_compares_law_invariants():
+    """``invariant_report.compare(..., law="ecm")``: closed form against quadrature with the
+    volume and axis rules (round-off for the straight element)."""
+    from runtime import invariant_report
+
+    result = invariant_report.compare("beam2d", "straight", law="ecm")
+    assert result["law"] == "ecm"
+    assert all(row["max_rel_diff"] <= 1e-13 for row in result["rows"])
+    assert result["structural_zeros_rel"] <= 1e-13
+    assert "law ecm" in invariant_report.report(result)
+    with pytest.raises(ValueError, match="--law"):
+        invariant_report.compare("beam2d", law="hooke")
