@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import NoReturn
 
+from runtime import progress
 from runtime.jit import JitEnvironmentError
 
 METHOD_FAMILIES = {
@@ -308,7 +309,8 @@ def main(argv: list[str] | None = None) -> int:
         except SystemExit as done:  # --help, or an option error already reported
             return done.code if isinstance(done.code, int) else 2
         command = f"ancf {args.command}"
-        return int(args.run(args))
+        with progress.enabled(not getattr(args, "quiet", False)):
+            return int(args.run(args))
     except KeyboardInterrupt:
         print(f"{command}: interrupted", file=sys.stderr)
         return 130

@@ -1,5 +1,5 @@
 """Run outputs (DESIGN.md section 7): the output folder, the time-series CSV written as the
-run goes, the atomic ``summary.json`` and PNG plots, and a progress bar on stderr.
+run goes, the atomic ``summary.json`` and PNG plots (progress: ``runtime.progress``).
 
 Every file is created with the ordinary permissions of ``open`` (0666 less the umask).  A
 write error (full disk, read-only folder) raises :class:`OutputError` and never leaves a
@@ -17,17 +17,14 @@ import math
 import os
 import re
 import secrets
-import sys
-import time
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
 
-__all__ = ["ENERGIES_FILE", "OutputError", "Progress", "TimeSeriesWriter", "atomic_file",
-           "plot_file_name", "plot_series", "prepare_folder",
-           "write_json_atomic"]
+__all__ = ["ENERGIES_FILE", "OutputError", "TimeSeriesWriter", "atomic_file", "plot_file_name",
+           "plot_series", "prepare_folder", "write_json_atomic"]
 
 ENERGIES_FILE = "energies.png"
 # longest plot file stem: room for the temporary-file decoration within 255 bytes
@@ -294,60 +291,3 @@ def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
     if present:
         save(ENERGIES_FILE, lambda: energy_panels(present))
     return written, problems
-
-
-class Progress:
-    """Progress bar of a run on stderr: ``\\r[#####.....] 42% t=1.68 s``.
-
-    total_time: the end time (s).  enabled: None -> only when stderr is a terminal.
-    ``update(t)`` redraws at most every ``interval`` s (0.1 s); ``close()`` draws the last
-    state and ends the line.  Disabled, it prints nothing.
-    """
-
-    def __init__(self, total_time: float, enabled: bool | None = None, width: int = 30,
-                 interval: float = 0.1) -> None:
-        if enabled is None:
-            try:
-                enabled = bool(sys.stderr is not None and sys.stderr.isatty())
-            except (AttributeError, ValueError):
-                enabled = False
-        self.total_time = float(total_time)
-        self.enabled = enabled
-        self.width = width
-        self.interval = interval
-        self._t = 0.0
-        self._last_draw: float | None = None
-        self._closed = False
-
-    def _draw(self) -> None:
-        total = self.total_time
-        fraction = 1.0 if total <= 0 else min(max(self._t / total, 0.0), 1.0)
-        filled = int(round(fraction * self.width))
-        bar = "#" * filled + "." * (self.width - filled)
-        sys.stderr.write(f"\r[{bar}] {fraction * 100:3.0f}% t={self._t:.2f} s")
-        sys.stderr.flush()
-        self._last_draw = time.monotonic()
-
-    def update(self, t: float) -> None:
-        """Record progress up to time t (s); redraw when the last draw is old enough."""
-        if not self.enabled or self._closed:
-            return
-        self._t = float(t)
-        now = time.monotonic()
-        if self._last_draw is None or now - self._last_draw >= self.interval:
-            self._draw()
-
-    def close(self) -> None:
-        """Draw the final state and end the line (idempotent)."""
-        if self.enabled and not self._closed:
-            self._draw()
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-        self._closed = True
-
-    def __enter__(self) -> Progress:
-        return self
-
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
-        self.close()

@@ -169,7 +169,7 @@ def test_internal_error_is_exit_4_with_a_hint_to_report_it(tmp_path, monkeypatch
     def bug(*args, **kwargs):
         raise ZeroDivisionError("division by zero")
 
-    monkeypatch.setattr("runtime.run.Sensors", bug)
+    monkeypatch.setattr("runtime.result.Sensors", bug)
     out = tmp_path / "o"
     assert main(["run", str(scene_file(tmp_path)), "--out", str(out), "--quiet"]) == 4
     line = one_line(capsys.readouterr().err)
@@ -264,3 +264,4 @@ def test_signal_during_a_run_is_exit_130_with_a_summary(sig, tmp_path):
     assert (out / "timeseries.csv").read_text().endswith("\n")
     assert summary["dynamic"]["t_reached"] == rows[-1][0] < 100.0
     assert not [name for name in os.listdir(out) if name.endswith(".tmp")]
+

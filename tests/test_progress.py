@@ -1,12 +1,15 @@
 """Progress on stderr (runtime.progress): lines every few seconds off a terminal, a tqdm bar
-on one, nothing for short phases or when silenced."""
+on one, nothing for short phases or when silenced; the dynamic run reports through it."""
 
 from __future__ import annotations
 
 import pytest
+from scenes_small import cantilever
 
 from runtime import progress
 from runtime.progress import Bar, enabled, phase
+from runtime.result import run_scene
+from runtime.scene import parse_scene
 
 
 class Clock:
@@ -113,3 +116,15 @@ def test_silenced_prints_nothing_and_nests(clock, capsys, monkeypatch):
     assert progress.shown()
     assert capsys.readouterr().err == ""
 
+
+def test_a_dynamic_run_reports_simulated_time(monkeypatch, capsys):
+    monkeypatch.setattr(progress, "DELAY", 0.0)
+    monkeypatch.setattr(progress, "LINE_INTERVAL", 0.0)
+    data = cantilever(elements=2, force=[0.0, -1000.0], solver={"backend": "numpy"},
+                      analysis_tables={"dynamic": {"t_end": 0.02, "step": 5e-3}})
+    run_scene(parse_scene(data))
+    err = lines(capsys.readouterr().err)
+    assert err[0].startswith("dynamic analysis: 0.005/0.02 s (25%), elapsed")
+    assert err[-1].startswith("dynamic analysis: 0.02/0.02 s (100%)") and "ETA 0 s" in err[-1]
+    run_scene(parse_scene(data), progress=False)
+    assert capsys.readouterr().err == ""
