@@ -145,7 +145,9 @@ def cmd_run(args) -> int:
     try:
         with _interrupt_on_signals():
             summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet,
-                                plots=not args.no_plots, engine=args.engine)
+                                plots=not args.no_plots, engine=args.engine,
+                                vtk=args.vtk or None, animation=args.gif or None,
+                                plane=args.plane)
     except RunInterrupted as stop:
         print(f"ancf run: {_first_line(stop.summary['message'])}", file=sys.stderr)
         return ExitCode.INTERRUPTED
@@ -221,6 +223,7 @@ def parser() -> argparse.ArgumentParser:
     from runtime.catalog import ENGINES
     from runtime.element import METHODS
     from runtime.kernels import BACKENDS
+    from runtime.shapes import PLANES
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)
@@ -249,7 +252,14 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--engine", choices=list(ENGINES),
                      help="dynamic engine (default: compiled with the C backend)")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
-    run.add_argument("--no-plots", action="store_true", help="write no PNG plots")
+    run.add_argument("--no-plots", action="store_true", help="write no PNG plots of sensors")
+    run.add_argument("--vtk", action="store_true",
+                     help="also write ParaView files in OUT/vtk (default: the scene's [output])")
+    run.add_argument("--gif", action="store_true",
+                     help="also write shape_animation.gif and shape_static.png (default: the "
+                          "scene's [output])")
+    run.add_argument("--plane", choices=list(PLANES), default="xy",
+                     help="projection of the animation and snapshot (default xy)")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability

@@ -1,4 +1,4 @@
-"""``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots):
+"""``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots, shapes):
 ``runtime.result.run_scene``'s machinery plus writers.
 
 Exit codes (:class:`ExitCode`): 0 ok, 1 diverged, 2 invalid scene or options, 3 environment
@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import output, progress
+from runtime import output, progress, shapes
 from runtime.jit import CacheError, JitEnvironmentError
-from runtime.result import TIMING_KEYS, Observer, Simulation
+from runtime.result import TIMING_KEYS, Observer, Simulation, requested
 from runtime.scene import Scene, SceneError, load_scene
 from runtime.sensors import ENERGY_TYPES
 
@@ -58,25 +58,30 @@ class _Stop(Exception):
 
 def run(scene_path, out_dir: str | Path, method: str | None = None,
         backend: str | None = None, quiet: bool = False, plots: bool = True,
-        engine: str | None = None) -> tuple[dict, int]:
+        engine: str | None = None, vtk: bool | None = None, animation: bool | None = None,
+        plane: str = "xy") -> tuple[dict, int]:
     """Run every analysis of a scene (a TOML path or a parsed Scene) into the folder
     ``out_dir``; returns (summary, exit code) - see :class:`ExitCode`.
 
     Order: the scene is validated; ``out_dir`` is created, checked writable and cleared of a
     previous run's outputs (only those); the model is built (kernels compiled); the analyses
-    run (:func:`runtime.result.run_scene`'s machinery), timeseries.csv written as it goes.
-    summary.json is written atomically when the analyses end, then the plots are drawn
-    (unless ``plots`` is False) and the summary rewritten with their time in
+    run (:func:`runtime.result.run_scene`'s machinery), timeseries.csv and, if asked, the
+    VTU series written as they go.  summary.json is written atomically when the analyses
+    end, then the plots are drawn (unless ``plots`` is False) with, if asked, the shape
+    snapshot and animation, and the summary rewritten with their time in
     ``timing.postprocess_s``, their files and warnings.  ``summary["message"]`` explains any
     code but 0; its first line is the one-line report.  If ``out_dir`` cannot be written the
     message says that no summary.json was written.  A KeyboardInterrupt writes the summary
     with status "interrupted" and raises :class:`RunInterrupted`.
-    quiet: no progress on stderr.
+
+    vtk, animation: write ``vtk/`` (static.vtu, mode_K.vtu, dynamic.pvd) and the snapshot
+    ``shape_static.png`` / animation ``shape_animation.gif`` projected on ``plane`` (xy, xz,
+    yz); None: as the scene's ``[output]`` table says.  quiet: no progress on stderr.
     """
     job = _Job(scene_path, Path(out_dir))
     try:
         with progress.enabled(not quiet):
-            code = job.execute(method, backend, plots, engine)
+            code = job.execute(method, backend, plots, engine, vtk, animation, plane)
     except _Stop as stop:
         job.summary.update(status=stop.status, message=str(stop))
         code = job.save(stop.code)
@@ -137,7 +142,8 @@ class _Job:
         return self._phase or self.simulation.phase
 
     def execute(self, method: str | None, backend: str | None, plots: bool,
-                engine: str | None) -> ExitCode:
+                engine: str | None, vtk: bool | None, animation: bool | None,
+                plane: str) -> ExitCode:
         scene, invalid = None, None
         if isinstance(self.scene_path, Scene):
             scene = self.scene_path
@@ -156,7 +162,15 @@ class _Job:
             raise _Stop(ExitCode.INVALID, invalid)
         if self.folder_error is not None:
             raise _Stop(ExitCode.ENVIRONMENT, self.folder_error)
-        observers = [_CsvWriter(self)]
+        if plane not in shapes.PLANES:
+            raise _Stop(ExitCode.INVALID, f"plane: expected one of {', '.join(shapes.PLANES)}, "
+                                          f"got {plane!r}")
+        vtk = requested(scene, "vtk") if vtk is None else vtk
+        animation = requested(scene, "animation") if animation is None else animation
+        observers: list[Observer] = [_CsvWriter(self)]
+        series = shapes.VtkSeries(self.out / output.VTK_FOLDER) if vtk else None
+        frames = shapes.Frames() if animation else None
+        observers += [o for o in (series, frames) if o is not None]
         self.simulation = simulation = Simulation(scene, method, backend, engine,
                                                   observers=observers, summary=self.summary)
         self._phase = None
@@ -175,12 +189,17 @@ class _Job:
             code = ExitCode(simulation.analyses())
         except (JitEnvironmentError, output.OutputError) as error:  # a dynamic engine
             raise _environment_stop(error) from None                # compiled on demand
+        finally:
+            if series is not None:
+                self.files.update(series.files)
         self._phase = "summary writing"
         code = self.save(code)
         if code in (ExitCode.OK, ExitCode.DIVERGED):
             self._phase = "plots"
             post_start = time.perf_counter()
             drawn = self._plots(scene, simulation) if plots else False
+            if animation:
+                drawn = self._shapes(scene, simulation, frames, plane) or drawn
             if drawn:
                 self.timing["postprocess_s"] += time.perf_counter() - post_start
                 code = self.save(code)
@@ -199,6 +218,28 @@ class _Job:
         self.files.update(path.name for path in written)
         self.summary["warnings"] += warnings
         return True
+
+    def _shapes(self, scene: Scene, simulation: Simulation, frames: shapes.Frames | None,
+                plane: str) -> bool:
+        """The static snapshot and the animation, those that have data; whether any was
+        attempted.  A failure is a warning, as for the plots."""
+        drawn = []
+        if simulation.static_q is not None:
+            line = shapes.CentreLine(simulation.model)
+            drawn.append((output.SHAPE_FILE, lambda path: shapes.write_snapshot(
+                path, line, simulation.model.reference, simulation.static_q, scene.title,
+                plane=plane)))
+        if frames is not None and frames.frames:
+            drawn.append((output.ANIMATION_FILE, lambda path: shapes.write_animation(
+                path, frames, scene.title, plane)))
+        for name, draw in drawn:
+            try:
+                draw(self.out / name)
+                self.files.add(name)
+            except Exception as error:
+                self.summary["warnings"].append(
+                    f"{name}: not written ({type(error).__name__}: {error})")
+        return bool(drawn)
 
     def save(self, code: ExitCode) -> ExitCode:
         """Write summary.json (total time and files updated); returns ``code``, or 3
@@ -243,11 +284,13 @@ class _Job:
 
 def _owned_files(scene: Scene | None) -> list[str]:
     """Files a run of ``scene`` owns in its folder beside summary.json: the time series,
-    the energy plot and a plot named after each sensor (energies had one before they shared
-    energies.png: a folder of an earlier version loses those too)."""
+    the energy plot, the shape snapshot and animation, and a plot named after each sensor
+    (energies had one before they shared energies.png: a folder of an earlier version loses
+    those too)."""
     if scene is None:
         return []
-    return [CSV, output.ENERGIES_FILE, *(output.plot_file_name(s.name) for s in scene.sensors)]
+    return [CSV, *output.RESERVED_FILES, output.ANIMATION_FILE,
+            *(output.plot_file_name(s.name) for s in scene.sensors)]
 
 
 def _environment_stop(error: JitEnvironmentError | output.OutputError) -> _Stop:
