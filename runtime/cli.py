@@ -184,11 +184,19 @@ def cmd_bench_paper(args) -> int:
     return 0
 
 
+def report_folder(out: str | None, quick: bool) -> Path:
+    """Where ``ancf report`` writes: ``out``; by default ``docs`` (the tracked report), or a
+    new temporary folder for ``--quick`` (a smoke test never overwrites the report)."""
+    if out is not None:
+        return Path(out)
+    return Path(tempfile.mkdtemp(prefix="ancf-report-quick-")) if quick else Path("docs")
+
+
 def cmd_report(args) -> int:
     from runtime.studies import report
 
-    path = report.build(args.out, quick=args.quick, scheduler=args.scheduler,
-                        workers=args.workers)
+    path = report.build(report_folder(args.out, args.quick), quick=args.quick,
+                        scheduler=args.scheduler, workers=args.workers)
     print(f"written: {path}")
     return 0
 
@@ -270,8 +278,10 @@ def parser() -> argparse.ArgumentParser:
     stability.add_cli(study_sub)
 
     report = sub.add_parser("report", help="measure everything and write docs/report.md")
-    report.add_argument("--out", default="docs", help="folder of report.md and its figures")
-    report.add_argument("--quick", action="store_true", help="small versions (smoke test)")
+    report.add_argument("--out", help="folder of report.md and its figures (default: docs; "
+                                      "with --quick a new temporary folder)")
+    report.add_argument("--quick", action="store_true",
+                        help="small versions (smoke test), never into docs/ unless --out says")
     report.add_argument("--scheduler", help="address of an existing dask scheduler")
     report.add_argument("--workers", type=int, help="local dask workers (default: cores)")
     report.set_defaults(run=cmd_report)

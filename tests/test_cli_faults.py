@@ -265,3 +265,35 @@ def test_signal_during_a_run_is_exit_130_with_a_summary(sig, tmp_path):
     assert summary["dynamic"]["t_reached"] == rows[-1][0] < 100.0
     assert not [name for name in os.listdir(out) if name.endswith(".tmp")]
 
+
+# --------------------------------------------------------------------------- report --quick
+
+def test_report_quick_writes_to_a_scratch_folder_never_into_docs(tmp_path, monkeypatch,
+                                                                  capsys):
+    import shutil
+
+    from runtime.studies import report
+
+    docs = ROOT / "docs"
+    before = {p: p.read_bytes() for p in docs.rglob("*") if p.is_file()}
+    seen = []
+
+    def build(out, quick, **kwargs):
+        seen.append((Path(out), quick))
+        return Path(out) / "report.md"
+
+    monkeypatch.setattr(report, "build", build)
+    monkeypatch.chdir(ROOT)
+    assert main(["report", "--quick"]) == 0
+    scratch, quick = seen[-1]
+    try:
+        assert quick and scratch.is_dir() and not os.listdir(scratch)
+        assert docs.resolve() not in [scratch.resolve(), *scratch.resolve().parents]
+        assert str(scratch / "report.md") in capsys.readouterr().out
+    finally:
+        shutil.rmtree(scratch)
+    assert main(["report", "--quick", "--out", str(tmp_path / "mine")]) == 0
+    assert seen[-1] == (tmp_path / "mine", True)
+    assert main(["report"]) == 0  # the full report is the tracked one
+    assert seen[-1] == (Path("docs"), False)
+    assert {p: p.read_bytes() for p in docs.rglob("*") if p.is_file()} == before
