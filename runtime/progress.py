@@ -92,8 +92,9 @@ class Bar:
     "cases"), with elapsed time and ETA, on stderr once ``DELAY`` seconds have passed.
 
     On a terminal a tqdm bar; elsewhere a line every ``LINE_INTERVAL`` seconds and a last
-    one at :meth:`close` (only if a line was printed).  Silenced (see :func:`enabled` at
-    construction) it prints nothing.  A context manager; ``close`` is idempotent.
+    one at :meth:`close` (only if a line was printed, and the state changed since).
+    Silenced (see :func:`enabled` at construction) it prints nothing.  A context manager;
+    ``close`` is idempotent.
     """
 
     def __init__(self, label: str, total: float, unit: str) -> None:
@@ -102,6 +103,7 @@ class Bar:
         self.note = ""
         self._start = _clock()
         self._last_line: float | None = None
+        self._last_shown: tuple[float, str] | None = None
         self._closed = False
         self._bar = None
         self._lines = shown() and not _terminal()
@@ -143,16 +145,16 @@ class Bar:
 
     def _line(self, now: float) -> None:
         _say(self.text(now))
-        self._last_line = now
+        self._last_line, self._last_shown = now, (self.done, self.note)
 
     def close(self) -> None:
-        """Draw the final state (idempotent)."""
+        """Draw the final state, unless the last line already shows it (idempotent)."""
         if self._closed:
             return
         self._closed = True
         if self._bar is not None:
             self._bar.close()
-        elif self._lines and self._last_line is not None:
+        elif self._last_line is not None and self._last_shown != (self.done, self.note):
             self._line(_clock())
 
     def __enter__(self) -> Bar:

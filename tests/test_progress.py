@@ -50,10 +50,30 @@ def test_lines_every_few_seconds_after_the_delay(clock, capsys):
     assert lines(capsys.readouterr().err) == ["dynamic analysis: 3/4 s (75%), elapsed 7 s, "
                                               "ETA 2 s"]
     clock.now += 2.0
+    bar.update(3.6)                       # 2 s after it: nothing, until the last line
+    assert capsys.readouterr().err == ""
     bar.close()
     bar.close()
-    assert lines(capsys.readouterr().err) == ["dynamic analysis: 3/4 s (75%), elapsed 9 s, "
-                                              "ETA 3 s"]
+    assert lines(capsys.readouterr().err) == ["dynamic analysis: 3.6/4 s (90%), elapsed 9 s, "
+                                              "ETA 1 s"]
+
+
+def test_the_last_line_is_not_repeated(clock, capsys):
+    bar = Bar("study", 2, "cases")
+    clock.now += 3.0
+    bar.advance("a")
+    bar.advance("b")                      # within LINE_INTERVAL of the first line
+    clock.now += 1.0
+    bar.close()
+    assert lines(capsys.readouterr().err) == ["study: 1/2 cases (50%), elapsed 3 s, ETA 3 s; "
+                                              "last: a",
+                                              "study: 2/2 cases (100%), elapsed 4 s, ETA 0 s; "
+                                              "last: b"]
+    bar = Bar("study", 1, "cases")
+    clock.now += 3.0
+    bar.advance()
+    bar.close()                           # the line of the advance shows the end already
+    assert lines(capsys.readouterr().err) == ["study: 1/1 cases (100%), elapsed 3 s, ETA 0 s"]
 
 
 def test_a_short_phase_prints_nothing(clock, capsys):
