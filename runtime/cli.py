@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import NoReturn
 
+from runtime import progress
 from runtime.jit import JitEnvironmentError
 
 METHOD_FAMILIES = {
@@ -144,7 +145,9 @@ def cmd_run(args) -> int:
     try:
         with _interrupt_on_signals():
             summary, code = run(args.scene, args.out, args.method, args.backend, args.quiet,
-                                plots=not args.no_plots, engine=args.engine)
+                                plots=not args.no_plots, engine=args.engine,
+                                vtk=args.vtk or None, animation=args.gif or None,
+                                plane=args.plane)
     except RunInterrupted as stop:
         print(f"ancf run: {_first_line(stop.summary['message'])}", file=sys.stderr)
         return ExitCode.INTERRUPTED
@@ -181,11 +184,19 @@ def cmd_bench_paper(args) -> int:
     return 0
 
 
+def report_folder(out: str | None, quick: bool) -> Path:
+    """Where ``ancf report`` writes: ``out``; by default ``docs`` (the tracked report), or a
+    new temporary folder for ``--quick`` (a smoke test never overwrites the report)."""
+    if out is not None:
+        return Path(out)
+    return Path(tempfile.mkdtemp(prefix="ancf-report-quick-")) if quick else Path("docs")
+
+
 def cmd_report(args) -> int:
     from runtime.studies import report
 
-    path = report.build(args.out, quick=args.quick, scheduler=args.scheduler,
-                        workers=args.workers)
+    path = report.build(report_folder(args.out, args.quick), quick=args.quick,
+                        scheduler=args.scheduler, workers=args.workers)
     print(f"written: {path}")
     return 0
 
@@ -220,6 +231,7 @@ def parser() -> argparse.ArgumentParser:
     from runtime.catalog import ENGINES
     from runtime.element import METHODS
     from runtime.kernels import BACKENDS
+    from runtime.shapes import PLANES
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)
@@ -248,7 +260,14 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--engine", choices=list(ENGINES),
                      help="dynamic engine (default: compiled with the C backend)")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
-    run.add_argument("--no-plots", action="store_true", help="write no PNG plots")
+    run.add_argument("--no-plots", action="store_true", help="write no PNG plots of sensors")
+    run.add_argument("--vtk", action="store_true",
+                     help="also write ParaView files in OUT/vtk (default: the scene's [output])")
+    run.add_argument("--gif", action="store_true",
+                     help="also write shape_animation.gif and shape_static.png (default: the "
+                          "scene's [output])")
+    run.add_argument("--plane", choices=list(PLANES), default="xy",
+                     help="projection of the animation and snapshot (default xy)")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability
@@ -259,8 +278,10 @@ def parser() -> argparse.ArgumentParser:
     stability.add_cli(study_sub)
 
     report = sub.add_parser("report", help="measure everything and write docs/report.md")
-    report.add_argument("--out", default="docs", help="folder of report.md and its figures")
-    report.add_argument("--quick", action="store_true", help="small versions (smoke test)")
+    report.add_argument("--out", help="folder of report.md and its figures (default: docs; "
+                                      "with --quick a new temporary folder)")
+    report.add_argument("--quick", action="store_true",
+                        help="small versions (smoke test), never into docs/ unless --out says")
     report.add_argument("--scheduler", help="address of an existing dask scheduler")
     report.add_argument("--workers", type=int, help="local dask workers (default: cores)")
     report.set_defaults(run=cmd_report)
@@ -308,7 +329,8 @@ def main(argv: list[str] | None = None) -> int:
         except SystemExit as done:  # --help, or an option error already reported
             return done.code if isinstance(done.code, int) else 2
         command = f"ancf {args.command}"
-        return int(args.run(args))
+        with progress.enabled(not getattr(args, "quiet", False)):
+            return int(args.run(args))
     except KeyboardInterrupt:
         print(f"{command}: interrupted", file=sys.stderr)
         return 130

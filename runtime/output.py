@@ -1,5 +1,6 @@
 """Run outputs (DESIGN.md section 7): the output folder, the time-series CSV written as the
-run goes, the atomic ``summary.json`` and PNG plots, and a progress bar on stderr.
+run goes, the atomic ``summary.json`` and PNG plots (shapes: ``runtime.shapes``; progress:
+``runtime.progress``).
 
 Every file is created with the ordinary permissions of ``open`` (0666 less the umask).  A
 write error (full disk, read-only folder) raises :class:`OutputError` and never leaves a
@@ -17,19 +18,23 @@ import math
 import os
 import re
 import secrets
-import sys
-import time
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
 
-__all__ = ["ENERGIES_FILE", "OutputError", "Progress", "TimeSeriesWriter", "atomic_file",
-           "plot_file_name", "plot_series", "prepare_folder",
+__all__ = ["ENERGIES_FILE", "OutputError", "RESERVED_FILES", "TimeSeriesWriter", "VTK_FOLDER",
+           "atomic_file", "atomic_path", "plot_file_name", "plot_series", "prepare_folder",
            "write_json_atomic"]
 
 ENERGIES_FILE = "energies.png"
+#: the snapshot of the static state and the animation (runtime.shapes)
+SHAPE_FILE, ANIMATION_FILE = "shape_static.png", "shape_animation.gif"
+#: PNG names of a run that no sensor plot may take
+RESERVED_FILES = (ENERGIES_FILE, SHAPE_FILE)
+#: subfolder of the VTU/PVD files of a run (runtime.shapes), owned by the run
+VTK_FOLDER = "vtk"
 # longest plot file stem: room for the temporary-file decoration within 255 bytes
 MAX_STEM = 100
 # what a run may have written, hence may remove when it reuses a folder
@@ -48,7 +53,8 @@ def prepare_folder(folder: str | Path, owned: Iterable[str] = ()) -> None:
     """Make ``folder`` ready for a run: create it if needed, check that files can be created
     in it, then remove the outputs of a previous run there - ``summary.json``,
     ``timeseries.csv``, the ``owned`` file names and the files listed under ``files`` in the
-    old ``summary.json`` - and nothing else.  Raises OutputError, with a one-line message."""
+    old ``summary.json``, the VTU and PVD files of its ``vtk`` subfolder - and nothing
+    else.  Raises OutputError, with a one-line message."""
     folder = Path(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -66,15 +72,21 @@ def prepare_folder(folder: str | Path, owned: Iterable[str] = ()) -> None:
     except OSError as error:
         raise OutputError(f"{folder}: cannot write in the folder ({_reason(error)})") from None
     names = {"summary.json", "timeseries.csv", *owned, *_previous_files(folder)}
-    for name in sorted(names):
+    vtk = folder / VTK_FOLDER
+    paths = [folder / name for name in sorted(names)]
+    if vtk.is_dir() and not vtk.is_symlink():
+        paths += sorted(p for p in vtk.iterdir() if p.suffix in (".vtu", ".pvd"))
+    for path in paths:
         try:
-            (folder / name).unlink(missing_ok=True)
+            path.unlink(missing_ok=True)
         except IsADirectoryError:
-            raise OutputError(f"{folder / name}: is a folder; expected an output file of a "
+            raise OutputError(f"{path}: is a folder; expected an output file of a "
                               f"previous run") from None
         except OSError as error:
-            raise OutputError(f"{folder / name}: cannot remove the output of a previous run "
+            raise OutputError(f"{path}: cannot remove the output of a previous run "
                               f"({_reason(error)})") from None
+    with contextlib.suppress(OSError):  # gone when it held nothing else
+        vtk.rmdir()
 
 
 def _previous_files(folder: Path) -> list[str]:
@@ -89,13 +101,18 @@ def _previous_files(folder: Path) -> list[str]:
             and not name.startswith(".") and name.endswith(OUTPUT_SUFFIXES)]
 
 
+def _temporary(path: Path, suffix: str = "") -> Path:
+    """A fresh hidden name beside ``path``, ending in ``.tmp`` and ``suffix``."""
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp{suffix}")
+
+
 @contextlib.contextmanager
 def atomic_file(path: str | Path, mode: str = "wb") -> Iterator[IO[Any]]:
     """Open a temporary file beside ``path`` (``mode`` "wb" or "w", UTF-8) that replaces
     ``path`` when the block ends normally, after fsync; on any exception (KeyboardInterrupt
     included) it is removed and ``path`` is untouched.  Readers never see a partial file."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    tmp = _temporary(path)
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
         with os.fdopen(fd, mode, encoding=None if "b" in mode else "utf-8") as f:
@@ -103,6 +120,27 @@ def atomic_file(path: str | Path, mode: str = "wb") -> Iterator[IO[Any]]:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` (same suffix, for writers that choose the format by
+    it) for a writer that wants a file name (meshio, matplotlib animations): it replaces
+    ``path`` when the block ends normally; on any exception it is removed and ``path`` is
+    untouched.  A write error raises OutputError."""
+    path = Path(path)
+    tmp = _temporary(path, path.suffix)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except OSError as error:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise OutputError(f"{path}: cannot write ({_reason(error)})") from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -214,11 +252,11 @@ def write_json_atomic(path: str | Path, data: Any) -> None:
 
 def plot_file_name(name: str) -> str:
     """File name of the plot of the series ``name``: ``<name>.png`` when that is a safe, short
-    file name; otherwise the name with unsafe characters replaced by ``_``, cut to
-    ``MAX_STEM`` characters and followed by a short hash of the whole name, so that
-    different names never share a file."""
+    file name other than the ``RESERVED_FILES``; otherwise the name with unsafe characters
+    replaced by ``_``, cut to ``MAX_STEM`` characters and followed by a short hash of the
+    whole name, so that different names never share a file."""
     safe = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".-")
-    if name and safe == name and len(name) <= MAX_STEM and f"{name}.png" != ENERGIES_FILE:
+    if name and safe == name and len(name) <= MAX_STEM and f"{name}.png" not in RESERVED_FILES:
         return f"{name}.png"
     digest = hashlib.sha1(name.encode("utf-8", "surrogatepass")).hexdigest()[:8]
     return f"{safe[:MAX_STEM - 9] or 'series'}-{digest}.png"
@@ -294,60 +332,3 @@ def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
     if present:
         save(ENERGIES_FILE, lambda: energy_panels(present))
     return written, problems
-
-
-class Progress:
-    """Progress bar of a run on stderr: ``\\r[#####.....] 42% t=1.68 s``.
-
-    total_time: the end time (s).  enabled: None -> only when stderr is a terminal.
-    ``update(t)`` redraws at most every ``interval`` s (0.1 s); ``close()`` draws the last
-    state and ends the line.  Disabled, it prints nothing.
-    """
-
-    def __init__(self, total_time: float, enabled: bool | None = None, width: int = 30,
-                 interval: float = 0.1) -> None:
-        if enabled is None:
-            try:
-                enabled = bool(sys.stderr is not None and sys.stderr.isatty())
-            except (AttributeError, ValueError):
-                enabled = False
-        self.total_time = float(total_time)
-        self.enabled = enabled
-        self.width = width
-        self.interval = interval
-        self._t = 0.0
-        self._last_draw: float | None = None
-        self._closed = False
-
-    def _draw(self) -> None:
-        total = self.total_time
-        fraction = 1.0 if total <= 0 else min(max(self._t / total, 0.0), 1.0)
-        filled = int(round(fraction * self.width))
-        bar = "#" * filled + "." * (self.width - filled)
-        sys.stderr.write(f"\r[{bar}] {fraction * 100:3.0f}% t={self._t:.2f} s")
-        sys.stderr.flush()
-        self._last_draw = time.monotonic()
-
-    def update(self, t: float) -> None:
-        """Record progress up to time t (s); redraw when the last draw is old enough."""
-        if not self.enabled or self._closed:
-            return
-        self._t = float(t)
-        now = time.monotonic()
-        if self._last_draw is None or now - self._last_draw >= self.interval:
-            self._draw()
-
-    def close(self) -> None:
-        """Draw the final state and end the line (idempotent)."""
-        if self.enabled and not self._closed:
-            self._draw()
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-        self._closed = True
-
-    def __enter__(self) -> Progress:
-        return self
-
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
-        self.close()

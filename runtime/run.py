@@ -1,4 +1,5 @@
-"""``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots).
+"""``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots, shapes):
+``runtime.result.run_scene``'s machinery plus writers.
 
 Exit codes (:class:`ExitCode`): 0 ok, 1 diverged, 2 invalid scene or options, 3 environment
 (output folder or files, C compiler, kernel cache, memory), 4 internal error (a bug),
@@ -14,13 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import analysis, engines, output
-from runtime.integrators import Divergence
+from runtime import output, progress, shapes
 from runtime.jit import CacheError, JitEnvironmentError
-from runtime.model import Model
-from runtime.scene import Scene, SceneError, Static, load_scene
-from runtime.sensors import ENERGY_TYPES, Sensors
-from runtime.signal import dominant_frequency
+from runtime.result import TIMING_KEYS, Observer, Simulation, requested
+from runtime.scene import Scene, SceneError, load_scene
+from runtime.sensors import ENERGY_TYPES
 
 CSV = "timeseries.csv"
 SUMMARY = "summary.json"
@@ -58,23 +57,31 @@ class _Stop(Exception):
 
 
 def run(scene_path, out_dir: str | Path, method: str | None = None,
-        backend: str | None = None, quiet: bool = False,
-        plots: bool = True, engine: str | None = None) -> tuple[dict, int]:
+        backend: str | None = None, quiet: bool = False, plots: bool = True,
+        engine: str | None = None, vtk: bool | None = None, animation: bool | None = None,
+        plane: str = "xy") -> tuple[dict, int]:
     """Run every analysis of a scene (a TOML path or a parsed Scene) into the folder
     ``out_dir``; returns (summary, exit code) - see :class:`ExitCode`.
 
     Order: the scene is validated; ``out_dir`` is created, checked writable and cleared of a
     previous run's outputs (only those); the model is built (kernels compiled); the analyses
-    run.  summary.json is written atomically when the analyses end, then the plots are drawn
-    (unless ``plots`` is False) and the summary rewritten with their time in
+    run (:func:`runtime.result.run_scene`'s machinery), timeseries.csv and, if asked, the
+    VTU series written as they go.  summary.json is written atomically when the analyses
+    end, then the plots are drawn (unless ``plots`` is False) with, if asked, the shape
+    snapshot and animation, and the summary rewritten with their time in
     ``timing.postprocess_s``, their files and warnings.  ``summary["message"]`` explains any
     code but 0; its first line is the one-line report.  If ``out_dir`` cannot be written the
     message says that no summary.json was written.  A KeyboardInterrupt writes the summary
     with status "interrupted" and raises :class:`RunInterrupted`.
+
+    vtk, animation: write ``vtk/`` (static.vtu, mode_K.vtu, dynamic.pvd) and the snapshot
+    ``shape_static.png`` / animation ``shape_animation.gif`` projected on ``plane`` (xy, xz,
+    yz); None: as the scene's ``[output]`` table says.  quiet: no progress on stderr.
     """
     job = _Job(scene_path, Path(out_dir))
     try:
-        code = job.execute(method, backend, quiet, plots, engine)
+        with progress.enabled(not quiet):
+            code = job.execute(method, backend, plots, engine, vtk, animation, plane)
     except _Stop as stop:
         job.summary.update(status=stop.status, message=str(stop))
         code = job.save(stop.code)
@@ -93,6 +100,26 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
     return job.summary, code
 
 
+class _CsvWriter(Observer):
+    """timeseries.csv of the dynamic analysis, a whole row at every output time."""
+
+    def __init__(self, job: _Job) -> None:
+        self.job = job
+        self.writer: output.TimeSeriesWriter | None = None
+
+    def dynamic_start(self, names: list[str]) -> None:
+        self.names = names
+        self.job.files.add(CSV)
+        self.writer = output.TimeSeriesWriter(self.job.out / CSV, names)
+
+    def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
+        self.writer.write(t, [values[name] for name in self.names])
+
+    def dynamic_end(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+
+
 class _Job:
     """One run: its summary, output folder and the files it wrote there."""
 
@@ -102,18 +129,21 @@ class _Job:
         given = isinstance(scene_path, Scene)
         self.summary: dict = {"scene": scene_path.source if given else str(scene_path),
                               "status": "ok", "message": "", "warnings": []}
-        self.timing = dict.fromkeys(("generate_s", "compile_s", "preprocess_s", "simulate_s",
-                                     "postprocess_s", "total_s"), 0.0)
+        self.timing = dict.fromkeys(TIMING_KEYS, 0.0)
         self.summary["timing"] = self.timing
         self.folder_error: str | None = "the output folder is not ready"
         self.files: set[str] = set()
-        self.phase = "scene validation"
-        self.engine = "python"
-        self.built: set[str] = set()   # modules built for this run beyond the kernels
+        self.simulation: Simulation | None = None
+        self._phase: str | None = "scene validation"
 
-    def execute(self, method: str | None, backend: str | None, quiet: bool,
-                plots: bool, engine: str | None = None) -> ExitCode:
-        summary, timing = self.summary, self.timing
+    @property
+    def phase(self) -> str:
+        """The step under way: the job's own, or the simulation's while it runs."""
+        return self._phase or self.simulation.phase
+
+    def execute(self, method: str | None, backend: str | None, plots: bool,
+                engine: str | None, vtk: bool | None, animation: bool | None,
+                plane: str) -> ExitCode:
         scene, invalid = None, None
         if isinstance(self.scene_path, Scene):
             scene = self.scene_path
@@ -122,7 +152,7 @@ class _Job:
                 scene = load_scene(self.scene_path)
             except SceneError as error:
                 invalid = str(error)
-        self.phase = "output folder check"
+        self._phase = "output folder check"
         try:
             output.prepare_folder(self.out, _owned_files(scene))
             self.folder_error = None
@@ -132,13 +162,22 @@ class _Job:
             raise _Stop(ExitCode.INVALID, invalid)
         if self.folder_error is not None:
             raise _Stop(ExitCode.ENVIRONMENT, self.folder_error)
-        summary["title"] = scene.title
-        self.phase = "model build"
+        if plane not in shapes.PLANES:
+            raise _Stop(ExitCode.INVALID, f"plane: expected one of {', '.join(shapes.PLANES)}, "
+                                          f"got {plane!r}")
+        vtk = requested(scene, "vtk") if vtk is None else vtk
+        animation = requested(scene, "animation") if animation is None else animation
+        observers: list[Observer] = [_CsvWriter(self)]
+        series = shapes.VtkSeries(self.out / output.VTK_FOLDER) if vtk else None
+        frames = shapes.Frames() if animation else None
+        observers += [o for o in (series, frames) if o is not None]
+        self.simulation = simulation = Simulation(scene, method, backend, engine,
+                                                  observers=observers, summary=self.summary)
+        self._phase = None
         try:
-            model = Model(scene, method, backend)
-            self.engine = engines.choose(engine or scene.solver.engine, model.backend)
-        except JitEnvironmentError as error:
-            raise _Stop(ExitCode.ENVIRONMENT, _environment_message(error)) from None
+            simulation.build()
+        except (JitEnvironmentError, output.OutputError) as error:
+            raise _environment_stop(error) from None
         except OSError as error:  # kernel cache folder or generated kernels unusable
             where = f"{error.filename}: " if error.filename else ""
             raise _Stop(ExitCode.ENVIRONMENT, f"{where}{error.strerror or error} while "
@@ -146,75 +185,61 @@ class _Job:
                         f"folder") from None
         except ValueError as error:
             raise _Stop(ExitCode.INVALID, str(error)) from None
-        summary["method"], summary["backend"] = model.method, model.backend
-        timing["compile_s"] = model.timing["compile_s"]
-        timing["preprocess_s"] = model.timing["preprocess_s"]
-        sensors = Sensors(model)
-        simulate_start = time.perf_counter()
-        code, history = ExitCode.OK, None
         try:
-            code, history = self._analyses(scene, model, sensors, quiet)
+            code = ExitCode(simulation.analyses())
+        except (JitEnvironmentError, output.OutputError) as error:  # a dynamic engine
+            raise _environment_stop(error) from None                # compiled on demand
         finally:
-            # post-processing (frequency fit) is timed apart from the simulation
-            timing["simulate_s"] = time.perf_counter() - simulate_start - timing["postprocess_s"]
-            # the Python engine's kernel calls go through the model, the compiled one's not
-            compiled = summary.get("dynamic", {}).get("engine") == "compiled"
-            summary["kernel_s"] = model.kernel_seconds + (
-                summary["dynamic"]["kernel_s"] if compiled else 0.0)
-            summary["kernels"] = sorted(self.built | {
-                f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
-                for f in ("invariants", b.element.family)})
-        self.phase = "summary writing"
+            if series is not None:
+                self.files.update(series.files)
+        self._phase = "summary writing"
         code = self.save(code)
-        if plots and history and code in (ExitCode.OK, ExitCode.DIVERGED):
-            self.phase = "plots"
+        if code in (ExitCode.OK, ExitCode.DIVERGED):
+            self._phase = "plots"
             post_start = time.perf_counter()
-            units = {s.name: UNITS[s.type] for s in scene.sensors}
-            series = {name: history[name] for name in sensors.names}
-            written, warnings = output.plot_series(history["t"], series, self.out, units,
-                                                   sensors.energy_names)
-            self.files.update(path.name for path in written)
-            summary["warnings"] += warnings
-            timing["postprocess_s"] += time.perf_counter() - post_start
-            code = self.save(code)
+            drawn = self._plots(scene, simulation) if plots else False
+            if animation:
+                drawn = self._shapes(scene, simulation, frames, plane) or drawn
+            if drawn:
+                self.timing["postprocess_s"] += time.perf_counter() - post_start
+                code = self.save(code)
         return code
 
-    def _analyses(self, scene: Scene, model: Model, sensors: Sensors,
-                  quiet: bool) -> tuple[ExitCode, dict | None]:
-        summary = self.summary
-        static_q = None
-        try:
-            if scene.static is not None:
-                self.phase = "static analysis"
-                result = analysis.solve_static(model, scene.static)
-                static_q = result.q
-                summary["static"] = {"sensors": sensors.values(result.q, t=None),
-                                     "iterations": result.iterations,
-                                     "load_steps": result.load_steps}
-            if scene.modal is not None:
-                self.phase = "modal analysis"
-                about = model.reference
-                if scene.modal.about == "static":
-                    about = static_q if static_q is not None else \
-                        analysis.solve_static(model, scene.static or Static()).q
-                omega = analysis.modal(model, about, scene.modal.modes)
-                summary["modal"] = {"about": scene.modal.about,
-                                    "frequencies_rad_s": omega.tolist(),
-                                    "frequencies_hz": (omega / (2 * np.pi)).tolist()}
-            if scene.dynamic is not None:
-                self.phase = "dynamic analysis"
-                self.files.add(CSV)
-                engine = engines.make(self.engine, model, scene.dynamic, model.reference)
-                self.timing["compile_s"] += getattr(engine, "compile_s", 0.0)
-                self.built.update(getattr(engine, "modules", ()))
-                return _dynamic(engine, scene.dynamic, sensors, self.out, summary, quiet)
-        except analysis.ConvergenceError as error:
-            raise _Stop(ExitCode.DIVERGED, str(error), "diverged") from None
-        except output.OutputError as error:
-            raise _Stop(ExitCode.ENVIRONMENT, str(error)) from None
-        except JitEnvironmentError as error:  # a dynamic engine compiled on demand
-            raise _Stop(ExitCode.ENVIRONMENT, _environment_message(error)) from None
-        return ExitCode.OK, None
+    def _plots(self, scene: Scene, simulation: Simulation) -> bool:
+        """The sensor plots of the dynamic analysis; whether any was attempted."""
+        history = simulation.history
+        if not history.get("t"):
+            return False
+        sensors = simulation.sensors
+        units = {s.name: UNITS[s.type] for s in scene.sensors}
+        series = {name: history[name] for name in sensors.names}
+        written, warnings = output.plot_series(history["t"], series, self.out, units,
+                                               sensors.energy_names)
+        self.files.update(path.name for path in written)
+        self.summary["warnings"] += warnings
+        return True
+
+    def _shapes(self, scene: Scene, simulation: Simulation, frames: shapes.Frames | None,
+                plane: str) -> bool:
+        """The static snapshot and the animation, those that have data; whether any was
+        attempted.  A failure is a warning, as for the plots."""
+        drawn = []
+        if simulation.static_q is not None:
+            line = shapes.CentreLine(simulation.model)
+            drawn.append((output.SHAPE_FILE, lambda path: shapes.write_snapshot(
+                path, line, simulation.model.reference, simulation.static_q, scene.title,
+                plane=plane)))
+        if frames is not None and frames.frames:
+            drawn.append((output.ANIMATION_FILE, lambda path: shapes.write_animation(
+                path, frames, scene.title, plane)))
+        for name, draw in drawn:
+            try:
+                draw(self.out / name)
+                self.files.add(name)
+            except Exception as error:
+                self.summary["warnings"].append(
+                    f"{name}: not written ({type(error).__name__}: {error})")
+        return bool(drawn)
 
     def save(self, code: ExitCode) -> ExitCode:
         """Write summary.json (total time and files updated); returns ``code``, or 3
@@ -259,72 +284,23 @@ class _Job:
 
 def _owned_files(scene: Scene | None) -> list[str]:
     """Files a run of ``scene`` owns in its folder beside summary.json: the time series,
-    the energy plot and a plot named after each sensor (energies had one before they shared
-    energies.png: a folder of an earlier version loses those too)."""
+    the energy plot, the shape snapshot and animation, and a plot named after each sensor
+    (energies had one before they shared energies.png: a folder of an earlier version loses
+    those too)."""
     if scene is None:
         return []
-    return [CSV, output.ENERGIES_FILE, *(output.plot_file_name(s.name) for s in scene.sensors)]
+    return [CSV, *output.RESERVED_FILES, output.ANIMATION_FILE,
+            *(output.plot_file_name(s.name) for s in scene.sensors)]
 
 
-def _environment_message(error: JitEnvironmentError) -> str:
-    """The message of an unusable C backend, first line ending with what to do."""
+def _environment_stop(error: JitEnvironmentError | output.OutputError) -> _Stop:
+    """Exit 3 for an unusable output file or C backend; for the latter the first line of the
+    message ends with what to do."""
+    if isinstance(error, output.OutputError):
+        return _Stop(ExitCode.ENVIRONMENT, str(error))
     first, *rest = str(error).split("\n", 1)
     if isinstance(error, CacheError):
         hint = "set ANCF_CACHE_DIR to a writable folder of yours"
     else:
         hint = "--backend numpy needs no C compiler"
-    return "\n".join([f"{first.rstrip('.')}; {hint}", *rest])
-
-
-def _dynamic(integrator, settings, sensors: Sensors, out: Path, summary: dict,
-             quiet: bool) -> tuple[ExitCode, dict[str, list[float]]]:
-    """The dynamic analysis with an engine (``runtime.engines``): timeseries.csv written as
-    it goes and the time series kept in memory ({"t" or sensor name: values}); fills
-    summary["dynamic"] even when interrupted."""
-    history: dict[str, list[float]] = {name: [] for name in ["t", *sensors.names]}
-    progress = output.Progress(settings.t_end, enabled=False if quiet else None)
-    code = ExitCode.OK
-    with output.TimeSeriesWriter(out / CSV, sensors.names) as writer:
-
-        def observe(t, q, v):
-            values = sensors.values(q, v, t)
-            writer.write(t, [values[name] for name in sensors.names])
-            history["t"].append(t)
-            for name in sensors.names:
-                history[name].append(values[name])
-
-        try:
-            integrator.run(settings.t_end, settings.step, observe, progress)
-        except Divergence as error:
-            summary.update(status="diverged", message=str(error))
-            code = ExitCode.DIVERGED
-        finally:
-            progress.close()
-            counters = integrator.counters
-            summary["dynamic"] = {
-                "t_end": settings.t_end, "step": settings.step,
-                "integrator": settings.integrator, "engine": integrator.engine,
-                "newton": integrator.newton,
-                "t_reached": history["t"][-1] if history["t"] else 0.0,
-                "steps": counters.steps, "newton_iterations": counters.newton_iterations,
-                "force_evaluations": counters.force_evaluations,
-                "jacobian_evaluations": counters.jacobian_evaluations,
-                "factorisations": counters.factorisations,
-                "kernel_s": integrator.timing["kernel_s"],
-                "steps_s": integrator.timing["steps_s"],
-                "sensors_final": {name: history[name][-1] for name in sensors.names
-                                  if history[name]},
-            }
-    if settings.frequency_of is not None and code == ExitCode.OK:
-        post_start = time.perf_counter()
-        t = np.asarray(history["t"])
-        keep = t >= settings.frequency_after
-        try:
-            frequency = dominant_frequency(t[keep],
-                                           np.asarray(history[settings.frequency_of])[keep])
-        except ValueError as error:  # too few samples, a constant signal
-            frequency = None
-            summary["warnings"].append(f"analysis.dynamic.frequency_of: {error}")
-        summary["dynamic"]["response_frequency_rad_s"] = frequency
-        summary["timing"]["postprocess_s"] += time.perf_counter() - post_start
-    return code, history
+    return _Stop(ExitCode.ENVIRONMENT, "\n".join([f"{first.rstrip('.')}; {hint}", *rest]))

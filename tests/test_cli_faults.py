@@ -169,7 +169,7 @@ def test_internal_error_is_exit_4_with_a_hint_to_report_it(tmp_path, monkeypatch
     def bug(*args, **kwargs):
         raise ZeroDivisionError("division by zero")
 
-    monkeypatch.setattr("runtime.run.Sensors", bug)
+    monkeypatch.setattr("runtime.result.Sensors", bug)
     out = tmp_path / "o"
     assert main(["run", str(scene_file(tmp_path)), "--out", str(out), "--quiet"]) == 4
     line = one_line(capsys.readouterr().err)
@@ -264,3 +264,36 @@ def test_signal_during_a_run_is_exit_130_with_a_summary(sig, tmp_path):
     assert (out / "timeseries.csv").read_text().endswith("\n")
     assert summary["dynamic"]["t_reached"] == rows[-1][0] < 100.0
     assert not [name for name in os.listdir(out) if name.endswith(".tmp")]
+
+
+# --------------------------------------------------------------------------- report --quick
+
+def test_report_quick_writes_to_a_scratch_folder_never_into_docs(tmp_path, monkeypatch,
+                                                                  capsys):
+    import shutil
+
+    from runtime.studies import report
+
+    docs = ROOT / "docs"
+    before = {p: p.read_bytes() for p in docs.rglob("*") if p.is_file()}
+    seen = []
+
+    def build(out, quick, **kwargs):
+        seen.append((Path(out), quick))
+        return Path(out) / "report.md"
+
+    monkeypatch.setattr(report, "build", build)
+    monkeypatch.chdir(ROOT)
+    assert main(["report", "--quick"]) == 0
+    scratch, quick = seen[-1]
+    try:
+        assert quick and scratch.is_dir() and not os.listdir(scratch)
+        assert docs.resolve() not in [scratch.resolve(), *scratch.resolve().parents]
+        assert str(scratch / "report.md") in capsys.readouterr().out
+    finally:
+        shutil.rmtree(scratch)
+    assert main(["report", "--quick", "--out", str(tmp_path / "mine")]) == 0
+    assert seen[-1] == (tmp_path / "mine", True)
+    assert main(["report"]) == 0  # the full report is the tracked one
+    assert seen[-1] == (Path("docs"), False)
+    assert {p: p.read_bytes() for p in docs.rglob("*") if p.is_file()} == before

@@ -1,6 +1,6 @@
 """Run outputs: the output folder, the time-series CSV (readable as it is written, whole rows
-only, even on a full disk), the atomic JSON summary and plots, file permissions, plot names
-and the progress bar."""
+only, even on a full disk), the atomic JSON summary and plots, file permissions and plot
+names (the progress bar: tests/test_progress.py)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ import pytest
 from runtime import output
 from runtime.output import (
     OutputError,
-    Progress,
     TimeSeriesWriter,
     plot_file_name,
     plot_series,
@@ -332,31 +331,3 @@ def test_a_failing_plot_is_a_warning_and_leaves_no_partial_file(tmp_path, monkey
 def test_plot_of_no_data_writes_nothing(tmp_path):
     assert plot_series([], {"tip_y": []}, tmp_path / "plots", energies=["tip_y"]) == ([], [])
     assert not (tmp_path / "plots").exists()
-
-
-def test_progress_disabled_prints_nothing(capsys):
-    bar = Progress(4.0, enabled=False)
-    for i in range(5):
-        bar.update(float(i))
-    bar.close()
-    captured = capsys.readouterr()
-    assert captured.err == "" and captured.out == ""
-
-
-def test_progress_enabled_draws_a_bar(capsys):
-    with Progress(4.0, enabled=True) as bar:
-        bar.update(1.68)
-        for i in range(1000):  # rate-limited: these do not all redraw
-            bar.update(1.68 + i * 1e-3)
-    err = capsys.readouterr().err
-    assert err.startswith("\r[") and err.endswith("\n")
-    assert "42% t=1.68 s" in err
-    assert err.count("\r") < 100
-    assert "100%" not in err
-
-
-def test_progress_defaults_to_disabled_when_stderr_is_not_a_tty(capsys):
-    bar = Progress(1.0)
-    bar.update(0.5)
-    bar.close()
-    assert capsys.readouterr().err == ""

@@ -375,7 +375,7 @@ class Refuse:
 
 @pytest.mark.parametrize("where", ["file", "under_file"])
 def test_unusable_output_folder_is_exit_3_before_any_work(where, tmp_path, monkeypatch):
-    monkeypatch.setattr("runtime.run.Model", Refuse)
+    monkeypatch.setattr("runtime.result.Model", Refuse)
     Refuse.calls = 0
     scene = write(tmp_path, small_scene())
     (tmp_path / "file").write_text("not a folder")
@@ -400,7 +400,7 @@ def test_read_only_output_folder_is_exit_3(tmp_path, monkeypatch):
         return real_open(path, flags, *args)
 
     monkeypatch.setattr(output.os, "open", read_only)
-    monkeypatch.setattr("runtime.run.Model", Refuse)
+    monkeypatch.setattr("runtime.result.Model", Refuse)
     (tmp_path / "out").mkdir()
     summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
     assert code == 3
@@ -457,7 +457,7 @@ def test_jit_environment_errors_are_exit_3_with_a_hint(error, hint, tmp_path, mo
     def broken(*args, **kwargs):
         raise getattr(jit, error)(f"{error} first line\ndetails: compiler output")
 
-    monkeypatch.setattr("runtime.run.Model", broken)
+    monkeypatch.setattr("runtime.result.Model", broken)
     out = tmp_path / "out"
     summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
     assert code == 3
@@ -567,7 +567,7 @@ def test_internal_error_still_writes_a_failed_summary(tmp_path, monkeypatch):
     def bug(*args, **kwargs):
         raise ZeroDivisionError("a bug")
 
-    monkeypatch.setattr("runtime.run.Sensors", bug)
+    monkeypatch.setattr("runtime.result.Sensors", bug)
     out = tmp_path / "out"
     summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
     assert code == 4
@@ -581,7 +581,7 @@ def test_out_of_memory_is_exit_3(tmp_path, monkeypatch):
     def huge(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr("runtime.run.Model", huge)
+    monkeypatch.setattr("runtime.result.Model", huge)
     summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
     assert code == 3
     assert summary["message"] == "out of memory during the model build"

@@ -747,15 +747,19 @@ def _describe_measure(plan: Plan) -> str:
 def plot(plan: Plan, rows: list[dict], path: Path) -> None:
     """error_vs_time.png: log-log error against simulate time, one line (the runs no faster
     run beats) per method (and integrator); points annotated with elements[, step] (every
-    point up to ANNOTATE_ALL points, else the points on the lines)."""
+    point up to ANNOTATE_ALL points, else the points on the lines; the points on the lines
+    first), each label beside its point where it overlaps no other label, else left out."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(9.5, 5.6))
+    canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     usable = _usable(rows)
     annotate_all = len(usable) <= ANNOTATE_ALL
     labels = _unique([_label(r, plan) for r in rows if r["role"] == "sweep"])
     markers = "osD^vP*X"
+    fronts, others = [], []    # (row, colour) to label: points on the lines first
     for k, label in enumerate(labels):
         points = [r for r in usable if _label(r, plan) == label]
         if not points:
@@ -766,9 +770,9 @@ def plot(plan: Plan, rows: list[dict], path: Path) -> None:
         front = _front(points)
         ax.loglog([r["simulate_s"] for r in front], [r["error"] for r in front], "-",
                   marker=markers[k % len(markers)], color=color, lw=1.4, ms=5, label=label)
-        for r in points if annotate_all else front:
-            ax.annotate(_point(r), (r["simulate_s"], r["error"]), textcoords="offset points",
-                        xytext=(4, 3), fontsize=6, color=color)
+        fronts += [(r, color) for r in front]
+        if annotate_all:
+            others += [(r, color) for r in points if r not in front]
     ax.set_xlabel("simulate time (s)")
     ax.set_ylabel(f"error ({plan.measure})")
     title = plan.scene.title if len(plan.scene.title) < 60 else plan.scene.title[:57] + "..."
@@ -782,6 +786,22 @@ def plot(plan: Plan, rows: list[dict], path: Path) -> None:
     else:
         ax.text(0.5, 0.5, "no run with a finite error", transform=ax.transAxes, ha="center")
     fig.subplots_adjust(left=0.09, right=0.75, bottom=0.1, top=0.89)
+    canvas.draw()  # final limits and layout: label boxes in pixels from here on
+    renderer = canvas.get_renderer()
+    placed = []    # pixel boxes of the labels kept
+    # right-above, right-below, left-above, left-below of the point (points, alignment)
+    spots = [((4, 3), "left", "bottom"), ((4, -3), "left", "top"),
+             ((-4, 3), "right", "bottom"), ((-4, -3), "right", "top")]
+    for row, color in fronts + others:
+        for offset, ha, va in spots:
+            note = ax.annotate(_point(row), (row["simulate_s"], row["error"]),
+                               textcoords="offset points", xytext=offset, ha=ha, va=va,
+                               fontsize=6, color=color)
+            box = note.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in placed):
+                placed.append(box)
+                break
+            note.remove()
     fig.savefig(path, dpi=110)
 
 

@@ -1,0 +1,315 @@
+"""``run_scene``: every analysis of a scene in memory, with no file I/O, into a ``Result``.
+
+``ancf run`` (``runtime.run``) is ``run_scene`` plus writers: they are :class:`Observer`
+objects that receive the results as they are computed (the time-series CSV and the VTU
+series stream rows and files while the dynamic analysis goes on).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from runtime import analysis, engines
+from runtime.integrators import Divergence
+from runtime.model import Model
+from runtime.progress import Bar, enabled
+from runtime.scene import Scene, Static, load_scene
+from runtime.sensors import Sensors
+from runtime.signal import dominant_frequency
+
+__all__ = ["Modes", "Observer", "Result", "Simulation", "States", "requested", "run_scene"]
+
+TIMING_KEYS = ("generate_s", "compile_s", "preprocess_s", "simulate_s", "postprocess_s",
+               "total_s")
+
+
+@dataclass
+class States:
+    """Coordinates and velocities of the whole model at the dynamic output times:
+    ``t`` (n,) s, ``q`` (n, size) m (gradients unitless), ``v`` (n, size) m/s (1/s)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+
+
+@dataclass
+class Modes:
+    """Modal analysis: ``frequencies_rad_s`` (k,) ascending, ``shapes`` (k, size) full
+    coordinate vectors (fixed and prescribed coordinates zero) normalised to a largest nodal
+    position component of +1, ``about`` (size,) the linearisation point."""
+
+    frequencies_rad_s: np.ndarray
+    shapes: np.ndarray
+    about: np.ndarray
+
+
+@dataclass
+class Result:
+    """What ``run_scene`` computed.
+
+    summary: what ``summary.json`` holds, less what the writers add (``files``, the plots'
+    ``timing.postprocess_s`` and warnings); sensors: {"t": output times (n,) s, sensor
+    name: values (n,)} of the dynamic analysis ({} without one; static values are in
+    ``summary["static"]["sensors"]``); static: equilibrium coordinates (size,) or None;
+    modes: :class:`Modes` or None; states: :class:`States` when asked, else None; model:
+    the ``Model`` (indexing, reference, sampling of shapes); exit_code: 0 ok, 1 diverged
+    (results kept up to then).
+    """
+
+    summary: dict
+    sensors: dict[str, np.ndarray]
+    static: np.ndarray | None
+    modes: Modes | None
+    states: States | None
+    model: Model
+    exit_code: int
+
+    @property
+    def status(self) -> str:
+        """``ok`` or ``diverged``."""
+        return self.summary["status"]
+
+
+class Observer:
+    """Receives a run's results as they are computed; every hook does nothing by default.
+
+    Order: ``begin`` once the model is built; ``static``, ``modal`` after those analyses;
+    ``dynamic_start``, ``sample`` at every output time (t = 0 included), then
+    ``dynamic_end`` however the dynamic analysis ends (when it ends by an exception, errors
+    of ``dynamic_end`` are ignored).  An exception of a hook stops the run.
+    """
+
+    def begin(self, model: Model) -> None:
+        """The model is built (kernels compiled); analyses follow."""
+
+    def static(self, q: np.ndarray) -> None:
+        """Static equilibrium coordinates (size,)."""
+
+    def modal(self, modes: Modes) -> None:
+        """Frequencies and mode shapes."""
+
+    def dynamic_start(self, names: list[str]) -> None:
+        """The dynamic analysis starts; ``names``: sensors in scene order."""
+
+    def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
+        """Output time t (s): coordinates, velocities (size,) and sensor values."""
+
+    def dynamic_end(self) -> None:
+        """The dynamic analysis ended (completed, diverged, interrupted or failed)."""
+
+
+def requested(scene: Scene, name: str) -> bool:
+    """Whether the scene's ``[output]`` table asks for ``name`` (vtk, animation, states);
+    False for a scene without one."""
+    return bool(getattr(getattr(scene, "output", None), name, False))
+
+
+class Simulation:
+    """One in-memory run of ``scene``: :meth:`build`, then :meth:`analyses`, then
+    :meth:`result`.  ``summary`` (the dict given, or a new one) is filled as the run goes,
+    so it says what was done when an exception stops it; ``phase`` names the current step.
+
+    method, backend, engine: overrides of the scene's ``[solver]``; store_states: keep
+    :class:`States`; observers: :class:`Observer` objects, called in order.
+    """
+
+    def __init__(self, scene: Scene, method: str | None = None, backend: str | None = None,
+                 engine: str | None = None, store_states: bool = False,
+                 observers: Sequence[Observer] = (), summary: dict | None = None) -> None:
+        self.scene, self.method, self.backend = scene, method, backend
+        self.engine_name = engine
+        self.store_states = store_states
+        self.observers = list(observers)
+        self.summary = summary if summary is not None else {
+            "scene": scene.source, "status": "ok", "message": "", "warnings": []}
+        self.timing = self.summary.setdefault("timing", dict.fromkeys(TIMING_KEYS, 0.0))
+        self.summary["title"] = scene.title
+        self.phase = "model build"
+        self.model: Model | None = None
+        self.static_q: np.ndarray | None = None
+        self.modes: Modes | None = None
+        self.history: dict[str, list[float]] = {}
+        self._states: tuple[list, list] = ([], [])
+        self._built: set[str] = set()   # modules built for this run beyond the kernels
+
+    def build(self) -> Model:
+        """Build the model (kernels compiled or loaded) and its sensors; choose the engine.
+        Raises ValueError (invalid options), JitEnvironmentError and OSError (kernels)."""
+        self.phase = "model build"
+        model = Model(self.scene, self.method, self.backend)
+        self.engine_name = engines.choose(self.engine_name or self.scene.solver.engine,
+                                          model.backend)
+        self.summary["method"], self.summary["backend"] = model.method, model.backend
+        self.timing["compile_s"] = model.timing["compile_s"]
+        self.timing["preprocess_s"] = model.timing["preprocess_s"]
+        self.sensors = Sensors(model)
+        self.model = model
+        for observer in self.observers:
+            observer.begin(model)
+        return model
+
+    def analyses(self) -> int:
+        """Static, modal and dynamic analyses, those the scene declares, in that order.
+        Returns 0, or 1 when one diverged (status "diverged"; the later ones do not run).
+        Other exceptions propagate (``summary`` keeps what was done)."""
+        scene, model, summary = self.scene, self.model, self.summary
+        start = time.perf_counter()
+        try:
+            if scene.static is not None:
+                self.phase = "static analysis"
+                found = analysis.solve_static(model, scene.static)
+                self.static_q = found.q
+                summary["static"] = {"sensors": self.sensors.values(found.q, t=None),
+                                     "iterations": found.iterations,
+                                     "load_steps": found.load_steps}
+                for observer in self.observers:
+                    observer.static(found.q)
+            if scene.modal is not None:
+                self.phase = "modal analysis"
+                self._modal()
+            if scene.dynamic is not None:
+                return self._dynamic(scene.dynamic)
+        except analysis.ConvergenceError as error:
+            summary.update(status="diverged", message=str(error))
+            return 1
+        finally:
+            # post-processing (frequency fit) is timed apart from the simulation
+            self.timing["simulate_s"] = (time.perf_counter() - start
+                                         - self.timing["postprocess_s"])
+            # the Python engine's kernel calls go through the model, the compiled one's not
+            compiled = summary.get("dynamic", {}).get("engine") == "compiled"
+            summary["kernel_s"] = model.kernel_seconds + (
+                summary["dynamic"]["kernel_s"] if compiled else 0.0)
+            summary["kernels"] = sorted(self._built | {
+                f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
+                for f in ("invariants", b.element.family)})
+        return 0
+
+    def _modal(self) -> None:
+        model, settings = self.model, self.scene.modal
+        about = model.reference
+        if settings.about == "static":
+            about = self.static_q if self.static_q is not None else \
+                analysis.solve_static(model, self.scene.static or Static()).q
+        found = analysis.modal_shapes(model, about, settings.modes)
+        omega = found.frequencies
+        self.modes = Modes(omega, found.shapes, np.array(about))
+        self.summary["modal"] = {"about": settings.about, "frequencies_rad_s": omega.tolist(),
+                                 "frequencies_hz": (omega / (2 * np.pi)).tolist()}
+        for observer in self.observers:
+            observer.modal(self.modes)
+
+    def _observe(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
+        values = self.sensors.values(q, v, t)
+        for observer in self.observers:
+            observer.sample(t, q, v, values)
+        self.history["t"].append(t)
+        for name in self.sensors.names:
+            self.history[name].append(values[name])
+        if self.store_states:
+            self._states[0].append(np.array(q))
+            self._states[1].append(np.array(v))
+
+    def _dynamic(self, settings) -> int:
+        """The dynamic analysis with the chosen engine (``runtime.engines``); fills
+        summary["dynamic"] however it ends."""
+        self.phase = "dynamic analysis"
+        summary, names = self.summary, self.sensors.names
+        engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
+        self.timing["compile_s"] += getattr(engine, "compile_s", 0.0)
+        self._built.update(getattr(engine, "modules", ()))
+        self.history = {name: [] for name in ["t", *names]}
+        for observer in self.observers:
+            observer.dynamic_start(list(names))
+        code, failed = 0, True
+        bar = Bar("dynamic analysis", settings.t_end, "s")
+        try:
+            engine.run(settings.t_end, settings.step, self._observe, bar)
+            failed = False
+        except Divergence as error:
+            summary.update(status="diverged", message=str(error))
+            code, failed = 1, False
+        finally:
+            bar.close()
+            history, counters = self.history, engine.counters
+            summary["dynamic"] = {
+                "t_end": settings.t_end, "step": settings.step,
+                "integrator": settings.integrator, "engine": engine.engine,
+                "newton": engine.newton,
+                "t_reached": history["t"][-1] if history["t"] else 0.0,
+                "steps": counters.steps, "newton_iterations": counters.newton_iterations,
+                "force_evaluations": counters.force_evaluations,
+                "jacobian_evaluations": counters.jacobian_evaluations,
+                "factorisations": counters.factorisations,
+                "kernel_s": engine.timing["kernel_s"],
+                "steps_s": engine.timing["steps_s"],
+                "sensors_final": {name: history[name][-1] for name in names
+                                  if history[name]},
+            }
+            for observer in self.observers:
+                with contextlib.suppress(Exception) if failed else contextlib.nullcontext():
+                    observer.dynamic_end()
+        if settings.frequency_of is not None and code == 0:
+            self._frequency(settings)
+        return code
+
+    def _frequency(self, settings) -> None:
+        """The response frequency of ``settings.frequency_of`` (timed as post-processing)."""
+        start = time.perf_counter()
+        t = np.asarray(self.history["t"])
+        keep = t >= settings.frequency_after
+        try:
+            frequency = dominant_frequency(
+                t[keep], np.asarray(self.history[settings.frequency_of])[keep])
+        except ValueError as error:  # too few samples, a constant signal
+            frequency = None
+            self.summary["warnings"].append(f"analysis.dynamic.frequency_of: {error}")
+        self.summary["dynamic"]["response_frequency_rad_s"] = frequency
+        self.timing["postprocess_s"] += time.perf_counter() - start
+
+    def result(self, exit_code: int) -> Result:
+        """The :class:`Result` of the run so far."""
+        sensors = {name: np.asarray(values, float) for name, values in self.history.items()}
+        states = None
+        if self.store_states and self.history:
+            size = self.model.size
+            q, v = (np.array(x).reshape(-1, size) for x in self._states)
+            states = States(np.asarray(self.history["t"], float), q, v)
+        return Result(self.summary, sensors, self.static_q, self.modes, states, self.model,
+                      exit_code)
+
+
+def run_scene(scene: Scene | str | Path, method: str | None = None,
+              backend: str | None = None, engine: str | None = None, *,
+              progress: bool = True, store_states: bool | None = None,
+              observers: Sequence[Observer] = ()) -> Result:
+    """Run every analysis of ``scene`` (a Scene, or a TOML file path) in memory.
+
+    method, backend, engine: overrides of the scene's ``[solver]``; progress: show the
+    progress of long phases on stderr (``runtime.progress``); store_states: keep the states
+    at every output time in ``result.states`` (default: the scene's ``[output] states``);
+    observers: receive results as they are computed (see :class:`Observer`).
+
+    Returns a :class:`Result` with exit code 0 (ok) or 1 (a diverged analysis: the results
+    up to then are kept).  Raises SceneError / ValueError for an invalid scene or option,
+    ``runtime.jit.JitEnvironmentError`` or OSError when the kernels cannot be built, and
+    KeyboardInterrupt as it comes.
+    """
+    start = time.perf_counter()
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    if store_states is None:
+        store_states = requested(scene, "states")
+    simulation = Simulation(scene, method, backend, engine, store_states, observers)
+    with enabled(progress):
+        simulation.build()
+        code = simulation.analyses()
+    simulation.timing["total_s"] = time.perf_counter() - start
+    return simulation.result(code)

@@ -1,0 +1,283 @@
+"""Shapes (runtime.shapes): centre lines sampled from the shape functions, VTU files read
+back by meshio, the PVD collections, mode shapes, the GIF and the static snapshot, through
+``ancf run --vtk --gif`` too."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+from scenes_small import body, cantilever, scene, to_toml
+
+from runtime import output, shapes
+from runtime.cli import main
+from runtime.model import Model
+from runtime.result import run_scene
+from runtime.run import run
+from runtime.scene import parse_scene
+from runtime.shapes import PER_ELEMENT, CentreLine, Frames, VtkSeries
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+SENSORS = [{"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
+           {"name": "tip_x", "type": "displacement", "node": "beam:-1", "component": "x"}]
+
+
+def small(element: str = "beam2d", analyses=("static", "modal", "dynamic"),
+          backend: str = "numpy") -> dict:
+    tables = {"static": {}, "modal": {"modes": 2},
+              "dynamic": {"t_end": 0.03, "step": 2.5e-3, "output_every": 5e-3}}
+    force = [0.0, -1e5] + ([0.0] if element == "beam3d" else [])
+    return cantilever(elements=2, element=element, force=force, sensors=SENSORS,
+                      law={"type": "linear_ramp", "duration": 0.01},
+                      analysis_tables={k: tables[k] for k in analyses},
+                      solver={"backend": backend})
+
+
+def hermite(xi: float, length: float) -> np.ndarray:
+    """Cubic Hermite weights of r0, r0_x, r1, r1_x at xi = x / L (textbook)."""
+    return np.array([1 - 3 * xi**2 + 2 * xi**3, length * (xi - 2 * xi**2 + xi**3),
+                     3 * xi**2 - 2 * xi**3, length * (xi**3 - xi**2)])
+
+
+def read_pvd(path) -> list[tuple[float, str]]:
+    root = ET.parse(path).getroot()
+    return [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+
+
+def nodal_vectors(model: Model, q: np.ndarray) -> np.ndarray:
+    """(nodes, 3) positions r of every node of ``q`` (z = 0 in 2D)."""
+    nodes = model.size // model.per_node
+    result = np.zeros((nodes, 3))
+    for n in range(nodes):
+        result[n, :model.dim] = q[model.node_dofs(n, "r")]
+    return result
+
+
+# --------------------------------------------------------------------------- centre lines
+
+@pytest.mark.parametrize("element", ["beam2d", "beam3d"])
+def test_centre_line_is_the_hermite_interpolation_of_the_nodes(element):
+    model = Model(parse_scene(small(element)))
+    line = CentreLine(model)
+    assert line.points == 2 * PER_ELEMENT + 1
+    assert line.segments.tolist() == [[k, k + 1] for k in range(2 * PER_ELEMENT)]
+    assert line.node_points.tolist() == [0, PER_ELEMENT, 2 * PER_ELEMENT]
+    # the reference: points equally spaced along the straight beam
+    reference = line.sample(model.reference)
+    assert reference[:, 0] == pytest.approx(np.linspace(0.0, 1.0, line.points), abs=1e-15)
+    assert not reference[:, 1:].any()
+    # any coordinates: nodes exactly, between them the cubic Hermite curve of r and r_x
+    q = model.reference + np.random.default_rng(1).normal(0.0, 0.1, model.size)
+    sampled = line.sample(q)
+    assert np.array_equal(sampled[line.node_points], nodal_vectors(model, q))
+    length = 0.5
+    for k in range(1, PER_ELEMENT):
+        xi = k / PER_ELEMENT
+        nodes = [q[model.node_dofs(n, v)] for n, v in ((0, "r"), (0, "r_x"), (1, "r"),
+                                                        (1, "r_x"))]
+        expected = sum(w * r for w, r in zip(hermite(xi, length), nodes, strict=True))
+        assert sampled[k, :model.dim] == pytest.approx(expected, rel=1e-12, abs=1e-14)
+
+
+def test_several_bodies_are_separate_polylines():
+    data = scene([body("a", "beam2d", 2, [0.0, 0.0], [1.0, 0.0]),
+                  body("b", "beam2d", 3, [1.0, 0.0], [1.0, 1.0])],
+                 [{"type": "clamp", "node": "a:0"}, {"type": "revolute",
+                                                     "nodes": ["a:-1", "b:0"]}],
+                 solver={"backend": "numpy"})
+    line = CentreLine(Model(parse_scene(data)))
+    first = 2 * PER_ELEMENT + 1
+    assert line.points == first + 3 * PER_ELEMENT + 1
+    assert [first - 1, first] not in line.segments.tolist()   # no cell across bodies
+    assert len(line.segments) == line.points - 2
+
+
+# --------------------------------------------------------------------------- VTU and PVD
+
+@pytest.fixture(scope="module")
+def series_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("vtk")
+    series = VtkSeries(folder / "vtk")
+    result = run_scene(parse_scene(small()), observers=[series], store_states=True,
+                       progress=False)
+    return folder / "vtk", series, result
+
+
+def test_every_output_time_is_a_vtu_listed_with_its_time(series_run):
+    folder, series, result = series_run
+    entries = read_pvd(folder / "dynamic.pvd")
+    assert [t for t, _ in entries] == result.sensors["t"].tolist()
+    assert [name for _, name in entries] == [f"dynamic_{k:06d}.vtu" for k in range(7)]
+    assert sorted(os.listdir(folder)) == sorted(
+        [name for _, name in entries] + ["dynamic.pvd", "static.vtu", "modes.pvd",
+                                         "mode_1.vtu", "mode_2.vtu"])
+    assert series.files == ["vtk/static.vtu", "vtk/modes.pvd", "vtk/dynamic.pvd"]
+
+
+def test_vtu_displacements_and_velocities_are_the_model_states(series_run):
+    folder, _, result = series_run
+    model, states = result.model, result.states
+    for k, (_, name) in enumerate(read_pvd(folder / "dynamic.pvd")):
+        mesh = meshio.read(folder / name)
+        assert mesh.points.shape == (2 * PER_ELEMENT + 1, 3)
+        assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == 2 * PER_ELEMENT
+        nodes = [0, PER_ELEMENT, 2 * PER_ELEMENT]
+        displacement = mesh.point_data["displacement"][nodes]
+        velocity = mesh.point_data["velocity"][nodes]
+        assert displacement == pytest.approx(
+            nodal_vectors(model, states.q[k]) - nodal_vectors(model, model.reference),
+            rel=1e-12, abs=1e-16)
+        assert velocity == pytest.approx(nodal_vectors(model, states.v[k]), rel=1e-12,
+                                         abs=1e-16)
+        assert mesh.points[nodes] == pytest.approx(nodal_vectors(model, states.q[k]))
+        # the tip sensor is the tip's displacement
+        assert displacement[-1, 1] == pytest.approx(result.sensors["tip_y"][k], rel=1e-12,
+                                                    abs=1e-16)
+    assert abs(result.sensors["tip_y"][-1]) > 1e-6  # the beam did move
+
+
+def test_static_and_mode_vtu(series_run):
+    folder, _, result = series_run
+    static = meshio.read(folder / "static.vtu")
+    assert static.point_data["displacement"][-1, 1] == pytest.approx(
+        result.summary["static"]["sensors"]["tip_y"], rel=1e-12)
+    assert read_pvd(folder / "modes.pvd") == [(1.0, "mode_1.vtu"), (2.0, "mode_2.vtu")]
+    model = result.model
+    for k in (1, 2):
+        mesh = meshio.read(folder / f"mode_{k}.vtu")
+        mode = mesh.point_data["mode"][[0, PER_ELEMENT, 2 * PER_ELEMENT]]
+        assert mode == pytest.approx(nodal_vectors(model, result.modes.shapes[k - 1]))
+        assert np.abs(mode).max() == pytest.approx(1.0)
+
+
+def test_a_diverged_run_keeps_its_vtu_series(tmp_path):
+    data = cantilever(elements=2, force=[0.0, -1e12], sensors=SENSORS,
+                      law={"type": "table", "points": [[0.0, 0.0], [0.02, 0.0], [0.03, 1.0]]},
+                      analysis_tables={"dynamic": {"t_end": 0.2, "step": 5e-3}},
+                      solver={"backend": "numpy"})
+    summary, code = run(parse_scene(data), tmp_path / "out", quiet=True, vtk=True)
+    assert code == 1
+    with (tmp_path / "out" / "timeseries.csv").open(newline="") as f:
+        times = [float(row[0]) for row in list(csv.reader(f))[1:]]
+    entries = read_pvd(tmp_path / "out" / "vtk" / "dynamic.pvd")
+    assert [t for t, _ in entries] == times
+    assert "vtk/dynamic.pvd" in summary["files"]
+
+
+# --------------------------------------------------------------------------- ancf run
+
+def test_ancf_run_vtk_and_gif(tmp_path, capsys):
+    path = tmp_path / "scene.toml"
+    path.write_text(to_toml(small("beam3d", backend="c")))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--vtk", "--gif",
+                 "--plane", "xz"]) == 0
+    assert capsys.readouterr().err == ""
+    summary = json.loads((out / "summary.json").read_text())
+    assert {"vtk/static.vtu", "vtk/modes.pvd", "vtk/dynamic.pvd", output.SHAPE_FILE,
+            output.ANIMATION_FILE} <= set(summary["files"])
+    assert summary["warnings"] == []
+    gif = (out / output.ANIMATION_FILE).read_bytes()
+    assert gif[:6] == b"GIF89a"
+    from PIL import Image
+
+    with Image.open(out / output.ANIMATION_FILE) as image:
+        assert image.format == "GIF" and image.n_frames == 7
+    assert (out / output.SHAPE_FILE).read_bytes()[:8] == PNG_SIGNATURE
+    assert not [n for n in os.listdir(out) + os.listdir(out / "vtk") if ".tmp" in n]
+    # by default: none of them
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert not (out / "vtk").exists()
+    assert not (out / output.ANIMATION_FILE).exists() and not (out / output.SHAPE_FILE).exists()
+
+
+def test_a_reused_folder_loses_old_vtu_files_only(tmp_path):
+    out = tmp_path / "out"
+    assert run(parse_scene(small()), out, quiet=True, vtk=True, plots=False)[1] == 0
+    (out / "vtk" / "notes.txt").write_text("mine")
+    assert run(parse_scene(small(analyses=("static",))), out, quiet=True, vtk=True)[1] == 0
+    assert sorted(os.listdir(out / "vtk")) == ["notes.txt", "static.vtu"]
+
+
+def test_scene_output_table_asks_for_shapes(tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    from runtime import run as run_module
+
+    wanted = SimpleNamespace(vtk=True, animation=True, states=False)
+    monkeypatch.setattr(run_module, "requested", lambda scene, name: getattr(wanted, name))
+    summary, code = run(parse_scene(small(analyses=("static",))), tmp_path / "out",
+                        quiet=True)
+    assert code == 0
+    assert {"vtk/static.vtu", output.SHAPE_FILE} <= set(summary["files"])
+
+
+def test_a_failing_animation_is_a_warning(tmp_path, monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("no pillow")
+
+    monkeypatch.setattr(shapes, "write_animation", broken)
+    summary, code = run(parse_scene(small(analyses=("dynamic",))), tmp_path / "out",
+                        quiet=True, animation=True)
+    assert code == 0
+    assert summary["warnings"] == [f"{output.ANIMATION_FILE}: not written (RuntimeError: no "
+                                   f"pillow)"]
+
+
+# --------------------------------------------------------------------------- drawing
+
+def test_small_displacements_are_magnified_large_ones_not():
+    reference = np.column_stack([np.linspace(0.0, 5.0, 11), np.zeros(11), np.zeros(11)])
+    bent = reference.copy()
+    bent[:, 1] = -2e-3 * reference[:, 0] / 5.0       # 2 mm at the tip of a 5 m beam
+    assert shapes.magnification(reference, [bent]) == 200.0
+    swung = reference[:, [1, 0, 2]]                  # rotated by 90 degrees
+    assert shapes.magnification(reference, [swung]) == 1.0
+    assert shapes.magnification(reference, [reference]) == 1.0
+
+
+def test_animation_frames_are_at_most_max_frames(tmp_path, monkeypatch):
+    monkeypatch.setattr(shapes, "MAX_FRAMES", 4)
+    frames = Frames()
+    run_scene(parse_scene(small(analyses=("dynamic",))), observers=[frames], progress=False)
+    assert len(frames.frames) == 7
+    path = shapes.write_animation(tmp_path / "a.gif", frames, "t" * 200, plane="xy")
+    from PIL import Image
+
+    with Image.open(path) as image:
+        assert image.n_frames == 4
+    with pytest.raises(ValueError, match="plane"):
+        shapes.write_animation(tmp_path / "b.gif", frames, "t", plane="xw")
+    assert sorted(os.listdir(tmp_path)) == ["a.gif"]
+
+
+def test_frames_stay_few_evenly_spaced_with_the_latest(monkeypatch):
+    from types import SimpleNamespace
+
+    monkeypatch.setattr(shapes, "MAX_FRAMES", 3)
+    frames = Frames()
+    frames.line = SimpleNamespace(sample=lambda q: q)
+    for n in range(50):
+        frames.sample(float(n), np.full((2, 3), n), None, {})
+        assert len(frames.frames) <= 6 and frames.times[-1] == n
+        kept = frames.times[:-1]
+        steps = {b - a for a, b in zip(kept, kept[1:], strict=False)}
+        assert frames.times[0] == 0.0 and len(steps) <= 1  # evenly spaced from the start
+        assert [f[0, 0] for f in frames.frames] == frames.times
+    assert frames.times == [0.0, 16.0, 32.0, 48.0, 49.0]
+
+
+def test_a_bad_plane_is_an_invalid_option(tmp_path):
+    summary, code = run(parse_scene(small(analyses=("static",))), tmp_path / "out",
+                        quiet=True, animation=True, plane="xw")
+    assert code == 2 and summary["message"] == "plane: expected one of xy, xz, yz, got 'xw'"
+
+
+def test_reserved_names_are_not_sensor_plots():
+    assert output.plot_file_name("shape_static") != output.SHAPE_FILE
+    assert output.plot_file_name("energies") != output.ENERGIES_FILE
