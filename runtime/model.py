@@ -90,7 +90,9 @@ class Model:
             def make(kind, length, e0, body=body, material=material):
                 return Element(kind, length, body.height, body.width, material.E, material.nu,
                                material.rho, e0=e0, method=self.method, backend=self.backend,
-                               quadrature=body.quadrature)
+                               quadrature=body.quadrature, law=material.law,
+                               shear_correction=material.shear_correction,
+                               damping=material.damping)
 
             e0s, element, nodes = _mesh_body(body, make)
             kind = element.kind
