@@ -82,6 +82,27 @@ class DAESystem:
         self.projector = self._projector()
 
     @property
+    def damped(self) -> bool:
+        """Whether forces depend on velocities (Kelvin-Voigt damping in some material)."""
+        return self.model.damped
+
+    def internal_forces(self, q_full: np.ndarray, v_full: np.ndarray, jacobian: bool):
+        """Elastic (plus damping) force (size,) and the free-free Jacobian data with respect
+        to q and to v (CSR order of ``model.pattern``; None when not asked or undamped)."""
+        if self.damped:
+            return self.model.internal_forces_damped(q_full, v_full, jacobian)
+        force, data = self.model.internal_forces(q_full, jacobian)
+        return force, data, None
+
+    def dissipation_power(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray,
+                          vp: np.ndarray) -> float:
+        """Power (W) dissipated by damping at free coordinates and velocities (q, v)."""
+        if not self.damped:
+            return 0.0
+        return self.model.dissipation_power(self.full_coordinates(q, qp),
+                                            self.full_velocities(v, vp))
+
+    @property
     def joints(self) -> int:
         """Number of joint rows (Lagrange multipliers)."""
         return self.joints_free.shape[0]

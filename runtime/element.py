@@ -259,6 +259,23 @@ class Element:
         de, de_dot = (result["jacobian"].reshape(shape), result["jacobian_dot"].reshape(shape))
         return (force[0], de[0], de_dot[0]) if single else (force, de, de_dot)
 
+    @property
+    def damping_family(self) -> str:
+        """Name of the kernel family of this element's damping kernels."""
+        return "quadrature_law" if self.method == "quadrature" else f"damping_{self.variant}"
+
+    @property
+    def damping_kernel_family(self):
+        """The loaded damping kernel family (``runtime.kernels``); compiled on first use."""
+        self._damping_kernels()
+        return self._damping_family
+
+    @property
+    def damping_inputs(self) -> dict:
+        """The invariant inputs of the damping kernels, by argument name."""
+        self._damping_kernels()
+        return dict(self._damping_fixed)
+
     def damping_group_kernel(self, kernel: str):
         """``kernel`` (damping_force, damping_jacobians, damped_force_jacobians) for a group
         of elements sharing this element's invariants (as ``group_kernel``): call it with

@@ -76,13 +76,16 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
     prescribed motions), M a = F - M_fp a_p with the joints' accelerations
     A_f a + A_p a_p = 0."""
-    qp, _, ap = (x[0] for x in dae.prescribed_motion([t]))
+    qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
-    force, _ = dae.model.internal_forces(dae.full_coordinates(q, qp), jacobian=False)
+    v = dae.initial_velocity.copy()
+    force, _, _ = dae.internal_forces(dae.full_coordinates(q, qp), dae.full_velocities(v, vp),
+                                      jacobian=False)
     force = force[dae.free] + dae.load_factors([t])[0] @ dae.load_vectors
     solver = SchurSolver(dae.mass_band, dae.joints_free)
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
-    return State(t, q, dae.initial_velocity.copy(), a, lam)
+    return State(t, q, v, a, lam, {"dissipated": 0.0,
+                                   "power": dae.dissipation_power(q, v, qp, vp)})
 
 
 class Integrator:
@@ -105,18 +108,21 @@ class Integrator:
 
     # --- pieces of a Newton iteration --------------------------------------------------
 
-    def forces(self, q: np.ndarray, t: float, qp: np.ndarray, loads: np.ndarray,
+    def forces(self, q: np.ndarray, v: np.ndarray, t: float, prescribed, loads: np.ndarray,
                jacobian: bool):
-        """Free part of elastic + external force (nf,), and the Jacobian data or None."""
+        """Free part of elastic (+ damping) + external force (nf,) at free coordinates q and
+        velocities v, and the Jacobian data (d/dq, d/dv or None) or None."""
         dae = self.dae
-        force, data = dae.model.internal_forces(dae.full_coordinates(q, qp), jacobian)
+        qp, vp, _ = prescribed
+        force, data, data_dot = dae.internal_forces(
+            dae.full_coordinates(q, qp), dae.full_velocities(v, vp), jacobian)
         self.counters.force_evaluations += 1
         total = force[dae.free] + loads @ dae.load_vectors
         if not np.all(np.isfinite(total)):
             raise Divergence(t, NON_FINITE)
         if jacobian:
             self.counters.jacobian_evaluations += 1
-        return total, data
+        return total, (data, data_dot)
 
     def residual(self, a: np.ndarray, force: np.ndarray, ap: np.ndarray,
                  multipliers: np.ndarray) -> np.ndarray:
@@ -129,16 +135,22 @@ class Integrator:
             residual += dae.joints_free.T @ multipliers
         return residual
 
-    def linear_step(self, q: np.ndarray, t: float, qp: np.ndarray, loads: np.ndarray,
-                    mass_coef: float, jacobian_coef: float, residual_of, constraint):
-        """One Newton iteration: forces (and the Jacobian, when it is rebuilt), the residual
-        ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy] = -[r; c]
-        with S = mass_coef M + jacobian_coef J.  Returns (dx, dy)."""
+    def linear_step(self, q: np.ndarray, v: np.ndarray, t: float, prescribed,
+                    loads: np.ndarray, coefficients: tuple[float, float, float], residual_of,
+                    constraint):
+        """One Newton iteration at (q, v): forces (and the Jacobians, when they are rebuilt),
+        the residual ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy]
+        = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) = ``coefficients``.
+        Returns (dx, dy)."""
         rebuild = self.newton == "full" or self._refresh or self._solver is None
-        force, data = self.forces(q, t, qp, loads, rebuild)
+        force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
         self.counters.newton_iterations += 1
         if rebuild:
-            band = jacobian_coef * self.dae.model.banded(data) + mass_coef * self.dae.mass_band
+            mass_coef, jacobian_coef, damping_coef = coefficients
+            model = self.dae.model
+            band = jacobian_coef * model.banded(data) + mass_coef * self.dae.mass_band
+            if data_dot is not None:
+                band += damping_coef * model.banded(data_dot)
             start = time.perf_counter()
             try:
                 self._solver = SchurSolver(band, self.dae.joints_free)
@@ -150,6 +162,17 @@ class Integrator:
             self._refresh = False
         return self._solver.solve(-residual_of(force), None if constraint is None
                                   else -constraint)
+
+    def dissipation(self, previous: State, q: np.ndarray, v: np.ndarray, prescribed,
+                    h: float) -> dict:
+        """Energy dissipated by damping (J) since t = 0 after a step to (q, v): the
+        trapezoidal rule on the dissipated power (W) at the two ends of the step."""
+        if not self.dae.damped:
+            return {"dissipated": 0.0, "power": 0.0}
+        qp, vp, _ = prescribed
+        power = self.dae.dissipation_power(q, v, qp, vp)
+        return {"dissipated": previous.extra["dissipated"]
+                + h / 2 * (previous.extra["power"] + power), "power": power}
 
     def converged(self, increment: np.ndarray) -> bool:
         return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
@@ -181,6 +204,7 @@ class Integrator:
 
     def _observe(self, observe, state: State) -> None:
         qp, vp, _ = (x[0] for x in self.dae.prescribed_motion([state.t]))
+        self.dae.model.dissipated_energy = state.extra["dissipated"]
         observe(state.t, self.dae.full_coordinates(state.q, qp),
                 self.dae.full_velocities(state.v, vp))
 
@@ -223,13 +247,15 @@ class Trapezoidal(Integrator):
         qp, vp, ap = prescribed
         a, lam = state.a.copy(), state.multipliers.copy()
         base_q = state.q + h * state.v + h * h / 4 * state.a
+        base_v = state.v + h / 2 * state.a
         k = h * h / 4
 
         def iterate() -> np.ndarray:
             nonlocal a, lam
             constraint = (dae.joints_free @ a + dae.joints_prescribed @ ap
                           if dae.joints else None)
-            da, dlam = self.linear_step(base_q + k * a, t, qp, loads, 1.0, -k,
+            da, dlam = self.linear_step(base_q + k * a, base_v + h / 2 * a, t, prescribed,
+                                        loads, (1.0, -k, -h / 2),
                                         lambda force: self.residual(a, force, ap, lam),
                                         constraint)
             a = a + da
@@ -241,7 +267,7 @@ class Trapezoidal(Integrator):
         v = state.v + h / 2 * (state.a + a)
         if dae.joints:
             q, v = self.project(q, v, qp, vp)
-        return State(t, q, v, a, lam)
+        return State(t, q, v, a, lam, self.dissipation(state, q, v, prescribed, h))
 
     def project(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray, vp: np.ndarray):
         """Mass-orthogonal projection of positions and velocities onto A q = 0, A v = 0."""
@@ -285,7 +311,8 @@ class GeneralizedAlpha(Integrator):
         def iterate() -> np.ndarray:
             nonlocal q, v, a, lam
             constraint = dae.joints_free @ q + fixed_part if dae.joints else None
-            dq, dlam = self.linear_step(q, t, qp, loads, beta_prime, -1.0,
+            dq, dlam = self.linear_step(q, v, t, prescribed, loads,
+                                        (beta_prime, -1.0, -gamma_prime),
                                         lambda force: self.residual(a, force, ap, lam),
                                         constraint)
             q = q + dq
@@ -296,7 +323,8 @@ class GeneralizedAlpha(Integrator):
 
         self.newton_loop(t, iterate)
         abar_new = abar_new + (1 - af) / (1 - am) * a
-        return State(t, q, v, a, lam, {"abar": abar_new})
+        return State(t, q, v, a, lam, {"abar": abar_new,
+                                       **self.dissipation(state, q, v, prescribed, h)})
 
 
 def alpha_parameters(rho_inf: float) -> tuple[float, float, float, float]:

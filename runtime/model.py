@@ -43,10 +43,18 @@ class BodyMesh:
         return self.element_dofs.shape[0]
 
     def kernel(self, name: str):
-        """The group kernel ``name`` of this body's elements (bound once, then reused)."""
+        """The group kernel ``name`` of this body's elements (bound once, then reused): an
+        elastic kernel, or a damping one (damping_force, damped_force_jacobians)."""
         if name not in self._kernels:
-            self._kernels[name] = self.element.group_kernel(name)
+            damping = name.startswith(("damping_", "damped_"))
+            self._kernels[name] = (self.element.damping_group_kernel(name) if damping
+                                   else self.element.group_kernel(name))
         return self._kernels[name]
+
+    @property
+    def damped(self) -> bool:
+        """Whether the material has Kelvin-Voigt damping (forces depend on velocities)."""
+        return self.element.damping > 0
 
 
 def _mesh_body(body, element_factory) -> tuple[np.ndarray, Element, np.ndarray]:
@@ -252,6 +260,56 @@ class Model:
             if jacobian:
                 data += np.bincount(slots, out["jacobian"].ravel()[keep], self.pattern.nnz)
         return force, data
+
+    @property
+    def damped(self) -> bool:
+        """Whether any body has Kelvin-Voigt damping."""
+        return any(body.damped for body in self.bodies.values())
+
+    def internal_forces_damped(self, q: np.ndarray, v: np.ndarray, jacobian: bool = True):
+        """Elastic plus damping force (size,) at coordinates q and velocities v (size,) and, if
+        asked, the free-free Jacobian data with respect to q and to v (CSR order, as
+        ``internal_forces``; zero for undamped bodies).  The Jacobian pass is one kernel per
+        damped body (damped_force_jacobians); the force pass adds damping_force to the
+        elastic force."""
+        force = np.zeros(self.size)
+        data = np.zeros(self.pattern.nnz) if jacobian else None
+        data_dot = np.zeros(self.pattern.nnz) if jacobian else None
+        for body, (keep, slots) in zip(self.bodies.values(), self._jac_targets, strict=True):
+            dofs = body.element_dofs
+            e = np.ascontiguousarray(q[dofs])
+            inputs = {"e": e, "e0": body.element_e0}
+            if body.damped:
+                inputs["e_dot"] = np.ascontiguousarray(v[dofs])
+            start = time.perf_counter()
+            if jacobian and body.damped:
+                out = body.kernel("damped_force_jacobians")(inputs)
+            else:
+                out = body.kernel("force_jacobian" if jacobian else "force")(inputs)
+                if body.damped:
+                    out = dict(out, force=out["force"]
+                               + body.kernel("damping_force")(inputs)["force"])
+            self.kernel_seconds += time.perf_counter() - start
+            force += np.bincount(dofs.ravel(), out["force"].ravel(), self.size)
+            if jacobian:
+                data += np.bincount(slots, out["jacobian"].ravel()[keep], self.pattern.nnz)
+                if body.damped:
+                    data_dot += np.bincount(slots, out["jacobian_dot"].ravel()[keep],
+                                            self.pattern.nnz)
+        return force, data, data_dot
+
+    def dissipation_power(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Power (W) dissipated by Kelvin-Voigt damping at coordinates q, velocities v
+        (size,): -v . F_damping (>= 0)."""
+        total = 0.0
+        for body in self.bodies.values():
+            if body.damped:
+                dofs = body.element_dofs
+                force = body.kernel("damping_force")({
+                    "e": np.ascontiguousarray(q[dofs]), "e0": body.element_e0,
+                    "e_dot": np.ascontiguousarray(v[dofs])})["force"]
+                total -= float(np.sum(force * v[dofs]))
+        return total
 
     def jacobian_matrix(self, data: np.ndarray) -> scipy.sparse.csr_matrix:
         """Free-free elastic Jacobian from ``internal_forces`` data."""
