@@ -26,7 +26,7 @@ import time
 from collections.abc import Iterator
 from types import TracebackType
 
-__all__ = ["DELAY", "LINE_INTERVAL", "Bar", "enabled", "phase", "shown"]
+__all__ = ["DELAY", "LINE_INTERVAL", "Bar", "enabled", "phase", "shown", "warn"]
 
 #: seconds a bar waits before it first appears
 DELAY = 2.0
@@ -72,6 +72,12 @@ def _duration(seconds: float) -> str:
     if seconds < 3600:
         return f"{seconds // 60} min {seconds % 60:02d} s"
     return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min"
+
+
+def warn(text: str) -> None:
+    """A warning line on stderr (``ancf: warning: ...``), unless silenced."""
+    if shown():
+        _say(f"ancf: warning: {text}")
 
 
 @contextlib.contextmanager

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import analysis, engines
+from runtime import analysis, engines, progress
 from runtime.integrators import Divergence
 from runtime.model import Model
 from runtime.progress import Bar, enabled
@@ -151,6 +151,9 @@ class Simulation:
         self.timing["preprocess_s"] = model.timing["preprocess_s"]
         self.sensors = Sensors(model)
         self.model = model
+        for text in locking_warnings(self.scene):
+            self.summary["warnings"].append(text)
+            progress.warn(text)
         for observer in self.observers:
             observer.begin(model)
         return model
@@ -189,7 +192,7 @@ class Simulation:
                 summary["dynamic"]["kernel_s"] if compiled else 0.0)
             summary["kernels"] = sorted(self._built | {
                 f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
-                for f in ("invariants", b.element.family)})
+                for f in ("invariants", b.element.family, *kernel_extras(b.element))})
         return 0
 
     def _modal(self) -> None:
@@ -203,6 +206,10 @@ class Simulation:
         self.modes = Modes(omega, found.shapes, np.array(about))
         self.summary["modal"] = {"about": settings.about, "frequencies_rad_s": omega.tolist(),
                                  "frequencies_hz": (omega / (2 * np.pi)).tolist()}
+        if model.damped:
+            self.summary["modal"]["damping"] = (
+                "ignored: undamped natural frequencies (Kelvin-Voigt damping gives mode k the "
+                "damping ratio alpha omega_k / 2)")
         for observer in self.observers:
             observer.modal(self.modes)
 
@@ -284,6 +291,28 @@ class Simulation:
             states = States(np.asarray(self.history["t"], float), q, v)
         return Result(self.summary, sensors, self.static_q, self.modes, states, self.model,
                       exit_code)
+
+
+def kernel_extras(element) -> tuple[str, ...]:
+    """Kernel families an element loads beyond its invariants and method: the law's and the
+    damping's."""
+    extras = ("laws",) if element.law != "svk" else ()
+    return extras + ((element.damping_family,) if element.damping > 0 else ())
+
+
+def locking_warnings(scene: Scene) -> list[str]:
+    """A warning per material that beams use with the svk law and nu != 0 (Poisson locking:
+    bending sees lam + 2G instead of E)."""
+    out = []
+    for name in sorted({body.material for body in scene.bodies}):
+        material = scene.materials[name]
+        if material.law == "svk" and material.nu != 0:
+            nu = material.nu
+            stiffer = (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1
+            out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
+                       f"(Poisson locking): its beams come out up to {stiffer:.0%} too stiff "
+                       f"in bending; use law = \"ecm\" (docs/laws.md)")
+    return out
 
 
 def run_scene(scene: Scene | str | Path, method: str | None = None,
