@@ -42,6 +42,8 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from runtime import progress
+
 __all__ = [
     "COMPILE_FLAGS",
     "CacheError",
@@ -647,7 +649,7 @@ def _no_compiler_message(tried: list[str]) -> str:
 
 
 def _obtain(
-    modname: str, source: str, cdef: str, folder: Path, timeout_s: float
+    modname: str, source: str, cdef: str, folder: Path, timeout_s: float, label: str
 ) -> tuple[types.ModuleType, bool, bool, Path]:
     """Load ``modname`` from the cache, compiling it (or waiting for another process) first.
 
@@ -702,7 +704,9 @@ def _obtain(
             with contextlib.suppress(FileNotFoundError):
                 ready.unlink()  # corrupt, planted or unloadable: never trust it again
             try:
-                _build(modname, source, cdef, cmd, so, ready)
+                with progress.phase(f"compiling {label} (first use on this machine, cached "
+                                    "afterwards)"):
+                    _build(modname, source, cdef, cmd, so, ready)
             except CompilerNotWorkingError:
                 raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
@@ -724,10 +728,12 @@ def _obtain(
 # --------------------------------------------------------------------------- public entry
 
 
-def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) -> CompiledModule:
+def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0,
+                   label: str | None = None) -> CompiledModule:
     """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
 
-    ``name`` becomes part of the module name ``_ancf_{name}_{hash}``.  Returns the loaded
+    ``name`` becomes part of the module name ``_ancf_{name}_{hash}``; ``label`` names the
+    module in the progress line of a compile (default ``name``).  Returns the loaded
     module; ``compiled`` tells whether this call ran the compiler and ``waited`` whether it
     waited for another process's compile (``seconds`` includes that wait).  ``timeout_s`` is
     the age after which another process's lock counts as stale, and the longest this call
@@ -744,7 +750,8 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0) 
             return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
         folder = cache_dir()
         try:
-            module, compiled, waited, path = _obtain(modname, source, cdef, folder, timeout_s)
+            module, compiled, waited, path = _obtain(modname, source, cdef, folder, timeout_s,
+                                                     label or name)
         except OSError as exc:
             where = f": {exc.filename}" if exc.filename else ""
             raise CacheError(

@@ -148,7 +148,8 @@ class CompiledEngine:
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         source, cdef = render(self.dae, self.integrator)
         start = time.perf_counter()
-        compiled = jit.compile_module("stepper", source, cdef)
+        compiled = jit.compile_module("stepper", source, cdef,
+                                      label=f"stepper/{self.integrator}")
         self.compile_s = compiled.seconds if compiled.compiled or compiled.waited else 0.0
         self.load_s = time.perf_counter() - start - self.compile_s
         self.modules = [f"stepper/{self.integrator}"]
