@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from types import TracebackType
@@ -82,15 +83,29 @@ def warn(text: str) -> None:
 
 @contextlib.contextmanager
 def phase(text: str) -> Iterator[None]:
-    """Announce a step of unknown length: ``text ...`` when it starts and ``text: done in
-    N s`` when it ends normally (nothing when silenced)."""
+    """Announce a step of unknown length once it has lasted ``DELAY`` seconds: ``text ...``
+    then, when it ends normally, ``text: done in N s`` (nothing for short steps or when
+    silenced).  The announcement comes from a timer thread, so it appears while the step
+    blocks (a compiler run, say)."""
     if not shown():
         yield
         return
     start = _clock()
-    _say(f"{text} ...")
-    yield
-    _say(f"{text}: done in {_duration(_clock() - start)}")
+    announced = threading.Event()
+
+    def announce() -> None:
+        announced.set()
+        _say(f"{text} ...")
+
+    timer = threading.Timer(DELAY, announce)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+    if announced.is_set():
+        _say(f"{text}: done in {_duration(_clock() - start)}")
 
 
 class Bar:

@@ -3,6 +3,8 @@ on one, nothing for short phases or when silenced; the dynamic run reports throu
 
 from __future__ import annotations
 
+import time
+
 import pytest
 from scenes_small import cantilever
 
@@ -113,11 +115,20 @@ def test_a_terminal_gets_a_tqdm_bar(monkeypatch, capsys):
     assert err.endswith("\n")
 
 
-def test_phase_says_what_and_how_long(clock, capsys):
+def test_phase_says_what_and_how_long(clock, capsys, monkeypatch):
+    monkeypatch.setattr(progress, "DELAY", 0.05)
     text = "compiling beam3d/gram_straight (first use on this machine, cached afterwards)"
     with phase(text):
+        time.sleep(0.3)          # the announcement comes while the step blocks
+        assert lines(capsys.readouterr().err) == [f"{text} ..."]
         clock.now += 12.4
-    assert lines(capsys.readouterr().err) == [f"{text} ...", f"{text}: done in 12 s"]
+    assert lines(capsys.readouterr().err) == [f"{text}: done in 12 s"]
+
+
+def test_short_phase_says_nothing(capsys):
+    with phase("compiling a tiny module"):
+        pass
+    assert capsys.readouterr().err == ""
 
 
 def test_silenced_prints_nothing_and_nests(clock, capsys, monkeypatch):
