@@ -22,7 +22,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import statistics
-import sys
 import time
 import tomllib
 from collections.abc import Callable
@@ -31,6 +30,7 @@ from dataclasses import dataclass
 import scenes
 from runtime import engines, peers
 from runtime.model import Model
+from runtime.progress import Bar, enabled
 from runtime.scene import parse_scene
 from runtime.sensors import Sensors
 
@@ -140,19 +140,13 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
 def measure(cases: list[Case], repeats: int, progress: bool = True) -> None:
     """Run every case ``repeats`` times, interleaved (round after round)."""
     runs = [(case, case.prepare()) for case in cases]
-    total = repeats * len(runs)
-    done, start = 0, time.perf_counter()
-    for _ in range(repeats):
-        for case, go in runs:
-            seconds, iterations, jacobians, tip = go()
-            case.times.append(seconds)
-            case.counts, case.tip = (iterations, jacobians), tip
-            done += 1
-            if progress:
-                elapsed = time.perf_counter() - start
-                print(f"  [{done}/{total}] {case.table}: {case.label} {seconds:.3f} s "
-                      f"(elapsed {elapsed:.0f} s, ETA {elapsed / done * (total - done):.0f} s)",
-                      file=sys.stderr, flush=True)
+    with enabled(progress), Bar("bench solvers", repeats * len(runs), "cases") as bar:
+        for _ in range(repeats):
+            for case, go in runs:
+                seconds, iterations, jacobians, tip = go()
+                case.times.append(seconds)
+                case.counts, case.tip = (iterations, jacobians), tip
+                bar.advance(f"{case.table}: {case.label} {seconds:.3f} s")
 
 
 def whole_run_table(cases: list[Case]) -> str:
@@ -201,17 +195,18 @@ def step_table(sizes=(10, 100, 1000, 10_000, 100_000), python_limit: int = 10_00
     lines = ["| beam3d elements | engine | free coordinates | us per step | "
              "us per element-step | Newton per step | kernel share | factorisation share |",
              "|---:|---|---:|---:|---:|---:|---:|---:|"]
-    for size in sizes:
-        for engine in ("compiled", "python"):
-            if engine == "python" and size > python_limit:
-                continue
-            if progress:
-                print(f"  step cost: {size} elements, {engine} engine", file=sys.stderr,
-                      flush=True)
-            r = step_cost(size, engine, method=method)
-            lines.append(f"| {size} | {engine} | {r['coordinates']} | {r['step_us']:.4g} | "
-                         f"{r['element_step_us']:.3g} | {r['newton_per_step']:.1f} | "
-                         f"{r['kernel_share']:.0%} | {r['factorisation_share']:.0%} |")
+    runs = [(size, engine) for size in sizes for engine in ("compiled", "python")
+            if engine == "compiled" or size <= python_limit]
+    with enabled(progress), Bar("step cost", len(runs), "cases") as bar:
+        rows = []
+        for size, engine in runs:
+            rows.append(step_cost(size, engine, method=method))
+            bar.advance(f"{size} elements, {engine} engine")
+    for r in rows:
+        lines.append(f"| {r['elements']} | {r['engine']} | {r['coordinates']} | "
+                     f"{r['step_us']:.4g} | {r['element_step_us']:.3g} | "
+                     f"{r['newton_per_step']:.1f} | {r['kernel_share']:.0%} | "
+                     f"{r['factorisation_share']:.0%} |")
     return "\n".join(lines) + "\n"
 
 

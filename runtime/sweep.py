@@ -11,6 +11,8 @@ import os
 import threading
 from collections.abc import Callable, Sequence
 
+from runtime.progress import Bar
+
 
 class SchedulerError(ValueError):
     """The requested dask scheduler cannot be reached."""
@@ -44,7 +46,7 @@ def _connect(scheduler: str, timeout_s: float):
 
 def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None = None,
               workers: int | None = None, serial: bool = False,
-              connect_timeout_s: float = 10.0) -> list:
+              connect_timeout_s: float = 10.0, label: str = "cases") -> list:
     """``[function(**case) for case in cases]``, computed in parallel.
 
     function: a module-level (picklable) function; cases: keyword arguments of each call.
@@ -52,13 +54,19 @@ def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None =
     a local cluster with ``workers`` processes (default: the number of cores).
     serial: run in this process instead (debugging, or a single case).
     connect_timeout_s: the longest wait (plus 5 s of grace) for ``scheduler`` to answer.
+    label: names the sweep in the progress line (n of N cases, elapsed, ETA).
     Results come back in the order of ``cases``; an exception in a case is raised here.
     """
     if not cases:
         raise ValueError("sweep: no cases to run (the study declared no runs)")
     if serial or (len(cases) == 1 and scheduler is None):
-        return [function(**case) for case in cases]
-    from dask.distributed import Client, LocalCluster
+        with Bar(label, len(cases), "cases") as bar:
+            results = []
+            for case in cases:
+                results.append(function(**case))
+                bar.advance()
+            return results
+    from dask.distributed import Client, LocalCluster, as_completed
 
     if scheduler is not None:
         client = _connect(scheduler, connect_timeout_s)
@@ -69,6 +77,9 @@ def run_cases(function: Callable, cases: Sequence[dict], scheduler: str | None =
         client = Client(cluster)
     try:
         futures = [client.submit(function, pure=False, **case) for case in cases]
+        with Bar(label, len(cases), "cases") as bar:
+            for _ in as_completed(futures):
+                bar.advance()
         return client.gather(futures)
     finally:
         client.close()

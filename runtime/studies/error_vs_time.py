@@ -606,7 +606,8 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
                       "series": None if plan.measure == "static_tip" else plan.sensor})
     if scheduler is not None:
         check_scheduler(scheduler)
-    results = run_cases(run_case, cases, scheduler=scheduler, workers=workers, serial=serial)
+    results = run_cases(run_case, cases, scheduler=scheduler, workers=workers, serial=serial,
+                        label="error-vs-time study")
     rows = _rows(plan, runs, results)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(rows, out / "error_vs_time.csv")

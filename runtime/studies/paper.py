@@ -167,4 +167,4 @@ def bench_paper(quick: bool = False, scheduler: str | None = None, workers: int 
     from runtime.sweep import run_cases
 
     return run_cases(paper_case, cases(quick, backend=backend), scheduler=scheduler,
-                     workers=workers, serial=serial)
+                     workers=workers, serial=serial, label="paper tables")

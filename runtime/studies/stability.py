@@ -841,7 +841,8 @@ def stability_study(scheduler: str | None = None, workers: int | None = None,
     from runtime.sweep import run_cases
 
     todo = cases(quick)
-    results = run_cases(run_case, todo, scheduler=scheduler, workers=workers, serial=serial)
+    results = run_cases(run_case, todo, scheduler=scheduler, workers=workers, serial=serial,
+                        label="stability study")
     rows: list[dict] = []
     integrator_results = []
     for case, result in zip(todo, results, strict=True):
