@@ -12,7 +12,9 @@ its TOML table (``Scene.to_dict``) and read by the parser of TOML files, so both
 ``SceneError`` whose message starts with the key path of the culprit (``body[1].sectoin:
 unknown key; expected one of ...``) and says what was expected and what was found; the
 validated scene holds the parsed values (node references ``"BODY:INDEX"`` resolved to
-``NodeRef`` with a non-negative index, numbers as floats, vectors as tuples).
+``NodeRef`` with a non-negative index, which keeps a negative index as written for
+``to_toml``, so "BODY:-1" stays the last node when the body is remeshed; numbers as floats,
+vectors as tuples).
 ``Scene.to_toml()`` writes a scene that ``load_scene`` reads back equal.
 
 Beyond the types, a scene is checked for what it would do wrong:

@@ -61,13 +61,20 @@ NODE_INDEX = re.compile(r"0|-?[1-9][0-9]*")
 @dataclass(frozen=True)
 class NodeRef:
     """Node ``index`` of body ``body`` (in a validated scene: 0 .. elements; as input, negative
-    indices count from the end).  ``str`` spells it as scenes do, ``"BODY:INDEX"``."""
+    indices count from the end).  ``str`` gives ``"BODY:INDEX"`` with that index; ``written``
+    keeps a negative index as the scene wrote it (not compared), so that the scene's TOML
+    (``spelled``) still names the last node after its body is remeshed."""
 
     body: str
     index: int
+    written: int | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def __str__(self) -> str:
         return f"{self.body}:{self.index}"
+
+    def spelled(self) -> str:
+        """``"BODY:INDEX"`` as the scene wrote it."""
+        return f"{self.body}:{self.index if self.written is None else self.written}"
 
 
 # --------------------------------------------------------------------------- checkers
@@ -163,7 +170,7 @@ class Nodes:
             shown = index_text if index is not None else f"{index_text[:20]}..."
             raise SceneError(f"{path}: node index {shown} out of range for body {_show(name)} "
                              f"with {n} nodes (0..{n - 1} or -{n}..-1)")
-        return NodeRef(name, index % n)
+        return NodeRef(name, index % n, index if index < 0 else None)
 
 
 @dataclass(frozen=True)
@@ -182,12 +189,13 @@ class Context:
 
 def plain(value: Any) -> Any:
     """``value`` as TOML data (tables, lists, strings, numbers, booleans): scene objects by
-    their ``to_dict``, node references as ``"BODY:INDEX"``, NumPy arrays and scalars as
-    lists and Python numbers; anything else unchanged (the parser then says what is wrong)."""
+    their ``to_dict``, node references as ``"BODY:INDEX"`` (as written), NumPy arrays and
+    scalars as lists and Python numbers; anything else unchanged (the parser then says what
+    is wrong)."""
     if hasattr(value, "to_dict"):
         return value.to_dict()
     if isinstance(value, NodeRef):
-        return str(value)
+        return value.spelled()
     if isinstance(value, dict):
         return {k: plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):

@@ -178,6 +178,18 @@ def test_replace_revalidates():
         dataclasses.replace(scene, dynamic=Dynamic(t_end=0.01, step=1.0))
 
 
+def test_node_references_from_the_end_follow_a_remeshed_body():
+    scene = cantilever()
+    assert scene.loads[0].node == NodeRef("beam", 4) and str(scene.loads[0].node) == "beam:4"
+    finer = dataclasses.replace(scene, bodies=[dataclasses.replace(BODY, elements=8)])
+    assert finer.loads[0].node == NodeRef("beam", 8)
+    assert finer.sensors[0].node == NodeRef("beam", 8)
+    # an index written from the start stays where it was
+    fixed = dataclasses.replace(scene, loads=[PointForce(NodeRef("beam", 4), (0, -1, 0))])
+    finer = dataclasses.replace(fixed, bodies=[dataclasses.replace(BODY, elements=8)])
+    assert finer.loads[0].node == NodeRef("beam", 4)
+
+
 def test_materials_as_a_sequence_or_by_name():
     by_name = cantilever(materials={"steel": STEEL})
     assert by_name == cantilever()
