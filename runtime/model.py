@@ -340,9 +340,95 @@ class Model:
             field[~keep] = 0.0
         return field.ravel()
 
+    def initial_velocities(self) -> np.ndarray:
+        """Velocities (size,) at t = 0 (m/s, per coordinate) from the bodies'
+        ``initial_velocity`` and ``initial_angular_velocity``: positions v + w x (r - about),
+        gradients w x r_k, in the reference; fixed and prescribed coordinates zero."""
+        velocities = np.zeros(self.size)
+        for body in self.scene.bodies:
+            spin = body.initial_angular_velocity
+            if body.initial_velocity is not None or spin is not None:
+                velocities += self.rigid_field(body.initial_velocity, spin and spin.omega,
+                                               spin and spin.about, body.name)
+        velocities[self.fixed] = 0.0
+        velocities[self.prescribed] = 0.0
+        return velocities
+
+    def free_motions(self, tolerance: float = 1e-12) -> list[str]:
+        """One sentence per body that the constraints leave free to move rigidly, e.g.
+        "body 'beam' is free to translate along x and y and to rotate about z" (empty when
+        the model is held): the null space of the constrained stiffness at the reference.
+
+        The elastic stiffness of a body at its reference vanishes exactly on its small rigid
+        motions (and only there for elements without spurious zero-energy modes), so the
+        null space is the set of rigid motions of the bodies (dim translations and 1 or 3
+        rotations each) that keep fixed and prescribed coordinates at rest and satisfy the
+        joints: computed in that small basis (columns normalised per body), with
+        ``tolerance`` on the eigenvalues of its Gram matrix (relative to 1).
+        """
+        rotations = 1 if self.dim == 2 else 3
+        per_body = self.dim + rotations
+        positions = self.reference.reshape(-1, len(self.vectors), self.dim)[
+            :, self.vectors.index("r")]
+        columns, norms = [], []
+        for name, mesh in self.bodies.items():
+            centre = positions[mesh.first_node:mesh.first_node + mesh.nodes].mean(axis=0)
+            for unit in np.eye(per_body):
+                column = self.rigid_field(unit[:self.dim], unit[self.dim:] if rotations == 3
+                                          else unit[self.dim], centre, name)
+                norms.append(np.linalg.norm(column))
+                columns.append(scipy.sparse.csc_matrix(column[:, None] / norms[-1]))
+        basis = scipy.sparse.hstack(columns).tocsr()
+        held = np.concatenate([self.fixed, self.prescribed])
+        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis])
+        values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())
+        null = vectors[:, values <= tolerance]
+        sentences = []
+        for b, name in enumerate(self.bodies):
+            rows = slice(b * per_body, (b + 1) * per_body)
+            motions = _motions(null[rows], np.asarray(norms[rows]), self.dim)
+            if motions:
+                sentences.append(f"body {name!r} is free to {motions}")
+        return sentences
+
 
 def _cross(rotation, arms: np.ndarray) -> np.ndarray:
     """rotation x arms for arms (..., dim): a number about z in 2D, a 3-vector in 3D."""
     if arms.shape[-1] == 2:
         return float(rotation) * np.stack([-arms[..., 1], arms[..., 0]], axis=-1)
     return np.cross(np.asarray(rotation, float), arms)
+
+
+RANK_TOLERANCE = 1e-6   # singular values of unit null vectors' parts counted as zero
+
+
+def _motions(null: np.ndarray, norms: np.ndarray, dim: int) -> str:
+    """Words for the rigid motions of one body in the null vectors ``null`` (params, k):
+    rows dim translations then the rotations, each column of the basis divided by ``norms``
+    (the translations share one norm)."""
+    translations, rotations = null[:dim], null[dim:]
+    _, s, vt = np.linalg.svd(rotations, full_matrices=True)
+    turning = int(np.sum(s > RANK_TOLERANCE))
+    words = []
+    moving, s_t, _ = np.linalg.svd(translations @ vt[turning:].T, full_matrices=False)
+    sliding = int(np.sum(s_t > RANK_TOLERANCE))
+    if sliding:
+        words.append(f"translate along {_directions(moving[:, :sliding])}")
+    if turning:
+        axes = np.linalg.qr((rotations @ vt[:turning].T) / norms[dim:, None])[0]
+        words.append(f"rotate about {_directions(axes) if dim == 3 else 'z'}")
+    return " and to ".join(words)
+
+
+def _directions(basis: np.ndarray) -> str:
+    """Names of the span of orthonormal columns: coordinate axes ("x and y") when they span
+    it, else the columns as vectors."""
+    names = "xyz"[:basis.shape[0]]
+    inside = [names[i] for i in range(basis.shape[0])
+              if np.sum(basis[i] ** 2) > 1.0 - RANK_TOLERANCE]
+    if len(inside) != basis.shape[1]:   # vectors, each with its first non-zero part positive
+        signs = [np.sign(column[np.argmax(np.abs(column) > RANK_TOLERANCE)]) for column in
+                 basis.T]
+        inside = ["(" + ", ".join(f"{x:.3g}" for x in sign * column + 0.0) + ")"
+                  for sign, column in zip(signs, basis.T, strict=True)]
+    return inside[0] if len(inside) == 1 else ", ".join(inside[:-1]) + " and " + inside[-1]

@@ -41,6 +41,13 @@ from runtime.run import run
 
 ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
+# templates/stepper.c.j2: dense_lu_solve applies the row interchanges of the Schur LU between
+# the elimination steps although dense_lu swapped whole rows (multipliers included); the
+# 6x6 (2D) and 12x12 (3D) Schur complements of a weld pivot, so the compiled engine's linear
+# solves are wrong and its Newton iterations converge slower (states still agree).  The fix
+# (all interchanges first, then the elimination) is in the report of branch wt-api.
+STEPPER_LU = pytest.mark.xfail(strict=True, reason="compiled dense_lu_solve pivot order")
+
 
 def _shipped(name: str, t_end: float | None = None) -> Scene:
     scene_ = load_scene(scenes.path(name))
@@ -101,7 +108,8 @@ def _compare(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
     return python[1], python[0], python[2]
 
 
-@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever"])
+@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever",
+                                  "spinning_beam", "l_frame"])
 def test_engines_agree_on_the_shipped_scenes(name):
     # The whole run: thousands of steps of schemes that do not damp (trapezoidal), in which
     # round-off differences of the two engines (other summation orders, SIMD) grow - in the
@@ -111,12 +119,6 @@ def test_engines_agree_on_the_shipped_scenes(name):
     _compare(_shipped(name), q_rtol=1e-11, v_rtol=1e-6)
 
 
-# templates/stepper.c.j2: dense_lu_solve applies the row interchanges of the Schur LU between
-# the elimination steps although dense_lu swapped whole rows (multipliers included); the
-# 6x6 (2D) and 12x12 (3D) Schur complements of a weld pivot, so the compiled engine's linear
-# solves are wrong and its Newton iterations converge slower (states still agree).  The fix
-# (all interchanges first, then the elimination) is in the report of branch wt-api.
-STEPPER_LU = pytest.mark.xfail(strict=True, reason="compiled dense_lu_solve pivot order")
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
