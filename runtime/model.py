@@ -12,6 +12,7 @@ with precomputed index maps.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -318,7 +319,9 @@ class Model:
         basis, upper = np.linalg.qr(gradients)
         return basis * np.sign(np.diag(upper))
 
-    def rigid_field(self, translation=None, rotation=None, about=None,
+    def rigid_field(self, translation: Sequence[float] | None = None,
+                    rotation: float | Sequence[float] | None = None,
+                    about: Sequence[float] | None = None,
                     body: str | None = None) -> np.ndarray:
         """Coordinates (size,) of the small rigid motion of the reference by ``translation``
         (dim,) and ``rotation`` (a number about z in 2D, (3,) in 3D) about the point
@@ -392,7 +395,7 @@ class Model:
         return sentences
 
 
-def _cross(rotation, arms: np.ndarray) -> np.ndarray:
+def _cross(rotation: float | Sequence[float], arms: np.ndarray) -> np.ndarray:
     """rotation x arms for arms (..., dim): a number about z in 2D, a 3-vector in 3D."""
     if arms.shape[-1] == 2:
         return float(rotation) * np.stack([-arms[..., 1], arms[..., 0]], axis=-1)

@@ -182,6 +182,7 @@ class Context:
 
     @property
     def body_names(self) -> tuple[str, ...]:
+        """Names of the scene's bodies, in order."""
         return tuple(self.node.bodies)
 
 
@@ -208,15 +209,15 @@ def plain(value: Any) -> Any:
 
 
 def table(obj: Any, skip: tuple[str, ...] = ()) -> dict[str, Any]:
-    """The TOML table of a dataclass: its fields (TOML key: ``metadata["key"]`` or the field
-    name) as ``plain`` data, without those left at None or at their default and ``skip``."""
+    """The TOML table of a dataclass: its fields (named as the TOML keys) as ``plain`` data,
+    without ``skip`` and those left at None or at their default."""
     out: dict[str, Any] = {}
     for f in sorted(dataclasses.fields(obj), key=lambda f: f.kw_only):   # keyword-only last
         value = getattr(obj, f.name)
         if f.name in skip or value is None or (f.default is not dataclasses.MISSING
                                                and same(value, f.default)):
             continue
-        out[f.metadata.get("key", f.name)] = plain(value)
+        out[f.name] = plain(value)
     return out
 
 
