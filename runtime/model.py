@@ -12,12 +12,14 @@ with precomputed index maps.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse
 
 from runtime import geometry
+from runtime.constraints import Built
 from runtime.element import Element
 from runtime.kernels import element_kind
 from runtime.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
@@ -158,24 +160,11 @@ class Model:
         self.mass.sum_duplicates()
 
     def _build_constraints(self) -> None:
-        fixed = np.zeros(self.size, bool)
-        self.hubs = []  # (node, law, axis, reference gradients (k, dim))
-        joint_rows = []
-        for c in self.scene.constraints:
-            if c.type == "clamp":
-                fixed[self.node_dofs(self.node_index(c.node))] = True
-            elif c.type == "pin":
-                fixed[self.node_dofs(self.node_index(c.node), "r")] = True
-            elif c.type == "prescribed_rotation":
-                node = self.node_index(c.node)
-                self.hubs.append((node, c.angle, np.asarray(c.axis or (0, 0, 1), float)))
-            elif c.type in ("spherical", "revolute"):
-                if c.type == "revolute" and self.dim != 2:
-                    raise ValueError("constraint revolute: only planar (2D) models have "
-                                     "revolute joints; use spherical in 3D")
-                a, b = (self.node_dofs(self.node_index(n), "r") for n in c.nodes)
-                for i, j in zip(a, b, strict=True):
-                    joint_rows.append((i, j))
+        built = Built(np.zeros(self.size, bool))
+        for constraint in self.scene.constraints:
+            constraint.apply(self, built)
+        fixed = built.fixed
+        self.hubs = built.hubs  # (node, angle law, axis (3,))
         prescribed = np.zeros(self.size, bool)
         for node, _, _ in self.hubs:
             prescribed[self.node_dofs(node)] = True
@@ -183,10 +172,11 @@ class Model:
         self.fixed = np.flatnonzero(fixed)
         self.prescribed = np.flatnonzero(prescribed)
         self.free = np.flatnonzero(~fixed & ~prescribed)
-        joints = scipy.sparse.lil_matrix((len(joint_rows), self.size))
-        for row, (i, j) in enumerate(joint_rows):
-            joints[row, i], joints[row, j] = 1.0, -1.0
-        self.joints = joints.tocsr()                       # A, with A q = 0
+        rows = np.repeat(np.arange(len(built.rows)), [len(row) for row in built.rows])
+        cols = [i for row in built.rows for i in row]
+        vals = np.array([v for row in built.rows for v in row.values()], float)
+        self.joints = scipy.sparse.csr_matrix((vals, (rows, cols)),     # A, with A q = 0
+                                              shape=(len(built.rows), self.size))
         self.joints_free = self.joints[:, self.free]
         self.joints_prescribed = self.joints[:, self.prescribed]
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
@@ -354,14 +344,8 @@ class Model:
     def nominal_loads(self) -> list[tuple[object, np.ndarray]]:
         """(time law, generalised force (size,) at unit law value) of every load."""
         if not hasattr(self, "_nominal_loads"):
-            self._nominal_loads = []
-            for load in self.scene.loads:
-                vector = np.zeros(self.size)
-                if load.type == "point_force":
-                    vector[self.node_dofs(self.node_index(load.node), "r")] = load.vector
-                else:  # gravity: the consistent force M u of a uniform acceleration
-                    vector = self.mass @ self._translation(np.asarray(load.vector))
-                self._nominal_loads.append((load.law, vector))
+            self._nominal_loads = [(load.time_law, load.nominal(self))
+                                   for load in self.scene.loads]
         return self._nominal_loads
 
     def nominal_load(self) -> np.ndarray:
@@ -369,7 +353,7 @@ class Model:
         return sum((vector for _, vector in self.nominal_loads()), np.zeros(self.size))
 
     def external_forces(self, t: float) -> np.ndarray:
-        """Point forces and gravity at time t (N), (size,)."""
+        """Loads at time t (N), (size,)."""
         force = np.zeros(self.size)
         for law, vector in self.nominal_loads():
             force += law.value(t) * vector
@@ -380,18 +364,134 @@ class Model:
         at time t, or at the loads' nominal value when t is None (static analysis)."""
         total = 0.0
         for load, (law, force) in zip(self.scene.loads, self.nominal_loads(), strict=True):
-            if load.type == "gravity":
+            if load.potential:
                 scale = 1.0 if t is None else law.value(t)
                 total -= scale * float(force @ (q - self.reference))
         return total
 
-    def _translation(self, vector: np.ndarray) -> np.ndarray:
-        """Coordinates of a rigid translation by ``vector`` (positions moved, gradients 0):
-        M times it is the consistent generalised force of a uniform acceleration."""
-        u = np.zeros(self.size)
-        k = self.vectors.index("r")
-        starts = np.arange(0, self.size, self.per_node) + k * self.dim
-        for c in range(self.dim):
-            u[starts + c] = vector[c]
-        return u
+    # --- frames and rigid motions --------------------------------------------------------
 
+    def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
+        """Orthonormal frame (dim, dim) of a node: its gradient vectors, orthonormalised with
+        r_x kept as the first axis (exact for a rigidly rotated node such as a hub)."""
+        gradients = np.column_stack([q[self.node_dofs(node, name)]
+                                     for name in self.vectors if name != "r"])
+        basis, upper = np.linalg.qr(gradients)
+        return basis * np.sign(np.diag(upper))
+
+    def rigid_field(self, translation: Sequence[float] | None = None,
+                    rotation: float | Sequence[float] | None = None,
+                    about: Sequence[float] | None = None,
+                    body: str | None = None) -> np.ndarray:
+        """Coordinates (size,) of the small rigid motion of the reference by ``translation``
+        (dim,) and ``rotation`` (a number about z in 2D, (3,) in 3D) about the point
+        ``about`` (dim,; default the origin): positions u + w x (r - about), gradients w x r_k;
+        zero outside ``body`` if given.  In velocities: m/s from m/s and rad/s."""
+        nodes = self.reference.reshape(-1, len(self.vectors), self.dim)
+        field = np.zeros_like(nodes)
+        k = self.vectors.index("r")
+        if translation is not None:
+            field[:, k] += np.asarray(translation, float)
+        if rotation is not None:
+            arms = nodes.copy()
+            arms[:, k] -= np.zeros(self.dim) if about is None else np.asarray(about, float)
+            field += _cross(rotation, arms)
+        if body is not None:
+            mesh = self.bodies[body]
+            keep = np.zeros(len(nodes), bool)
+            keep[mesh.first_node:mesh.first_node + mesh.nodes] = True
+            field[~keep] = 0.0
+        return field.ravel()
+
+    def initial_velocities(self) -> np.ndarray:
+        """Velocities (size,) at t = 0 (m/s, per coordinate) from the bodies'
+        ``initial_velocity`` and ``initial_angular_velocity``: positions v + w x (r - about),
+        gradients w x r_k, in the reference; fixed and prescribed coordinates zero."""
+        velocities = np.zeros(self.size)
+        for body in self.scene.bodies:
+            spin = body.initial_angular_velocity
+            if body.initial_velocity is not None or spin is not None:
+                velocities += self.rigid_field(body.initial_velocity, spin and spin.omega,
+                                               spin and spin.about, body.name)
+        velocities[self.fixed] = 0.0
+        velocities[self.prescribed] = 0.0
+        return velocities
+
+    def free_motions(self, tolerance: float = 1e-12) -> list[str]:
+        """One sentence per body that the constraints leave free to move rigidly, e.g.
+        "body 'beam' is free to translate along x and y and to rotate about z" (empty when
+        the model is held): the null space of the constrained stiffness at the reference.
+
+        The elastic stiffness of a body at its reference vanishes exactly on its small rigid
+        motions (and only there for elements without spurious zero-energy modes), so the
+        null space is the set of rigid motions of the bodies (dim translations and 1 or 3
+        rotations each) that keep fixed and prescribed coordinates at rest and satisfy the
+        joints: computed in that small basis (columns normalised per body), with
+        ``tolerance`` on the eigenvalues of its Gram matrix (relative to 1).
+        """
+        rotations = 1 if self.dim == 2 else 3
+        per_body = self.dim + rotations
+        positions = self.reference.reshape(-1, len(self.vectors), self.dim)[
+            :, self.vectors.index("r")]
+        columns, norms = [], []
+        for name, mesh in self.bodies.items():
+            centre = positions[mesh.first_node:mesh.first_node + mesh.nodes].mean(axis=0)
+            for unit in np.eye(per_body):
+                column = self.rigid_field(unit[:self.dim], unit[self.dim:] if rotations == 3
+                                          else unit[self.dim], centre, name)
+                norms.append(np.linalg.norm(column))
+                columns.append(scipy.sparse.csc_matrix(column[:, None] / norms[-1]))
+        basis = scipy.sparse.hstack(columns).tocsr()
+        held = np.concatenate([self.fixed, self.prescribed])
+        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis])
+        values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())
+        null = vectors[:, values <= tolerance]
+        sentences = []
+        for b, name in enumerate(self.bodies):
+            rows = slice(b * per_body, (b + 1) * per_body)
+            motions = _motions(null[rows], np.asarray(norms[rows]), self.dim)
+            if motions:
+                sentences.append(f"body {name!r} is free to {motions}")
+        return sentences
+
+
+def _cross(rotation: float | Sequence[float], arms: np.ndarray) -> np.ndarray:
+    """rotation x arms for arms (..., dim): a number about z in 2D, a 3-vector in 3D."""
+    if arms.shape[-1] == 2:
+        return float(rotation) * np.stack([-arms[..., 1], arms[..., 0]], axis=-1)
+    return np.cross(np.asarray(rotation, float), arms)
+
+
+RANK_TOLERANCE = 1e-6   # singular values of unit null vectors' parts counted as zero
+
+
+def _motions(null: np.ndarray, norms: np.ndarray, dim: int) -> str:
+    """Words for the rigid motions of one body in the null vectors ``null`` (params, k):
+    rows dim translations then the rotations, each column of the basis divided by ``norms``
+    (the translations share one norm)."""
+    translations, rotations = null[:dim], null[dim:]
+    _, s, vt = np.linalg.svd(rotations, full_matrices=True)
+    turning = int(np.sum(s > RANK_TOLERANCE))
+    words = []
+    moving, s_t, _ = np.linalg.svd(translations @ vt[turning:].T, full_matrices=False)
+    sliding = int(np.sum(s_t > RANK_TOLERANCE))
+    if sliding:
+        words.append(f"translate along {_directions(moving[:, :sliding])}")
+    if turning:
+        axes = np.linalg.qr((rotations @ vt[:turning].T) / norms[dim:, None])[0]
+        words.append(f"rotate about {_directions(axes) if dim == 3 else 'z'}")
+    return " and to ".join(words)
+
+
+def _directions(basis: np.ndarray) -> str:
+    """Names of the span of orthonormal columns: coordinate axes ("x and y") when they span
+    it, else the columns as vectors."""
+    names = "xyz"[:basis.shape[0]]
+    inside = [names[i] for i in range(basis.shape[0])
+              if np.sum(basis[i] ** 2) > 1.0 - RANK_TOLERANCE]
+    if len(inside) != basis.shape[1]:   # vectors, each with its first non-zero part positive
+        signs = [np.sign(column[np.argmax(np.abs(column) > RANK_TOLERANCE)]) for column in
+                 basis.T]
+        inside = ["(" + ", ".join(f"{x:.3g}" for x in sign * column + 0.0) + ")"
+                  for sign, column in zip(signs, basis.T, strict=True)]
+    return inside[0] if len(inside) == 1 else ", ".join(inside[:-1]) + " and " + inside[-1]

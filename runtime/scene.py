@@ -1,12 +1,21 @@
-"""Scenes: a TOML file (DESIGN.md section 7) -> a validated, typed ``Scene``.
+"""Scenes: the public Python API of the scene schema, read from and written to TOML
+(DESIGN.md section 7).
 
-Units SI: lengths in m, forces in N, accelerations in m/s^2, E in Pa, rho in kg/m^3, angles
-in degrees where the key says ``_deg`` and in rad in time laws, times in s.
+Units SI: lengths in m, forces in N, moments in N m, velocities in m/s, angular velocities in
+rad/s, accelerations in m/s^2, E in Pa, rho in kg/m^3, angles in degrees where the key says
+``_deg`` and in rad in time laws, times in s.
 
-Every error is a ``SceneError`` whose message starts with the key path of the culprit
-(``body[1].sectoin: unknown key; expected one of ...``) and says what was expected and what
-was found.  Node references ``"BODY:INDEX"`` are resolved: ``NodeRef.index`` is always the
-non-negative node index (0 .. elements).
+A ``Scene`` is built from the dataclasses of this module and the typed records of
+``runtime.constraints``, ``runtime.loads`` and ``runtime.sensors``, in Python or from a TOML
+file (``load_scene``).  There is one validation path: a scene built in Python is written as
+its TOML table (``Scene.to_dict``) and read by the parser of TOML files, so both raise the same
+``SceneError`` whose message starts with the key path of the culprit (``body[1].sectoin:
+unknown key; expected one of ...``) and says what was expected and what was found; the
+validated scene holds the parsed values (node references ``"BODY:INDEX"`` resolved to
+``NodeRef`` with a non-negative index, which keeps a negative index as written for
+``to_toml``, so "BODY:-1" stays the last node when the body is remeshed; numbers as floats,
+vectors as tuples).
+``Scene.to_toml()`` writes a scene that ``load_scene`` reads back equal.
 
 Beyond the types, a scene is checked for what it would do wrong:
 
@@ -14,7 +23,8 @@ Beyond the types, a scene is checked for what it would do wrong:
   what a pin holds; a clamp and a prescribed rotation contradict each other); joints join two
   distinct nodes at the same place in the reference, each pair once, and never two nodes whose
   positions are already held or already tied by other joints (the multipliers would be
-  singular); a point force acts on a node whose position is free; some coordinate stays free;
+  singular); a point force acts on a node whose position is free, a point moment on a node
+  whose section can turn; some coordinate stays free;
 * times: ``t_end`` and ``output_every`` are integer multiples of ``step`` (relative tolerance
   1e-9 on the ratio; the message suggests the nearest valid values);
 * sizes, estimated before anything is built (``LIMITS``): memory of the model (element
@@ -23,14 +33,15 @@ Beyond the types, a scene is checked for what it would do wrong:
   measured ~9 us per element and step); at most 1e8 values in the time series; at most 1000
   Newton iterations, 1000 modes (and no more than the degrees of freedom), 1000 sensors and
   Gauss orders up to 64; a relative Newton tolerance in [1e-15, 1e-2];
-* names: sensor names are file names (``SENSOR_NAME``, at most 64 characters, unique ignoring
-  case, none reserved); body and material names printable, at most 64 characters;
+* names: sensor names are file names (at most 64 characters, unique ignoring case, none
+  reserved: ``runtime.sensors``); body and material names printable, at most 64 characters;
 * files (``read_scene_file``): UTF-8 (a byte order mark is skipped), at most 16 MiB, a
   regular file, not empty; errors name the file (and the byte offset or the line).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import tomllib
@@ -40,46 +51,53 @@ from pathlib import Path
 from typing import Any
 
 from runtime.catalog import ENGINES, NEWTON_MODES
+from runtime.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint
 from runtime.element import METHODS
 from runtime.kernels import BACKENDS, element_kind, known_kinds
-from runtime.laws import Constant, Law, SceneError, _is_finite, _show, parse_law
+from runtime.laws import SceneError, _show
+from runtime.loads import LOADS, Load, NodeLoad
+from runtime.schema import (
+    NAME_LENGTH,
+    Context,
+    NodeRef,
+    Nodes,
+    boolean,
+    choice,
+    keys,
+    number,
+    parse_record,
+    plain,
+    rotation_vector,
+    same,
+    string,
+    table,
+    vector,
+)
+from runtime.sensors import SENSORS, Sensor
 
 __all__ = [
     "Arc",
     "Body",
-    "Constraint",
     "Dynamic",
-    "Load",
     "Material",
     "Modal",
     "NodeRef",
+    "Output",
     "Scene",
     "SceneError",
-    "Sensor",
     "Solver",
+    "Spin",
     "Static",
     "load_scene",
     "parse_scene",
+    "read_scene_file",
+    "toml_text",
 ]
 
-CONSTRAINT_TYPES = ("clamp", "pin", "prescribed_rotation", "spherical", "revolute")
-LOAD_TYPES = ("point_force", "gravity")
-SENSOR_TYPES = ("displacement", "position", "strain_energy", "kinetic_energy",
-                "potential_energy", "total_energy", "constraint_violation")
 INTEGRATORS = ("trapezoidal", "generalized_alpha")
 MATERIAL_LAWS = ("svk", "ecm")
 MODAL_ABOUT = ("reference", "static")
-# names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
-# "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
-# systems that ignore case); "t" is the time column, "energies" the energy plot, the others
-# are device names on Windows
-SENSOR_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*")
-RESERVED_SENSOR_NAMES = ("t", "energies", "con", "prn", "aux", "nul",
-                         *(f"com{i}" for i in range(1, 10)), *(f"lpt{i}" for i in range(1, 10)))
-NAME_LENGTH = 64
 TITLE_LENGTH = 200
-# a node index: ASCII digits, an optional "-", no "+", blanks, "_" or leading zeros
-NODE_INDEX = re.compile(r"0|-?[1-9][0-9]*")
 # relative tolerance on t_end / step and output_every / step being integers
 MULTIPLE_TOLERANCE = 1e-9
 # a relative Newton tolerance outside this range is never met or accepts unconverged steps
@@ -97,52 +115,29 @@ LIMITS = {
     "quadrature": 64,                    # Gauss order per direction (runtime.element)
     "scene_bytes": 16 * 2**20,           # size of a scene file
 }
-# what a missing required key should hold, for error messages
-HINTS = {
-    "E": "Young's modulus in Pa",
-    "nu": "Poisson's ratio",
-    "rho": "the density in kg/m^3",
-    "name": "a name",
-    "element": "an element kind",
-    "material": "the NAME of a [material.NAME] table",
-    "section": "{height = H, width = W} in m",
-    "height": "the section height in m",
-    "width": "the section width in m",
-    "elements": "the number of elements",
-    "center": "the centre of the arc in m",
-    "radius": "the radius of the arc in m",
-    "angle_deg": "the opening angle of the arc in degrees",
-    "node": 'a node reference "BODY:INDEX"',
-    "nodes": 'two node references ["A:INDEX", "B:INDEX"]',
-    "angle": 'a time law of the angle in rad, e.g. {type = "spin_up", omega = 4.0, t_ramp = 15.0}',
-    "force": "the force vector in N",
-    "acceleration": "the acceleration vector in m/s^2",
-    "component": "x, y, z or norm",
-    "t_end": "the end time in s",
-    "step": "the time step in s",
+# two node constraints on one node: why not (by their types; one type: the same twice)
+CONFLICTS = {
+    frozenset({"clamp", "pin"}): "redundant: the clamp holds every coordinate of the node, the "
+                                 "pin only its position; keep the clamp",
+    frozenset({"clamp", "prescribed_rotation"}): "contradictory: the clamp holds the node's "
+                                                 "gradients, the prescribed rotation turns them",
+    frozenset({"pin", "prescribed_rotation"}): "redundant: the prescribed rotation already "
+                                               "holds the node's position (a rigid hub); "
+                                               "remove the pin",
+    frozenset({"prescribed_rotation"}): "a node has at most one prescribed_rotation",
 }
 
 
 # --------------------------------------------------------------------------- dataclasses
 
 @dataclass(frozen=True)
-class NodeRef:
-    """Node ``index`` (0-based, resolved: 0 .. elements) of body ``body``."""
-
-    body: str
-    index: int
-
-    def __str__(self) -> str:
-        return f"{self.body}:{self.index}"
-
-
-@dataclass(frozen=True)
 class Material:
-    """Elastic material: E (Pa) > 0, -1 < nu < 0.5, rho (kg/m^3) > 0.
+    """Elastic material ``name``: E (Pa) > 0, -1 < nu < 0.5, rho (kg/m^3) > 0.
 
     law: ``svk`` (St. Venant-Kirchhoff) or ``ecm`` (elastic continuum mechanics with a shear
     correction); shear_correction: the ecm shear correction factor (> 0), None for the default
     (always None with svk); damping: Kelvin-Voigt coefficient alpha (s) >= 0, 0 for none.
+    In TOML the name is the key of the table ``[material.NAME]``.
     """
 
     name: str
@@ -152,6 +147,10 @@ class Material:
     law: str = "svk"
     shear_correction: float | None = None
     damping: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[material.NAME]`` (without the name)."""
+        return table(self, skip=("name",))
 
 
 @dataclass(frozen=True)
@@ -164,14 +163,33 @@ class Arc:
     start_angle_deg: float
     angle_deg: float
 
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``arc = {...}``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Spin:
+    """A rigid rotation at the angular velocity ``omega`` (rad/s: a number, about +z, in 2D;
+    a vector (3,) in 3D) about the point ``about`` (dim,) in m."""
+
+    omega: float | tuple[float, ...]
+    about: tuple[float, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``initial_angular_velocity = {...}``."""
+        return table(self)
+
 
 @dataclass(frozen=True)
 class Body:
     """A mesh of ``elements`` elements of kind ``element`` (``elements + 1`` nodes).
 
-    material: the name of a material of ``Scene.materials``; height, width: section (m);
-    either ``start``/``end`` (dim,) in m (straight) or ``arc``; quadrature: Gauss orders
-    (dim,) or None for the kind's default.
+    material: the name of a material of the scene; height, width: section (m; TOML
+    ``section = {height, width}``); either ``start``/``end`` (dim,) in m (straight) or
+    ``arc``; quadrature: Gauss orders (dim,) or None for the kind's default.  Initial
+    conditions (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s,
+    a uniform translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
     """
 
     name: str
@@ -180,10 +198,12 @@ class Body:
     height: float
     width: float
     elements: int
-    start: tuple[float, ...] | None
-    end: tuple[float, ...] | None
-    arc: Arc | None
-    quadrature: tuple[int, ...] | None
+    start: tuple[float, ...] | None = None
+    end: tuple[float, ...] | None = None
+    arc: Arc | None = None
+    quadrature: tuple[int, ...] | None = None
+    initial_velocity: tuple[float, ...] | None = None
+    initial_angular_velocity: Spin | None = None
 
     @property
     def dim(self) -> int:
@@ -195,46 +215,12 @@ class Body:
         """Number of nodes, ``elements + 1``."""
         return self.elements + 1
 
-
-@dataclass(frozen=True)
-class Constraint:
-    """A constraint: ``clamp`` / ``pin`` / ``prescribed_rotation`` act on ``node``;
-    ``spherical`` / ``revolute`` (2D only) join the two ``nodes``, coincident in the reference.
-    ``angle``: the law of the prescribed rotation (rad); ``axis``: its unit rotation axis (3,)
-    in 3D (default +z), None in 2D and for the other types."""
-
-    type: str
-    node: NodeRef | None
-    nodes: tuple[NodeRef, NodeRef] | None
-    angle: Law | None
-    axis: tuple[float, ...] | None
-
-
-@dataclass(frozen=True)
-class Load:
-    """``point_force`` at ``node`` (vector: force, N) or ``gravity`` on every body (vector:
-    acceleration, m/s^2, node None); the vector (dim,) is scaled by ``law.value(t)``."""
-
-    type: str
-    node: NodeRef | None
-    vector: tuple[float, ...]
-    law: Law
-
-
-@dataclass(frozen=True)
-class Sensor:
-    """A named output: ``displacement`` / ``position`` (m) of ``node``, ``component`` x|y|z|norm,
-    in the frame of node ``frame`` when given; ``strain_energy`` / ``kinetic_energy`` (J) of
-    ``body`` (None: the whole model); ``potential_energy`` (J, of gravity) and
-    ``total_energy`` (J, strain + kinetic + potential) of the whole model;
-    ``constraint_violation`` (norm of the constraints)."""
-
-    name: str
-    type: str
-    node: NodeRef | None
-    component: str | None
-    frame: NodeRef | None
-    body: str | None
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[[body]]``."""
+        head = {"name": self.name, "element": self.element, "material": self.material,
+                "section": {"height": self.height, "width": self.width},
+                "elements": self.elements}
+        return {**plain(head), **table(self, skip=(*head, "height", "width"))}
 
 
 @dataclass(frozen=True)
@@ -246,6 +232,10 @@ class Static:
     tolerance: float = 1e-10
     load_steps: int = 1
 
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.static]``."""
+        return table(self)
+
 
 @dataclass(frozen=True)
 class Modal:
@@ -254,6 +244,10 @@ class Modal:
 
     modes: int = 4
     about: str = "reference"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.modal]``."""
+        return table(self)
 
 
 @dataclass(frozen=True)
@@ -274,6 +268,10 @@ class Dynamic:
     frequency_after: float = 0.0       # ... from this time (s) to t_end
     newton: str = "full"
 
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.dynamic]``."""
+        return table(self)
+
 
 @dataclass(frozen=True)
 class Solver:
@@ -285,22 +283,58 @@ class Solver:
     backend: str = "c"
     engine: str | None = None
 
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[solver]``."""
+        return table(self)
+
 
 @dataclass(frozen=True)
-class Scene:
-    """A validated scene; ``source`` is the file it came from (or ``"<scene>"``)."""
+class Output:
+    """What a run writes beyond the summary and time series: ``vtk`` (VTU/PVD files of the
+    deformed bodies), ``animation`` (a GIF), ``states`` (keep the nodal states in memory)."""
 
-    title: str
+    vtk: bool = False
+    animation: bool = False
+    states: bool = False
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[output]``."""
+        return table(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Scene:
+    """A validated scene.  Built in Python, the arguments are checked as the TOML file
+    ``to_toml()`` would be (``SceneError`` naming the key path) and replaced by their parsed
+    values.  ``materials``: Material objects (a sequence, or {name: Material}); node references
+    may be ``NodeRef`` or ``"BODY:INDEX"``; vectors sequences of numbers; ``source`` is the
+    file the scene came from (or ``"<scene>"``; not compared).
+
+    Example::
+
+        Scene(materials=[Material("steel", E=2.1e11, nu=0.3, rho=7800.0)],
+              bodies=[Body("beam", "beam2d", "steel", 0.1, 0.1, 8, (0, 0), (1, 0))],
+              constraints=[Clamp("beam:0")], loads=[PointForce("beam:-1", (0, -100))],
+              sensors=[Displacement("tip_y", "beam:-1", "y")], static=Static())
+    """
+
+    title: str = "untitled"
     materials: dict[str, Material]
     bodies: tuple[Body, ...]
-    constraints: tuple[Constraint, ...]
-    loads: tuple[Load, ...]
-    sensors: tuple[Sensor, ...]
-    static: Static | None
-    modal: Modal | None
-    dynamic: Dynamic | None
-    solver: Solver
-    source: str
+    constraints: tuple[Constraint, ...] = ()
+    loads: tuple[Load, ...] = ()
+    sensors: tuple[Sensor, ...] = ()
+    static: Static | None = None
+    modal: Modal | None = None
+    dynamic: Dynamic | None = None
+    solver: Solver = Solver()
+    output: Output = Output()
+    source: str = dataclasses.field(default="<scene>", compare=False)
+
+    def __post_init__(self) -> None:
+        parsed = parse_scene(self.to_dict(), self.source)
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, getattr(parsed, f.name))
 
     @property
     def dim(self) -> int:
@@ -319,34 +353,61 @@ class Scene:
         b = self.body(body) if isinstance(body, str) else body
         return self.materials[b.material]
 
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as the table a TOML file holds (what ``tomllib`` would return)."""
+        data: dict[str, Any] = {"title": self.title,
+                                "material": _materials_table(self.materials),
+                                "body": plain(self.bodies)}
+        for name, items in (("constraint", self.constraints), ("load", self.loads),
+                            ("sensor", self.sensors)):
+            if items:
+                data[name] = plain(items)
+        analysis = {name: plain(value) for name, value in (
+            ("static", self.static), ("modal", self.modal), ("dynamic", self.dynamic))
+            if value is not None}
+        if analysis:
+            data["analysis"] = analysis
+        for name, value, default in (("solver", self.solver, Solver()),
+                                     ("output", self.output, Output())):
+            if not same(value, default):
+                data[name] = plain(value)
+        return data
+
+    def to_toml(self) -> str:
+        """The scene as TOML text (``load_scene`` of it gives an equal scene)."""
+        return toml_text(self.to_dict())
+
+
+def _materials_table(materials: Any) -> Any:
+    """``[material.NAME]`` tables of Material objects (a sequence or {name: Material})."""
+    if isinstance(materials, dict):
+        for name, material in materials.items():
+            if isinstance(material, Material) and material.name != name:
+                raise SceneError(f"material.{name}: the material under this key is called "
+                                 f"{_show(material.name)}; expected the same name")
+        return plain(materials)
+    if not isinstance(materials, list | tuple):
+        return plain(materials)
+    out: dict[str, Any] = {}
+    for i, material in enumerate(materials):
+        if not isinstance(material, Material):
+            raise SceneError(f"material: expected Material objects, got {_show(material)} at "
+                             f"position {i}")
+        if material.name in out:
+            raise SceneError(f"material.{material.name}: duplicate material name")
+        out[material.name] = material.to_dict()
+    return out
+
+
+def _validated_scene(**values: Any) -> Scene:
+    """A Scene of already validated values (the parser's result: not validated again)."""
+    scene = object.__new__(Scene)
+    for name, value in values.items():
+        object.__setattr__(scene, name, value)
+    return scene
+
 
 # --------------------------------------------------------------------------- checkers
-
-def _keys(data: Any, path: str, required: tuple[str, ...], optional: tuple[str, ...],
-          what: str = "a table") -> dict:
-    """Check that ``data`` is a table holding all ``required`` keys and no unknown key."""
-    if not isinstance(data, dict):
-        raise SceneError(f"{path}: expected {what}, got {_show(data)}")
-    allowed = (*required, *optional)
-    prefix = f"{path}." if path else ""
-    for key in data:
-        if key not in allowed:
-            raise SceneError(f"{prefix}{key}: unknown key; expected one of {', '.join(allowed)}")
-    for key in required:
-        if key not in data:
-            hint = f"; expected {HINTS[key]}" if key in HINTS else ""
-            raise SceneError(f"{prefix}{key}: missing required key{hint}")
-    return data
-
-
-def _number(value: Any, path: str, positive: bool = False) -> float:
-    if not _is_finite(value):
-        raise SceneError(f"{path}: expected a {'positive' if positive else 'finite'} number, "
-                         f"got {_show(value)}")
-    if positive and value <= 0:
-        raise SceneError(f"{path}: expected a positive number, got {_show(value)}")
-    return float(value)
-
 
 def _count(value: Any, path: str, maximum: int | None = None, why: str = "") -> int:
     """A positive integer (TOML integer: a float such as 1e20 or 10.0 is not one), at most
@@ -361,15 +422,9 @@ def _count(value: Any, path: str, maximum: int | None = None, why: str = "") -> 
     return value
 
 
-def _string(value: Any, path: str) -> str:
-    if not isinstance(value, str) or not value:
-        raise SceneError(f"{path}: expected a non-empty string, got {_show(value)}")
-    return value
-
-
 def _name(value: Any, path: str, what: str = "a name") -> str:
     """A non-empty printable name of at most NAME_LENGTH characters, without blanks around."""
-    name = _string(value, path)
+    name = string(value, path)
     if len(name) > NAME_LENGTH:
         raise SceneError(f"{path}: expected {what} of at most {NAME_LENGTH} characters, got "
                          f"{len(name)} characters {_show(name)}")
@@ -377,19 +432,6 @@ def _name(value: Any, path: str, what: str = "a name") -> str:
         raise SceneError(f"{path}: expected {what} of printable characters without blanks at "
                          f"either end, got {_show(name)}")
     return name
-
-
-def _choice(value: Any, path: str, choices: tuple[str, ...], what: str = "value") -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise SceneError(f"{path}: unknown {what} {_show(value)}; expected one of "
-                         f"{', '.join(choices)}")
-    return value
-
-
-def _vector(value: Any, path: str, dim: int, why: str) -> tuple[float, ...]:
-    if not isinstance(value, list) or len(value) != dim or not all(map(_is_finite, value)):
-        raise SceneError(f"{path}: expected a list of {dim} numbers ({why}), got {_show(value)}")
-    return tuple(float(x) for x in value)
 
 
 def _array_of_tables(data: dict, key: str) -> list:
@@ -404,20 +446,20 @@ def _array_of_tables(data: dict, key: str) -> list:
 def _material(name: str, data: Any) -> Material:
     path = f"material.{name}" if name else 'material.""'
     _name(name, path, "a material name")
-    _keys(data, path, ("E", "nu", "rho"), ("law", "shear_correction", "damping"))
-    E = _number(data["E"], f"{path}.E", positive=True)
-    nu = _number(data["nu"], f"{path}.nu")
+    keys(data, path, ("E", "nu", "rho"), ("law", "shear_correction", "damping"))
+    E = number(data["E"], f"{path}.E", positive=True)
+    nu = number(data["nu"], f"{path}.nu")
     if not -1.0 < nu < 0.5:
         raise SceneError(f"{path}.nu: expected a Poisson ratio in (-1, 0.5), got {_show(nu)}")
-    rho = _number(data["rho"], f"{path}.rho", positive=True)
-    law = _choice(data.get("law", "svk"), f"{path}.law", MATERIAL_LAWS, "material law")
+    rho = number(data["rho"], f"{path}.rho", positive=True)
+    law = choice(data.get("law", "svk"), f"{path}.law", MATERIAL_LAWS, "material law")
     shear = None
     if "shear_correction" in data:
-        shear = _number(data["shear_correction"], f"{path}.shear_correction", positive=True)
+        shear = number(data["shear_correction"], f"{path}.shear_correction", positive=True)
         if law != "ecm":
             raise SceneError(f'{path}.shear_correction: only meaningful with law = "ecm", got '
                              f'law = "{law}"; remove it or set law = "ecm"')
-    damping = _number(data.get("damping", 0.0), f"{path}.damping")
+    damping = number(data.get("damping", 0.0), f"{path}.damping")
     if damping < 0:
         raise SceneError(f"{path}.damping: expected a Kelvin-Voigt coefficient alpha >= 0 (s), "
                          f"got {_show(data['damping'])}")
@@ -426,24 +468,24 @@ def _material(name: str, data: Any) -> Material:
 
 def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
     path = f"body[{i}]"
-    _keys(data, path, ("name", "element", "material", "section", "elements"),
-          ("start", "end", "arc", "quadrature"))
+    keys(data, path, ("name", "element", "material", "section", "elements"),
+         ("start", "end", "arc", "quadrature", "initial_velocity", "initial_angular_velocity"))
     name = _name(data["name"], f"{path}.name", "a body name")
     if ":" in name:
         raise SceneError(f'{path}.name: expected a name without ":", got {_show(name)}')
     kinds = tuple(known_kinds())
-    kind = _choice(data["element"], f"{path}.element", kinds, "element kind")
+    kind = choice(data["element"], f"{path}.element", kinds, "element kind")
     dim = element_kind(kind).dim
     why = f"{kind} is {dim}D"
-    material = _string(data["material"], f"{path}.material")
+    material = string(data["material"], f"{path}.material")
     if material not in materials:
         defined = ", ".join(materials) or "none"
         raise SceneError(f"{path}.material: material {_show(material)} is not defined; "
                          f"defined materials: {defined}")
-    section = _keys(data["section"], f"{path}.section", ("height", "width"), (),
-                    "a table {height = H, width = W}")
-    height = _number(section["height"], f"{path}.section.height", positive=True)
-    width = _number(section["width"], f"{path}.section.width", positive=True)
+    section = keys(data["section"], f"{path}.section", ("height", "width"), (),
+                   "a table {height = H, width = W}")
+    height = number(section["height"], f"{path}.section.height", positive=True)
+    width = number(section["width"], f"{path}.section.width", positive=True)
     elements = _count(data["elements"], f"{path}.elements")
 
     straight = "start" in data or "end" in data
@@ -456,8 +498,8 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
             if key not in data:
                 raise SceneError(f"{path}.{key}: missing required key; expected a point in m "
                                  "(a straight body needs start and end)")
-        start = _vector(data["start"], f"{path}.start", dim, why)
-        end = _vector(data["end"], f"{path}.end", dim, why)
+        start = vector(data["start"], f"{path}.start", dim, why)
+        end = vector(data["end"], f"{path}.end", dim, why)
         if start == end:
             raise SceneError(f"{path}.end: expected a point different from start, got "
                              f"{_show(data['end'])}")
@@ -465,21 +507,7 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
             raise SceneError(f"{path}.end: expected a body of finite length, got start = "
                              f"{_show(data['start'])} and end = {_show(data['end'])}")
     elif "arc" in data:
-        apath = f"{path}.arc"
-        a = _keys(data["arc"], apath, ("center", "radius", "angle_deg"), ("start_angle_deg",),
-                  "a table {center = [...], radius = R, angle_deg = A}")
-        center = _vector(a["center"], f"{apath}.center", dim, why)
-        radius = _number(a["radius"], f"{apath}.radius", positive=True)
-        extent = radius + max(abs(x) for x in center)
-        if not math.isfinite(extent * extent):
-            raise SceneError(f"{apath}.radius: expected an arc of finite extent, got radius "
-                             f"{_show(a['radius'])} about centre {_show(a['center'])}")
-        start_angle = _number(a.get("start_angle_deg", 0.0), f"{apath}.start_angle_deg")
-        angle = _number(a["angle_deg"], f"{apath}.angle_deg")
-        if angle == 0.0 or abs(angle) > 360.0:
-            raise SceneError(f"{apath}.angle_deg: expected a non-zero angle of at most 360 "
-                             f"degrees in magnitude, got {_show(a['angle_deg'])}")
-        arc = Arc(center, radius, start_angle, angle)
+        arc = _arc(data["arc"], f"{path}.arc", dim, why)
     else:
         raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
 
@@ -492,134 +520,43 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
             raise SceneError(f"{path}.quadrature: expected a list of {dim} positive integers "
                              f"of at most {top} (Gauss orders; {why}), got {_show(q)}")
         quadrature = tuple(q)
-    return Body(name, kind, material, height, width, elements, start, end, arc, quadrature)
+    velocity = None
+    if "initial_velocity" in data:
+        velocity = vector(data["initial_velocity"], f"{path}.initial_velocity", dim,
+                          f"a velocity in m/s; {why}")
+    spin = None
+    if "initial_angular_velocity" in data:
+        spath = f"{path}.initial_angular_velocity"
+        s = keys(data["initial_angular_velocity"], spath, ("omega", "about"), (),
+                 "a table {omega = ..., about = [...]}")
+        spin = Spin(rotation_vector(s["omega"], f"{spath}.omega", dim, "the angular velocity "
+                                    "in rad/s"),
+                    vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
+    return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
+                velocity, spin)
 
 
-class _Nodes:
-    """Resolves ``"BODY:INDEX"`` against the bodies of a scene."""
-
-    def __init__(self, bodies: tuple[Body, ...]) -> None:
-        self.bodies = {b.name: b for b in bodies}
-
-    def __call__(self, value: Any, path: str) -> NodeRef:
-        if not isinstance(value, str) or value.count(":") != 1:
-            raise SceneError(f'{path}: expected a node reference "BODY:INDEX", got '
-                             f"{_show(value)}")
-        name, index_text = value.split(":")
-        if name not in self.bodies:
-            raise SceneError(f"{path}: unknown body {_show(name)} in {_show(value)}; bodies: "
-                             f"{', '.join(self.bodies)}")
-        if not NODE_INDEX.fullmatch(index_text):
-            raise SceneError(f'{path}: expected an integer node index after ":" (ASCII digits '
-                             f'and an optional leading "-"; no "+", blanks, "_" or leading '
-                             f'zeros, "-0" neither: 0 is the first node, -1 the last), got '
-                             f"{_show(value)}")
-        n = self.bodies[name].n_nodes
-        index = int(index_text) if len(index_text) <= 20 else None
-        if index is None or not -n <= index < n:
-            shown = index_text if index is not None else f"{index_text[:20]}..."
-            raise SceneError(f"{path}: node index {shown} out of range for body {_show(name)} "
-                             f"with {n} nodes (0..{n - 1} or -{n}..-1)")
-        return NodeRef(name, index % n)
-
-
-def _axis(value: Any, path: str) -> tuple[float, ...]:
-    axis = _vector(value, path, 3, "an axis is 3D")
-    norm = math.hypot(*axis)
-    if norm == 0.0:
-        raise SceneError(f"{path}: expected a non-zero axis, got {_show(value)}")
-    return tuple(x / norm for x in axis)
-
-
-def _constraint(i: int, data: dict, node: _Nodes, dim: int) -> Constraint:
-    path = f"constraint[{i}]"
-    if "type" not in data:
-        raise SceneError(f"{path}.type: missing required key; expected one of "
-                         f"{', '.join(CONSTRAINT_TYPES)}")
-    kind = _choice(data["type"], f"{path}.type", CONSTRAINT_TYPES, "constraint type")
-    if kind in ("clamp", "pin"):
-        _keys(data, path, ("type", "node"), ())
-        return Constraint(kind, node(data["node"], f"{path}.node"), None, None, None)
-    if kind == "prescribed_rotation":
-        if dim == 2 and "axis" in data:
-            raise SceneError(f"{path}.axis: only allowed in 3D scenes (a 2D rotation is about z)")
-        _keys(data, path, ("type", "node", "angle"), ("axis",) if dim == 3 else ())
-        ref = node(data["node"], f"{path}.node")
-        angle = parse_law(data["angle"], f"{path}.angle")
-        axis = _axis(data.get("axis", [0.0, 0.0, 1.0]), f"{path}.axis") if dim == 3 else None
-        return Constraint(kind, ref, None, angle, axis)
-    # spherical, revolute: two nodes
-    if kind == "revolute" and dim == 3:
-        raise SceneError(f'{path}.type: a revolute joint is planar (2D scenes only); use '
-                         f'"spherical" in 3D')
-    _keys(data, path, ("type", "nodes"), ())
-    refs = data["nodes"]
-    if not isinstance(refs, list) or len(refs) != 2:
-        raise SceneError(f'{path}.nodes: expected two node references ["A:-1", "B:0"], got '
-                         f"{_show(refs)}")
-    a, b = node(refs[0], f"{path}.nodes[0]"), node(refs[1], f"{path}.nodes[1]")
-    if a == b:
-        raise SceneError(f"{path}.nodes: expected two different nodes, got {a} twice "
-                         f"({_show(refs[0])} and {_show(refs[1])})")
-    return Constraint(kind, None, (a, b), None, None)
-
-
-def _load(i: int, data: dict, node: _Nodes, dim: int) -> Load:
-    path = f"load[{i}]"
-    if "type" not in data:
-        raise SceneError(f"{path}.type: missing required key; expected one of "
-                         f"{', '.join(LOAD_TYPES)}")
-    kind = _choice(data["type"], f"{path}.type", LOAD_TYPES, "load type")
-    why = f"the scene is {dim}D"
-    if kind == "point_force":
-        _keys(data, path, ("type", "node", "force"), ("time_law",))
-        ref = node(data["node"], f"{path}.node")
-        vector = _vector(data["force"], f"{path}.force", dim, why)
-    else:
-        _keys(data, path, ("type", "acceleration"), ("time_law",))
-        ref = None
-        vector = _vector(data["acceleration"], f"{path}.acceleration", dim, why)
-    law = parse_law(data["time_law"], f"{path}.time_law") if "time_law" in data else Constant()
-    return Load(kind, ref, vector, law)
-
-
-def _sensor(i: int, data: dict, node: _Nodes, dim: int) -> Sensor:
-    path = f"sensor[{i}]"
-    for key in ("name", "type"):
-        if key not in data:
-            hint = "a name" if key == "name" else f"one of {', '.join(SENSOR_TYPES)}"
-            raise SceneError(f"{path}.{key}: missing required key; expected {hint}")
-    name = _string(data["name"], f"{path}.name")
-    if not SENSOR_NAME.fullmatch(name) or len(name) > NAME_LENGTH:
-        raise SceneError(f"{path}.name: expected letters, digits, _ . and - starting with a "
-                         f"letter, digit or _, at most {NAME_LENGTH} characters (it names a "
-                         f"CSV column and a PNG file), got {_show(name)}")
-    if name.split(".")[0].lower() in RESERVED_SENSOR_NAMES:
-        raise SceneError(f"{path}.name: expected a name other than the reserved "
-                         f"{', '.join(RESERVED_SENSOR_NAMES)} (in any case, also before a "
-                         f'"."), got {_show(name)}')
-    kind = _choice(data["type"], f"{path}.type", SENSOR_TYPES, "sensor type")
-    if kind in ("displacement", "position"):
-        _keys(data, path, ("name", "type", "node", "component"), ("frame",))
-        ref = node(data["node"], f"{path}.node")
-        components = ("x", "y", "z", "norm") if dim == 3 else ("x", "y", "norm")
-        component = _choice(data["component"], f"{path}.component", components, "component")
-        frame = node(data["frame"], f"{path}.frame") if "frame" in data else None
-        return Sensor(name, kind, ref, component, frame, None)
-    if kind in ("strain_energy", "kinetic_energy"):
-        _keys(data, path, ("name", "type"), ("body",))
-        body = None
-        if "body" in data:
-            body = _choice(data["body"], f"{path}.body", tuple(node.bodies), "body")
-        return Sensor(name, kind, None, None, None, body)
-    _keys(data, path, ("name", "type"), ())
-    return Sensor(name, kind, None, None, None, None)
+def _arc(data: Any, path: str, dim: int, why: str) -> Arc:
+    a = keys(data, path, ("center", "radius", "angle_deg"), ("start_angle_deg",),
+             "a table {center = [...], radius = R, angle_deg = A}")
+    center = vector(a["center"], f"{path}.center", dim, why)
+    radius = number(a["radius"], f"{path}.radius", positive=True)
+    extent = radius + max(abs(x) for x in center)
+    if not math.isfinite(extent * extent):
+        raise SceneError(f"{path}.radius: expected an arc of finite extent, got radius "
+                         f"{_show(a['radius'])} about centre {_show(a['center'])}")
+    start_angle = number(a.get("start_angle_deg", 0.0), f"{path}.start_angle_deg")
+    angle = number(a["angle_deg"], f"{path}.angle_deg")
+    if angle == 0.0 or abs(angle) > 360.0:
+        raise SceneError(f"{path}.angle_deg: expected a non-zero angle of at most 360 "
+                         f"degrees in magnitude, got {_show(a['angle_deg'])}")
+    return Arc(center, radius, start_angle, angle)
 
 
 def _table_fields(data: Any, path: str, spec: dict[str, Callable[[Any, str], Any]],
                   required: tuple[str, ...] = ()) -> dict:
     optional = tuple(k for k in spec if k not in required)
-    _keys(data, path, required, optional)
+    keys(data, path, required, optional)
     return {key: check(data[key], f"{path}.{key}") for key, check in spec.items() if key in data}
 
 
@@ -629,7 +566,7 @@ def _iterations(value: Any, path: str) -> int:
 
 def _tolerance(value: Any, path: str) -> float:
     low, high = TOLERANCE_RANGE
-    tolerance = _number(value, path, positive=True)
+    tolerance = number(value, path, positive=True)
     if not low <= tolerance <= high:
         raise SceneError(f"{path}: expected a relative Newton tolerance in [{low:g}, {high:g}] "
                          f"(below, rounding never lets Newton meet it; above, unconverged "
@@ -646,7 +583,7 @@ def _static(data: Any) -> Static:
 def _modal(data: Any) -> Modal:
     return Modal(**_table_fields(data, "analysis.modal", {
         "modes": lambda v, p: _count(v, p, LIMITS["modes"], " modes"),
-        "about": lambda v, p: _choice(v, p, MODAL_ABOUT)}))
+        "about": lambda v, p: choice(v, p, MODAL_ABOUT)}))
 
 
 def _g(x: float) -> str:
@@ -675,14 +612,14 @@ def _multiple(value: float, step: float, path: str, key: str) -> None:
 
 def _dynamic(data: Any) -> Dynamic:
     path = "analysis.dynamic"
-    positive = lambda v, p: _number(v, p, positive=True)  # noqa: E731
+    positive = lambda v, p: number(v, p, positive=True)  # noqa: E731
     fields = _table_fields(data, path, {
         "t_end": positive, "step": positive,
-        "integrator": lambda v, p: _choice(v, p, INTEGRATORS, "integrator"),
-        "output_every": positive, "rho_inf": _number, "tolerance": _tolerance,
-        "max_iterations": _iterations, "frequency_of": _string,
-        "frequency_after": lambda v, p: _number(v, p),
-        "newton": lambda v, p: _choice(v, p, NEWTON_MODES, "Newton iteration")},
+        "integrator": lambda v, p: choice(v, p, INTEGRATORS, "integrator"),
+        "output_every": positive, "rho_inf": number, "tolerance": _tolerance,
+        "max_iterations": _iterations, "frequency_of": string,
+        "frequency_after": lambda v, p: number(v, p),
+        "newton": lambda v, p: choice(v, p, NEWTON_MODES, "Newton iteration")},
         required=("t_end", "step"))
     t_end, step = fields["t_end"], fields["step"]
     if not 0.0 <= fields.get("frequency_after", 0.0) < t_end:
@@ -710,10 +647,17 @@ def _dynamic(data: Any) -> Dynamic:
 
 def _solver(data: Any) -> Solver:
     return Solver(**_table_fields(data, "solver", {
-        "method": lambda v, p: _choice(v, p, METHODS, "method"),
-        "backend": lambda v, p: _choice(v, p, BACKENDS, "backend"),
-        "engine": lambda v, p: _choice(v, p, ENGINES, "engine")}))
+        "method": lambda v, p: choice(v, p, METHODS, "method"),
+        "backend": lambda v, p: choice(v, p, BACKENDS, "backend"),
+        "engine": lambda v, p: choice(v, p, ENGINES, "engine")}))
 
+
+def _output(data: Any) -> Output:
+    return Output(**_table_fields(data, "output", dict.fromkeys(
+        (f.name for f in dataclasses.fields(Output)), boolean)))
+
+
+# --------------------------------------------------------------------------- scene checks
 
 def _node_position(body: Body, index: int) -> tuple[float, ...]:
     """Reference position (m) of node ``index`` (0 .. elements) of a body, as the model
@@ -739,27 +683,17 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
     """Reject constraints that contradict or repeat each other (see the module docstring)."""
     holds: dict[NodeRef, int] = {}   # node -> the constraint holding its position
     for i, c in enumerate(constraints):
-        if c.node is None:
+        if not isinstance(c, NodeConstraint):
             continue
         j = holds.setdefault(c.node, i)
         if j == i:
             continue
         first = constraints[j]
-        pair = {first.type, c.type}
-        both = f"constraint[{j}] ({first.type}) and constraint[{i}] ({c.type}) on node {c.node}"
-        if len(pair) == 1:
-            why = (f"a node has at most one {c.type}" if c.type == "prescribed_rotation"
-                   else "the same constraint twice")
-        elif pair == {"clamp", "pin"}:
-            why = "redundant: the clamp holds every coordinate of the node, the pin only its " \
-                  "position; keep the clamp"
-        elif pair == {"clamp", "prescribed_rotation"}:
-            why = "contradictory: the clamp holds the node's gradients, the prescribed " \
-                  "rotation turns them"
-        else:
-            why = "redundant: the prescribed rotation already holds the node's position " \
-                  "(a rigid hub); remove the pin"
-        raise SceneError(f"constraint[{i}].node: {both}: {why}")
+        why = CONFLICTS.get(frozenset({first.type, c.type}),
+                            "the same constraint twice" if first.type == c.type else
+                            "a node has at most one of them")
+        raise SceneError(f"constraint[{i}].node: constraint[{j}] ({first.type}) and "
+                         f"constraint[{i}] ({c.type}) on node {c.node}: {why}")
 
     by_name = {b.name: b for b in bodies}
     scale = max(_extent(b) for b in bodies)
@@ -777,7 +711,7 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
         ties.setdefault(None, []).append(i)
     joined: dict[frozenset, int] = {}
     for i, c in enumerate(constraints):
-        if c.nodes is None:
+        if not isinstance(c, Joint):
             continue
         a, b = c.nodes
         path = f"constraint[{i}].nodes"
@@ -810,13 +744,18 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
 
 
 def _check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...]) -> None:
-    held = {c.node: i for i, c in enumerate(constraints) if c.node is not None}
+    """A load on a node must act on coordinates that the node's constraint leaves free."""
+    held = {c.node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)}
     for i, load in enumerate(loads):
-        if load.node in held:
-            j = held[load.node]
-            raise SceneError(f"load[{i}].node: the position of {load.node} is held by "
-                             f"constraint[{j}] ({constraints[j].type}): a force there does "
-                             f"nothing; expected a node that can move")
+        if not isinstance(load, NodeLoad) or load.node not in held:
+            continue
+        j = held[load.node]
+        if load.on_gradients and not constraints[j].holds_gradients:
+            continue
+        what, can = ("section", "turn") if load.on_gradients else ("position", "move")
+        raise SceneError(f"load[{i}].node: the {what} of {load.node} is held by "
+                         f"constraint[{j}] ({constraints[j].type}): a {load.noun} there does "
+                         f"nothing; expected a node whose {what} can {can}")
 
 
 def _big(n: int) -> str:
@@ -864,11 +803,10 @@ def _check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
     dim = bodies[0].dim
     coordinates = sum(b.n_nodes for b in bodies) * per_node
     model_bytes = _model_bytes(bodies)
-    held = sum(per_node if c.type in ("clamp", "prescribed_rotation") else dim
-               for c in constraints if c.node is not None)
+    held = sum(c.held(dim, per_node) for c in constraints if isinstance(c, NodeConstraint))
     free = coordinates - held
-    joints = sum(1 for c in constraints if c.nodes is not None)
-    dofs = free - dim * joints
+    joints = [c for c in constraints if isinstance(c, Joint)]
+    dofs = free - sum(c.rows(dim, per_node) for c in joints)
     if dofs <= 0:
         raise SceneError(f"constraint: the constraints hold all {coordinates} coordinates of "
                          f"the model; expected at least one free coordinate")
@@ -937,10 +875,10 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
         raise SceneError(f"{source}: expected a table of scene keys, got {_show(data)}")
     # [study] declares a work-precision sweep: read and validated by `ancf study
     # error-vs-time` (runtime/studies/error_vs_time.py), ignored by runs
-    _keys(data, "", (), ("title", "material", "body", "constraint", "load", "sensor",
-                         "analysis", "solver", "study"))
+    keys(data, "", (), ("title", "material", "body", "constraint", "load", "sensor",
+                        "analysis", "solver", "output", "study"))
     default_title = Path(source).stem if source != "<scene>" else "untitled"
-    title = _string(data.get("title", default_title), "title")
+    title = string(data.get("title", default_title), "title")
     if len(title) > TITLE_LENGTH or not title.isprintable():
         raise SceneError(f"title: expected one line of printable text of at most "
                          f"{TITLE_LENGTH} characters, got {_show(title)}")
@@ -963,13 +901,13 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
                              f"body[0], got {body.element} ({body.dim}D)")
         bodies.append(body)
     _check_model_size(tuple(bodies))
-    dim = bodies[0].dim
-    node = _Nodes(tuple(bodies))
+    context = Context(bodies[0].dim, Nodes(tuple(bodies)))
 
-    constraints = tuple(_constraint(i, c, node, dim)
+    constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)
                         for i, c in enumerate(_array_of_tables(data, "constraint")))
     _check_constraints(constraints, tuple(bodies))
-    loads = tuple(_load(i, x, node, dim) for i, x in enumerate(_array_of_tables(data, "load")))
+    loads = tuple(parse_record(LOADS, "load", x, f"load[{i}]", context)
+                  for i, x in enumerate(_array_of_tables(data, "load")))
     _check_loads(loads, constraints)
     raw_sensors = _array_of_tables(data, "sensor")
     if len(raw_sensors) > LIMITS["sensors"]:
@@ -977,24 +915,28 @@ def parse_scene(data: dict, source: str = "<scene>") -> Scene:
                          f"column and one PNG plot each), got {len(raw_sensors)}")
     sensors: list[Sensor] = []
     for i, raw in enumerate(raw_sensors):
-        sensor = _sensor(i, raw, node, dim)
-        same = [s.name for s in sensors if s.name.lower() == sensor.name.lower()]
-        if same:
-            case = "" if same[0] == sensor.name else f" (as {_show(same[0])}, ignoring case)"
+        sensor = parse_record(SENSORS, "sensor", raw, f"sensor[{i}]", context)
+        same_name = [s.name for s in sensors if s.name.lower() == sensor.name.lower()]
+        if same_name:
+            case = "" if same_name[0] == sensor.name else \
+                f" (as {_show(same_name[0])}, ignoring case)"
             raise SceneError(f"sensor[{i}].name: duplicate sensor name {_show(sensor.name)}"
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
 
-    analysis = _keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
+    analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
     static = _static(analysis["static"]) if "static" in analysis else None
     modal = _modal(analysis["modal"]) if "modal" in analysis else None
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
     if dynamic is not None and dynamic.frequency_of is not None:
         _check_frequency(dynamic, sensors)
     solver = _solver(data.get("solver", {}))
+    output = _output(data.get("output", {}))
     _check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic)
-    return Scene(title, materials, tuple(bodies), constraints, loads, tuple(sensors), static,
-                 modal, dynamic, solver, source)
+    return _validated_scene(title=title, materials=materials, bodies=tuple(bodies),
+                            constraints=constraints, loads=loads, sensors=tuple(sensors),
+                            static=static, modal=modal, dynamic=dynamic, solver=solver,
+                            output=output, source=source)
 
 
 def read_scene_file(path: str | Path) -> dict:
@@ -1048,3 +990,64 @@ def read_scene_file(path: str | Path) -> dict:
 def load_scene(path: str | Path) -> Scene:
     """Read and validate the TOML scene file ``path`` (SceneError for any problem)."""
     return parse_scene(read_scene_file(path), str(path))
+
+
+# --------------------------------------------------------------------------- TOML writer
+
+BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f",
+           "\r": "\\r"}
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string (control characters escaped)."""
+    return '"' + "".join(ESCAPES.get(c) or (f"\\u{ord(c):04x}" if ord(c) < 0x20 or c == "\x7f"
+                                            else c) for c in text) + '"'
+
+
+def _toml_key(key: str) -> str:
+    return key if BARE_KEY.fullmatch(key) else _toml_string(key)
+
+
+def _toml_value(value: Any) -> str:
+    """One TOML value on one line (tables inline)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float):
+        return repr(value)      # floats: the shortest text that reads back the same float
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(map(_toml_value, value)) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) \
+            + "}"
+    raise TypeError(f"no TOML value for {value!r}")
+
+
+def _is_table_array(value: Any) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def _emit(data: dict, path: tuple[str, ...], lines: list[str]) -> None:
+    inline = {k: v for k, v in data.items() if not isinstance(v, dict) and
+              not _is_table_array(v)}
+    header = ".".join(map(_toml_key, path))
+    if path and (inline or len(inline) == len(data)):   # an empty table is written too
+        lines.append(f"\n[{header}]")
+    lines.extend(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in inline.items())
+    for k, value in data.items():
+        if isinstance(value, dict):
+            _emit(value, (*path, k), lines)
+        elif _is_table_array(value):
+            for item in value:   # items of arrays of tables: their tables are inline
+                lines.append(f"\n[[{'.'.join(map(_toml_key, (*path, k)))}]]")
+                lines.extend(f"{_toml_key(n)} = {_toml_value(v)}" for n, v in item.items())
+
+
+def toml_text(data: dict) -> str:
+    """TOML text of a table of TOML data (``tomllib.loads`` of it gives ``data`` back): tables
+    as ``[a.b]``, arrays of tables as ``[[a]]`` with their own tables inline."""
+    lines: list[str] = []
+    _emit(data, (), lines)
+    return "\n".join(lines).lstrip("\n") + "\n"

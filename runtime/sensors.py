@@ -1,64 +1,214 @@
-"""Sensors: scalar quantities of a model state, as declared in a scene (DESIGN.md section 7)."""
+"""Sensors: named scalar outputs of a model state (``[[sensor]]`` tables), a typed registry
+``SENSORS``.
+
+Each class declares its TOML keys as fields (``runtime.schema.Record``), its ``unit`` and
+whether it is an ``energy`` (plotted together), and computes its value from (model, q, v, t);
+adding one is one class here and one entry in ``SENSORS``.  ``Sensors`` evaluates all the
+sensors of a model's scene.
+"""
 
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
 import numpy as np
 
-from runtime.model import Model
+from runtime.laws import SceneError, _show
+from runtime.schema import (
+    NAME_LENGTH,
+    Context,
+    NodeRef,
+    Record,
+    choice,
+    key,
+    node_key,
+    registry,
+    string,
+)
 
-ENERGY_TYPES = ("strain_energy", "kinetic_energy", "potential_energy", "total_energy")
+if TYPE_CHECKING:
+    from runtime.model import Model
+
+__all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "Displacement", "KineticEnergy",
+           "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy", "TotalEnergy"]
+
+# names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
+# "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
+# systems that ignore case); "t" is the time column, "energies" the energy plot, the others
+# are device names on Windows
+SENSOR_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*")
+RESERVED_SENSOR_NAMES = ("t", "energies", "con", "prn", "aux", "nul",
+                         *(f"com{i}" for i in range(1, 10)), *(f"lpt{i}" for i in range(1, 10)))
 
 
-def node_frame(model: Model, q: np.ndarray, node: int) -> np.ndarray:
-    """Orthonormal frame (dim, dim) of a node: its gradient vectors, orthonormalised with r_x
-    kept as the first axis (exact for a rigidly rotated node such as a hub)."""
-    gradients = np.column_stack([q[model.node_dofs(node, name)]
-                                 for name in model.vectors if name != "r"])
-    basis, upper = np.linalg.qr(gradients)
-    return basis * np.sign(np.diag(upper))
+def _name_key(value: Any, path: str, context: Context) -> str:
+    name = string(value, path)
+    if not SENSOR_NAME.fullmatch(name) or len(name) > NAME_LENGTH:
+        raise SceneError(f"{path}: expected letters, digits, _ . and - starting with a "
+                         f"letter, digit or _, at most {NAME_LENGTH} characters (it names a "
+                         f"CSV column and a PNG file), got {_show(name)}")
+    if name.split(".")[0].lower() in RESERVED_SENSOR_NAMES:
+        raise SceneError(f"{path}: expected a name other than the reserved "
+                         f"{', '.join(RESERVED_SENSOR_NAMES)} (in any case, also before a "
+                         f'"."), got {_show(name)}')
+    return name
+
+
+@dataclass(frozen=True)
+class Sensor(Record):
+    """Base of the sensors: ``name`` names a CSV column and a PNG plot; ``unit`` of the value;
+    ``energy``: plotted with the other energies."""
+
+    unit: ClassVar[str] = "J"
+    energy: ClassVar[bool] = True
+    name: str = key(_name_key)
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        """The sensor at coordinates q, velocities v (size,) and time t (s; None: the loads
+        at their nominal value, as in the static analysis)."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, **super().to_dict()}
+
+
+def _component_key(value: Any, path: str, context: Context) -> str:
+    components = ("x", "y", "z", "norm") if context.dim == 3 else ("x", "y", "norm")
+    return choice(value, path, components, "component")
+
+
+@dataclass(frozen=True)
+class NodeSensor(Sensor):
+    """A vector of ``node`` (m): one ``component`` (x | y | z | norm), in global axes or, with
+    ``frame``, in the frame of that node (its gradients orthonormalised, r_x first) relative
+    to its position."""
+
+    unit: ClassVar[str] = "m"
+    energy: ClassVar[bool] = False
+    node: NodeRef | str = key(node_key)
+    component: str = key(_component_key)
+    frame: NodeRef | str | None = key(node_key, None)
+
+    def _vector(self, position: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The vector this sensor reports from the node's position and reference (m)."""
+        raise NotImplementedError
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        node = model.node_index(self.node)
+        position = q[model.node_dofs(node, "r")]
+        reference = model.reference[model.node_dofs(node, "r")]
+        if self.frame is not None:
+            frame_node = model.node_index(self.frame)
+            origin = q[model.node_dofs(frame_node, "r")]
+            origin0 = model.reference[model.node_dofs(frame_node, "r")]
+            position = model.node_frame(q, frame_node).T @ (position - origin)
+            reference = model.node_frame(model.reference, frame_node).T @ (reference - origin0)
+        vector = self._vector(position, reference)
+        if self.component == "norm":
+            return float(np.linalg.norm(vector))
+        return float(vector["xyz".index(self.component)])
+
+
+@dataclass(frozen=True)
+class Displacement(NodeSensor):
+    """Displacement of the node from its reference position (m)."""
+
+    type: ClassVar[str] = "displacement"
+
+    def _vector(self, position: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        return position - reference
+
+
+@dataclass(frozen=True)
+class Position(NodeSensor):
+    """Position of the node (m)."""
+
+    type: ClassVar[str] = "position"
+
+    def _vector(self, position: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        return position
+
+
+def _body_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, context.body_names, "body")
+
+
+@dataclass(frozen=True)
+class StrainEnergy(Sensor):
+    """Strain energy (J) of ``body`` (None: the whole model)."""
+
+    type: ClassVar[str] = "strain_energy"
+    body: str | None = key(_body_key, None)
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        return model.strain_energy(q, self.body)
+
+
+@dataclass(frozen=True)
+class KineticEnergy(Sensor):
+    """Kinetic energy 1/2 v^T M v (J) of ``body`` (None: the whole model)."""
+
+    type: ClassVar[str] = "kinetic_energy"
+    body: str | None = key(_body_key, None)
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        return model.kinetic_energy(v, self.body)
+
+
+@dataclass(frozen=True)
+class PotentialEnergy(Sensor):
+    """Potential energy (J) of the gravity loads relative to the reference."""
+
+    type: ClassVar[str] = "potential_energy"
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        return model.gravity_potential(q, t)
+
+
+@dataclass(frozen=True)
+class TotalEnergy(Sensor):
+    """Strain + kinetic + gravity potential energy (J) of the whole model."""
+
+    type: ClassVar[str] = "total_energy"
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        return model.strain_energy(q) + model.kinetic_energy(v) + model.gravity_potential(q, t)
+
+
+@dataclass(frozen=True)
+class ConstraintViolation(Sensor):
+    """max |A q| of the joint rows (m; 0 without joints)."""
+
+    type: ClassVar[str] = "constraint_violation"
+    unit: ClassVar[str] = "m"
+    energy: ClassVar[bool] = False
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        if model.joints.shape[0] == 0:
+            return 0.0
+        return float(np.abs(model.joints @ q).max())
+
+
+SENSORS: dict[str, type[Sensor]] = registry(
+    Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
+    ConstraintViolation)
+ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
 class Sensors:
-    """Evaluates every sensor of a scene on global states (q, v)."""
+    """Evaluates every sensor of a model's scene on global states (q, v)."""
 
     def __init__(self, model: Model) -> None:
         self.model = model
         self.sensors = model.scene.sensors
         self.names = [s.name for s in self.sensors]
-        self.energy_names = [s.name for s in self.sensors if s.type in ENERGY_TYPES]
+        self.energy_names = [s.name for s in self.sensors if s.energy]
 
     def values(self, q: np.ndarray, v: np.ndarray | None = None,
                t: float | None = 0.0) -> dict[str, float]:
         """{sensor name: value} at coordinates q (and velocities v, zero if None), time t
         (None: loads at their nominal value, as in the static analysis)."""
         v = np.zeros_like(q) if v is None else v
-        return {s.name: self._value(s, q, v, t) for s in self.sensors}
-
-    def _value(self, sensor, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        model = self.model
-        if sensor.type == "strain_energy":
-            return model.strain_energy(q, sensor.body)
-        if sensor.type == "kinetic_energy":
-            return model.kinetic_energy(v, sensor.body)
-        if sensor.type == "potential_energy":
-            return model.gravity_potential(q, t)
-        if sensor.type == "total_energy":
-            return (model.strain_energy(q) + model.kinetic_energy(v)
-                    + model.gravity_potential(q, t))
-        if sensor.type == "constraint_violation":
-            if model.joints.shape[0] == 0:
-                return 0.0
-            return float(np.abs(model.joints @ q).max())
-        node = model.node_index(sensor.node)
-        position = q[model.node_dofs(node, "r")]
-        reference = model.reference[model.node_dofs(node, "r")]
-        if sensor.frame is not None:
-            frame_node = model.node_index(sensor.frame)
-            origin = q[model.node_dofs(frame_node, "r")]
-            origin0 = model.reference[model.node_dofs(frame_node, "r")]
-            position = node_frame(model, q, frame_node).T @ (position - origin)
-            reference = node_frame(model, model.reference, frame_node).T @ (reference - origin0)
-        vector = position - reference if sensor.type == "displacement" else position
-        if sensor.component == "norm":
-            return float(np.linalg.norm(vector))
-        return float(vector["xyz".index(sensor.component)])
+        return {s.name: s.value(self.model, q, v, t) for s in self.sensors}

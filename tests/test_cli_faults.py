@@ -15,21 +15,22 @@ import time
 from pathlib import Path
 
 import pytest
-from scenes_small import cantilever, to_toml
+from scenes_small import cantilever
 
 from runtime import cli, jit
 from runtime.cli import main
+from runtime.scene import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def scene_file(folder: Path, analyses: dict | None = None, backend: str = "numpy",
                **changes) -> Path:
-    data = cantilever(elements=2, force=[0.0, -1000.0],
-                      analysis_tables=analyses or {"static": {}}, solver={"backend": backend})
+    data = cantilever(elements=2, force=[0.0, -1000.0], **(analyses or {"static": {}}),
+                      solver={"backend": backend}).to_dict()
     data.update(changes)
     path = folder / "scene.toml"
-    path.write_text(to_toml(data))
+    path.write_text(toml_text(data))
     return path
 
 

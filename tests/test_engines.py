@@ -7,61 +7,72 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import tomllib
 
 import numpy as np
 import pytest
 from scenes_small import body, cantilever, scene
 
 import scenes
-from runtime import engines
+from runtime import (
+    Arc,
+    Body,
+    Clamp,
+    CosineRamp,
+    Displacement,
+    Dynamic,
+    Gravity,
+    Hub,
+    LinearRamp,
+    Material,
+    Pin,
+    PointForce,
+    Position,
+    Revolute,
+    Scene,
+    Spherical,
+    SpinUp,
+    Weld,
+    engines,
+    load_scene,
+)
 from runtime.integrators import Divergence
 from runtime.model import Model
 from runtime.run import run
-from runtime.scene import parse_scene
 
-ALUMINIUM = {"E": 7.0e10, "nu": 0.0, "rho": 2700.0}
+ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
-
-def _shipped(name: str, t_end: float | None = None) -> dict:
-    data = tomllib.loads(scenes.path(name).read_text())
-    if t_end is not None:
-        data["analysis"]["dynamic"]["t_end"] = t_end
-    data["analysis"]["dynamic"].pop("frequency_of", None)
-    data["analysis"]["dynamic"].pop("frequency_after", None)
-    data.pop("study", None)
-    return data
+# templates/stepper.c.j2: dense_lu_solve applies the row interchanges of the Schur LU between
+# the elimination steps although dense_lu swapped whole rows (multipliers included); the
+# 6x6 (2D) and 12x12 (3D) Schur complements of a weld pivot, so the compiled engine's linear
+# solves are wrong and its Newton iterations converge slower (states still agree).  The fix
+# (all interchanges first, then the elimination) is in the report of branch wt-api.
+STEPPER_LU = pytest.mark.xfail(strict=True, reason="compiled dense_lu_solve pivot order")
 
 
-def _two_bodies(element: str, joint: str, integrator: str, hub: bool = False) -> dict:
+def _shipped(name: str, t_end: float | None = None) -> Scene:
+    scene_ = load_scene(scenes.path(name))
+    dynamic = dataclasses.replace(scene_.dynamic, frequency_of=None, frequency_after=0.0,
+                                  t_end=t_end or scene_.dynamic.t_end)
+    return dataclasses.replace(scene_, dynamic=dynamic)
+
+
+def _two_bodies(element: str, joint: type, integrator: str, hub: bool = False) -> Scene:
     """A double pendulum (or, with ``hub``, a driven two-link arm) joined by ``joint``."""
     z = [0.0] if element == "beam3d" else []
-    root = ({"type": "prescribed_rotation", "node": "a:0",
-             "angle": {"type": "spin_up", "omega": 3.0, "t_ramp": 0.2}} if hub
-            else {"type": "pin", "node": "a:0"})
+    root = Hub("a:0", SpinUp(3.0, 0.2)) if hub else Pin("a:0")
     return scene([body("a", element, 2, [0.0, 0.0] + z, [0.5, 0.0] + z, 0.02, 0.02),
                   body("b", element, 2, [0.5, 0.0] + z, [1.0, 0.0] + z, 0.02, 0.02)],
-                 [root, {"type": joint, "nodes": ["a:-1", "b:0"]}],
-                 [{"type": "gravity", "acceleration": [0.0, -9.81] + z}],
-                 [{"name": "tip_y", "type": "position", "node": "b:-1", "component": "y"}],
-                 {"dynamic": {"t_end": 0.1, "step": 2.5e-3, "integrator": integrator,
-                              "rho_inf": 0.9}},
-                 material=ALUMINIUM)
+                 [root, joint(("a:-1", "b:0"))], [Gravity([0.0, -9.81] + z)],
+                 [Position("tip_y", "b:-1", "y")], ALUMINIUM,
+                 dynamic=Dynamic(t_end=0.1, step=2.5e-3, integrator=integrator, rho_inf=0.9))
 
 
-def _curved(integrator: str) -> dict:
-    data = scene([{"name": "arc", "element": "beam3d", "material": "m",
-                   "section": {"height": 0.05, "width": 0.05}, "elements": 3,
-                   "arc": {"center": [0.0, 1.0, 0.0], "radius": 1.0, "angle_deg": 60.0,
-                           "start_angle_deg": -90.0}}],
-                 [{"type": "clamp", "node": "arc:0"}],
-                 [{"type": "point_force", "node": "arc:-1", "force": [0.0, 0.0, -2e3],
-                   "time_law": {"type": "cosine_ramp", "duration": 0.05}}],
-                 [{"name": "tip_z", "type": "displacement", "node": "arc:-1",
-                   "component": "z"}],
-                 {"dynamic": {"t_end": 0.1, "step": 1e-3, "integrator": integrator}},
-                 material=ALUMINIUM)
-    return data
+def _curved(integrator: str) -> Scene:
+    arc = Arc((0.0, 1.0, 0.0), 1.0, -90.0, 60.0)
+    return scene([Body("arc", "beam3d", "m", 0.05, 0.05, 3, arc=arc)], [Clamp("arc:0")],
+                 [PointForce("arc:-1", [0.0, 0.0, -2e3], time_law=CosineRamp(0.05))],
+                 [Displacement("tip_z", "arc:-1", "z")], ALUMINIUM,
+                 dynamic=Dynamic(t_end=0.1, step=1e-3, integrator=integrator))
 
 
 def _history(model: Model, settings, engine: str):
@@ -77,11 +88,10 @@ def _history(model: Model, settings, engine: str):
     return states, dataclasses.asdict(runner.counters), failure
 
 
-def _compare(data: dict, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
+def _compare(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
              **dynamic) -> tuple[dict, list, tuple | None]:
     """Run both engines; assert equal counters and failures, and states equal to q_rtol of
     the largest coordinate and velocities to v_rtol of the largest velocity."""
-    scene_ = parse_scene(data)
     settings = dataclasses.replace(scene_.dynamic, **dynamic)
     model = Model(scene_)
     python = _history(model, settings, "python")
@@ -98,7 +108,8 @@ def _compare(data: dict, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
     return python[1], python[0], python[2]
 
 
-@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever"])
+@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever",
+                                  "spinning_beam", "l_frame"])
 def test_engines_agree_on_the_shipped_scenes(name):
     # The whole run: thousands of steps of schemes that do not damp (trapezoidal), in which
     # round-off differences of the two engines (other summation orders, SIMD) grow - in the
@@ -108,8 +119,13 @@ def test_engines_agree_on_the_shipped_scenes(name):
     _compare(_shipped(name), q_rtol=1e-11, v_rtol=1e-6)
 
 
+
+
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
-@pytest.mark.parametrize("element,joint", [("beam2d", "revolute"), ("beam3d", "spherical")])
+@pytest.mark.parametrize("element,joint", [
+    ("beam2d", Revolute), ("beam3d", Spherical),
+    pytest.param("beam2d", Weld, marks=STEPPER_LU), pytest.param("beam3d", Weld,
+                                                                 marks=STEPPER_LU)])
 def test_engines_agree_with_joints(element, joint, integrator):
     counters, states, _ = _compare(_two_bodies(element, joint, integrator))
     assert counters["newton_iterations"] > counters["steps"]   # a real nonlinear motion
@@ -118,7 +134,7 @@ def test_engines_agree_with_joints(element, joint, integrator):
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_with_a_hub_and_a_joint(integrator):
-    _compare(_two_bodies("beam2d", "revolute", integrator, hub=True))
+    _compare(_two_bodies("beam2d", Revolute, integrator, hub=True))
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
@@ -128,8 +144,8 @@ def test_engines_agree_on_a_curved_body(integrator):
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_with_modified_newton(integrator):
-    full, full_states, _ = _compare(_two_bodies("beam2d", "revolute", integrator))
-    modified, modified_states, _ = _compare(_two_bodies("beam2d", "revolute", integrator),
+    full, full_states, _ = _compare(_two_bodies("beam2d", Revolute, integrator))
+    modified, modified_states, _ = _compare(_two_bodies("beam2d", Revolute, integrator),
                                          newton="modified")
     # fewer Jacobians and factorisations than iterations, and fewer than full Newton
     assert modified["factorisations"] == modified["jacobian_evaluations"]
@@ -143,9 +159,8 @@ def test_engines_agree_with_modified_newton(integrator):
 
 def test_engines_report_the_same_newton_failure():
     # the load grows until three iterations no longer reach the tolerance
-    data = cantilever(elements=3, force=[0.0, -2e6], sensors=[],
-                      law={"type": "linear_ramp", "duration": 0.1},
-                      analysis_tables={"dynamic": {"t_end": 0.1, "step": 2e-3}})
+    data = cantilever(elements=3, force=[0.0, -2e6], sensors=[], law=LinearRamp(0.1),
+                      dynamic=Dynamic(t_end=0.1, step=2e-3))
     _, states, failure = _compare(data, max_iterations=3)
     assert failure is not None and "did not converge" in failure[1]
     # it failed after some steps, and every output before the failure is kept
@@ -155,10 +170,9 @@ def test_engines_report_the_same_newton_failure():
 def test_engines_report_the_same_blow_up():
     # a force that overflows the elastic force kernels: non-finite at the first step
     data = cantilever(elements=2, force=[0.0, -1e305], sensors=[],
-                      analysis_tables={"dynamic": {"t_end": 0.01, "step": 1e-3}})
-    scene_ = parse_scene(data)
-    model = Model(scene_)
-    results = [_history(model, scene_.dynamic, name) for name in ("python", "compiled")]
+                      dynamic=Dynamic(t_end=0.01, step=1e-3))
+    model = Model(data)
+    results = [_history(model, data.dynamic, name) for name in ("python", "compiled")]
     assert results[0][2] is not None and results[0][2] == results[1][2]
     assert results[0][1] == results[1][1]
 
@@ -176,13 +190,13 @@ def test_run_reports_engine_counters_and_built_modules(tmp_path):
     data = _shipped("rotating_beam", 0.05)
     summaries = {}
     for engine in ("python", "compiled"):
-        summary, code = run(parse_scene(data), tmp_path / engine, engine=engine, quiet=True)
+        summary, code = run(data, tmp_path / engine, engine=engine, quiet=True)
         assert code == 0
         summaries[engine] = summary
         written = json.loads((tmp_path / engine / "summary.json").read_text())
         assert written["dynamic"]["engine"] == engine
     compiled, python = summaries["compiled"]["dynamic"], summaries["python"]["dynamic"]
-    integrator = data["analysis"]["dynamic"].get("integrator", "trapezoidal")
+    integrator = data.dynamic.integrator
     assert f"stepper/{integrator}" in summaries["compiled"]["kernels"]
     assert not any(k.startswith("stepper") for k in summaries["python"]["kernels"])
     for key in ("steps", "newton_iterations", "jacobian_evaluations", "factorisations"):

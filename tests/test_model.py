@@ -8,9 +8,8 @@ never from a previous output of the code.
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -18,33 +17,62 @@ import pytest
 from scenes_small import (
     STEEL,
     body,
-    build,
     cantilever,
     cantilever_frequency,
     scene,
     second_moment,
     simulate,
     tip_deflection,
-    to_toml,
 )
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
-from runtime import analysis
-from runtime.laws import parse_law
+import scenes
+from runtime import (
+    Clamp,
+    Constant,
+    ConstantRate,
+    ConstraintViolation,
+    CosineRamp,
+    Displacement,
+    Dynamic,
+    Gravity,
+    Hub,
+    KineticEnergy,
+    LinearRamp,
+    Material,
+    Modal,
+    NodeRef,
+    Pin,
+    PointForce,
+    Position,
+    PotentialEnergy,
+    Revolute,
+    Scene,
+    Sine,
+    Spherical,
+    SpinUp,
+    Static,
+    StrainEnergy,
+    Table,
+    TotalEnergy,
+    analysis,
+    load_scene,
+)
+from runtime.model import Model
 from runtime.run import run
-from runtime.scene import NodeRef
 from runtime.sensors import Sensors
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 G = 9.81
-ALUMINIUM = {"E": 7.0e10, "nu": 0.0, "rho": 2700.0}
+ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
 
-def load_toml(name: str) -> dict:
-    with (SCENES / name).open("rb") as f:
-        return tomllib.load(f)
+def shipped(name: str, **dynamic) -> Scene:
+    """A shipped scene, its dynamic analysis changed by ``dynamic``."""
+    scene_ = load_scene(scenes.path(name))
+    return dataclasses.replace(scene_, dynamic=dataclasses.replace(scene_.dynamic, **dynamic))
 
 
 def node(model, ref: str) -> int:
@@ -73,10 +101,10 @@ def spin_up(t: float, omega: float, t_ramp: float) -> tuple[float, float]:
     return omega * (t - t_ramp / 2), omega
 
 
-def run_scene(data: dict, folder: Path, name: str = "scene"):
-    """Write a scene dict as TOML and run it through ``runtime.run.run``."""
+def run_scene(scene_: Scene, folder: Path, name: str = "scene"):
+    """Write a scene as TOML and run it through ``runtime.run.run``."""
     path = folder / f"{name}.toml"
-    path.write_text(to_toml(data))
+    path.write_text(scene_.to_toml())
     return run(path, folder / f"{name}_out", quiet=True)
 
 
@@ -85,9 +113,8 @@ def run_scene(data: dict, folder: Path, name: str = "scene"):
 def test_clamp_holds_every_coordinate_in_static_and_dynamic_runs():
     # 3D cantilever bent in two planes and twisted-free; the clamp must hold r, r_x, r_y, r_z
     data = cantilever(elements=3, element="beam3d", force=[200.0, -5e4, 3e4],
-                      law={"type": "cosine_ramp", "duration": 0.04}, gravity=[0.0, -G, 0.0],
-                      analysis_tables={"static": {},
-                                       "dynamic": {"t_end": 0.05, "step": 2.5e-3}})
+                      law=CosineRamp(0.04), gravity=[0.0, -G, 0.0], static=Static(),
+                      dynamic=Dynamic(t_end=0.05, step=2.5e-3))
     result = simulate(data, keep_states=True)
     model = result.model
     root = model.node_dofs(0)
@@ -106,10 +133,8 @@ def test_pin_fixes_the_position_and_lets_a_beam_swing_like_a_rigid_pendulum():
     # ~450 rad/s, so over 0.1 s it turns as a rigid rod, angle = -(3 g / 4 L) t^2
     length = 1.0
     data = scene([body(elements=4, end=(length, 0.0), height=0.02, width=0.02)],
-                 [{"type": "pin", "node": "beam:0"}],
-                 [{"type": "gravity", "acceleration": [0.0, -G]}], [],
-                 {"dynamic": {"t_end": 0.1, "step": 1e-3, "output_every": 0.02}},
-                 material=ALUMINIUM)
+                 [Pin("beam:0")], [Gravity([0.0, -G])], [], ALUMINIUM,
+                 dynamic=Dynamic(t_end=0.1, step=1e-3, output_every=0.02))
     result = simulate(data, keep_states=True)
     model = result.model
     for t, q, _ in result.states:
@@ -126,14 +151,13 @@ def test_pin_fixes_the_position_and_lets_a_beam_swing_like_a_rigid_pendulum():
 def test_prescribed_constant_rate_rotation_drives_the_hub_gradients():
     omega, length = 2.0, 1.0
     data = scene([body(elements=3, end=(length, 0.0))],
-                 [{"type": "prescribed_rotation", "node": "beam:0",
-                   "angle": {"type": "constant_rate", "omega": omega}}], [], [],
-                 {"dynamic": {"t_end": 1.0, "step": 1e-2, "integrator": "generalized_alpha",
-                              "rho_inf": 0.5, "output_every": 0.05}})
+                 [Hub("beam:0", ConstantRate(omega))],
+                 dynamic=Dynamic(t_end=1.0, step=1e-2, integrator="generalized_alpha",
+                                 rho_inf=0.5, output_every=0.05))
     result = simulate(data, keep_states=True)
     model = result.model
     # the hub starts impulsively: the tip rings with an amplitude ~ omega L / omega_1
-    ring = omega * length / cantilever_frequency(STEEL["E"], STEEL["rho"], 0.1, 0.1, length)
+    ring = omega * length / cantilever_frequency(STEEL.E, STEEL.rho, 0.1, 0.1, length)
     assert len(result.states) == 21
     for t, q, v in result.states:
         rot = rot2(omega * t)
@@ -150,9 +174,8 @@ def test_prescribed_spin_up_about_an_axis_in_3d():
     omega, t_ramp = 1.5, 0.4
     axis = np.array([0.0, 1.0, 1.0]) / math.sqrt(2)
     data = scene([body(element="beam3d", elements=2, start=(0, 0, 0), end=(1.0, 0, 0))],
-                 [{"type": "prescribed_rotation", "node": "beam:0", "axis": [0.0, 2.0, 2.0],
-                   "angle": {"type": "spin_up", "omega": omega, "t_ramp": t_ramp}}], [], [],
-                 {"dynamic": {"t_end": 0.6, "step": 1e-2, "output_every": 0.1}})
+                 [Hub("beam:0", SpinUp(omega, t_ramp), (0.0, 2.0, 2.0))],
+                 dynamic=Dynamic(t_end=0.6, step=1e-2, output_every=0.1))
     result = simulate(data, keep_states=True)
     model = result.model
     for t, q, _ in result.states:
@@ -165,27 +188,22 @@ def test_prescribed_spin_up_about_an_axis_in_3d():
     assert spin_up(0.6, omega, t_ramp)[0] > 0.5  # a sizeable turn was checked
 
 
-def _double_pendulum(element: str, joint: str, elements: int, t_end: float, step: float,
-                     integrator: str = "trapezoidal") -> dict:
+def _double_pendulum(element: str, joint: type, elements: int, t_end: float, step: float,
+                     integrator: str = "trapezoidal") -> Scene:
     z = [0.0] if element == "beam3d" else []
-    sensors = [{"name": "violation", "type": "constraint_violation"},
-               {"name": "total", "type": "total_energy"},
-               {"name": "kinetic", "type": "kinetic_energy"},
-               {"name": "kinetic_a", "type": "kinetic_energy", "body": "a"},
-               {"name": "kinetic_b", "type": "kinetic_energy", "body": "b"},
-               {"name": "tip_y", "type": "position", "node": "b:-1", "component": "y"}]
+    sensors = [ConstraintViolation("violation"), TotalEnergy("total"), KineticEnergy("kinetic"),
+               KineticEnergy("kinetic_a", "a"), KineticEnergy("kinetic_b", "b"),
+               Position("tip_y", "b:-1", "y")]
     return scene([body("a", element, elements, [0.0, 0.0] + z, [0.5, 0.0] + z, 0.02, 0.02),
                   body("b", element, elements, [0.5, 0.0] + z, [1.0, 0.0] + z, 0.02, 0.02)],
-                 [{"type": "pin", "node": "a:0"}, {"type": joint, "nodes": ["a:-1", "b:0"]}],
-                 [{"type": "gravity", "acceleration": [0.0, -G] + z}], sensors,
-                 {"dynamic": {"t_end": t_end, "step": step, "integrator": integrator,
-                              "rho_inf": 0.9}},
-                 material=ALUMINIUM)
+                 [Pin("a:0"), joint(("a:-1", "b:0"))], [Gravity([0.0, -G] + z)], sensors,
+                 ALUMINIUM, dynamic=Dynamic(t_end=t_end, step=step, integrator=integrator,
+                                            rho_inf=0.9))
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_spherical_joint_keeps_a_3d_double_pendulum_together(integrator):
-    result = simulate(_double_pendulum("beam3d", "spherical", 2, 0.3, 2.5e-3, integrator),
+    result = simulate(_double_pendulum("beam3d", Spherical, 2, 0.3, 2.5e-3, integrator),
                       keep_states=True)
     model = result.model
     assert result["violation"].max() <= 1e-9
@@ -204,21 +222,16 @@ def test_spherical_joint_is_a_hinge_between_two_cantilevers_in_static():
     # beam a clamped at x = 0, beam b clamped at x = 2, joined at x = 1 by a spherical joint,
     # load P at the joint: no moment crosses it, each cantilever carries P / 2
     P, h, n = 10.0, 0.05, 6
-    sensors = [{"name": "joint_a", "type": "displacement", "node": "a:-1", "component": "y"},
-               {"name": "joint_b", "type": "displacement", "node": "b:0", "component": "y"},
-               {"name": "violation", "type": "constraint_violation"},
-               {"name": "strain_a", "type": "strain_energy", "body": "a"},
-               {"name": "strain_b", "type": "strain_energy", "body": "b"},
-               {"name": "strain", "type": "strain_energy"}]
+    sensors = [Displacement("joint_a", "a:-1", "y"), Displacement("joint_b", "b:0", "y"),
+               ConstraintViolation("violation"), StrainEnergy("strain_a", "a"),
+               StrainEnergy("strain_b", "b"), StrainEnergy("strain")]
     data = scene([body("a", "beam3d", n, [0, 0, 0], [1.0, 0, 0], h, h),
                   body("b", "beam3d", n, [1.0, 0, 0], [2.0, 0, 0], h, h)],
-                 [{"type": "clamp", "node": "a:0"}, {"type": "clamp", "node": "b:-1"},
-                  {"type": "spherical", "nodes": ["a:-1", "b:0"]}],
-                 [{"type": "point_force", "node": "a:-1", "force": [0.0, -P, 0.0]}],
-                 sensors, {"static": {}})
+                 [Clamp("a:0"), Clamp("b:-1"), Spherical(("a:-1", "b:0"))],
+                 [PointForce("a:-1", [0.0, -P, 0.0])], sensors, static=Static())
     result = simulate(data)
     values = result.static_values
-    half = tip_deflection(P / 2, STEEL["E"], h, h, 1.0)
+    half = tip_deflection(P / 2, STEEL.E, h, h, 1.0)
     assert values["violation"] <= 1e-12
     assert values["joint_a"] == pytest.approx(values["joint_b"], rel=1e-12)
     # Euler-Bernoulli within the discretisation error of 6 elements (~1 %)
@@ -226,11 +239,11 @@ def test_spherical_joint_is_a_hinge_between_two_cantilevers_in_static():
     # the same mesh as one cantilever under P / 2 gives the same deflection (the load splits
     # in two; the membrane force of the clamped-clamped pair is O(deflection^2))
     single = simulate(cantilever(elements=n, element="beam3d", height=h, width=h,
-                                 force=[0.0, -P / 2, 0.0], analysis_tables={"static": {}}))
+                                 force=[0.0, -P / 2, 0.0], static=Static()))
     assert values["joint_a"] == pytest.approx(single.static_values["tip_y"], rel=1e-4)
     # a kink at the hinge: opposite slopes of size (P/2) L^2 / (2 E I)
     model, q = result.model, result.static.q
-    slope = (P / 2) / (2 * STEEL["E"] * second_moment(h, h))
+    slope = (P / 2) / (2 * STEEL.E * second_moment(h, h))
     r_x_a = nodal(model, q, node(model, "a:-1"), "r_x")
     r_x_b = nodal(model, q, node(model, "b:0"), "r_x")
     assert r_x_a[1] == pytest.approx(-slope, rel=0.02)
@@ -247,26 +260,24 @@ def test_modes_of_two_cantilevers_joined_by_a_hinge():
     h, n = 0.05, 6
     data = scene([body("a", "beam2d", n, [0.0, 0.0], [1.0, 0.0], h, h),
                   body("b", "beam2d", n, [1.0, 0.0], [2.0, 0.0], h, h)],
-                 [{"type": "clamp", "node": "a:0"}, {"type": "clamp", "node": "b:-1"},
-                  {"type": "revolute", "nodes": ["a:-1", "b:0"]}], [], [],
-                 {"modal": {"modes": 2}})
+                 [Clamp("a:0"), Clamp("b:-1"), Revolute(("a:-1", "b:0"))],
+                 modal=Modal(modes=2))
     pair = simulate(data).frequencies
-    scale = math.sqrt(STEEL["E"] * second_moment(h, h) / (STEEL["rho"] * h * h))
+    scale = math.sqrt(STEEL.E * second_moment(h, h) / (STEEL.rho * h * h))
     assert pair[0] == pytest.approx(1.875104**2 * scale, rel=0.01)
     assert pair[1] == pytest.approx(3.926602**2 * scale, rel=0.04)  # 6 elements: ~3 % high
     # the same two modes of one half, free or pinned at its end, on the same mesh
     free = simulate(cantilever(elements=n, height=h, width=h,
-                               analysis_tables={"modal": {"modes": 1}})).frequencies[0]
-    propped = scene([body(elements=n, height=h, width=h)],
-                    [{"type": "clamp", "node": "beam:0"}, {"type": "pin", "node": "beam:-1"}],
-                    analysis_tables={"modal": {"modes": 1}})
+                               modal=Modal(modes=1))).frequencies[0]
+    propped = scene([body(elements=n, height=h, width=h)], [Clamp("beam:0"), Pin("beam:-1")],
+                    modal=Modal(modes=1))
     pinned = simulate(propped).frequencies[0]
     assert pair[0] == pytest.approx(free, rel=1e-7)
     assert pair[1] == pytest.approx(pinned, rel=1e-7)
 
 
 def test_revolute_joint_2d_double_pendulum_conserves_energy():
-    result = simulate(_double_pendulum("beam2d", "revolute", 2, 0.4, 2e-3))
+    result = simulate(_double_pendulum("beam2d", Revolute, 2, 0.4, 2e-3))
     assert result["violation"].max() <= 1e-9
     kinetic = result["kinetic"].max()
     assert kinetic > 1.0  # ~ m g h: it really swings
@@ -275,9 +286,8 @@ def test_revolute_joint_2d_double_pendulum_conserves_energy():
 
 
 def test_revolute_joint_in_3d_is_an_error_naming_spherical():
-    data = _double_pendulum("beam3d", "revolute", 2, 0.1, 1e-2)
     with pytest.raises(ValueError, match="revolute") as error:
-        build(data)
+        _double_pendulum("beam3d", Revolute, 2, 0.1, 1e-2)
     assert "spherical" in str(error.value)
 
 
@@ -287,12 +297,12 @@ def test_3d_straight_body_bends_in_plane_like_the_2d_one():
     tips = {}
     for element, force in (("beam2d", [0.0, -P]), ("beam3d", [0.0, -P, 0.0])):
         data = cantilever(elements=6, element=element, height=h, width=w, force=force,
-                          analysis_tables={"static": {}})
+                          static=Static())
         result = simulate(data)
         tips[element] = result.static_values["tip_y"]
         reference = result.model.reference
         assert reference[result.model.node_dofs(0, "r_y")][1] == pytest.approx(1.0)
-    assert -tips["beam2d"] == pytest.approx(tip_deflection(P, STEEL["E"], h, w, 1.0), rel=0.01)
+    assert -tips["beam2d"] == pytest.approx(tip_deflection(P, STEEL.E, h, w, 1.0), rel=0.01)
     assert tips["beam3d"] == pytest.approx(tips["beam2d"], rel=1e-6)
 
 
@@ -300,23 +310,21 @@ def test_3d_straight_body_bends_in_plane_like_the_2d_one():
 
 P_SMALL = 1000.0
 LAWS = {
-    "constant": {"type": "constant", "value": 0.8},
-    "cosine_ramp": {"type": "cosine_ramp", "duration": 1.0},
-    "linear_ramp": {"type": "linear_ramp", "duration": 1.0, "value": -0.5},
-    "sine": {"type": "sine", "amplitude": 1.0, "frequency_hz": 1.0, "phase_deg": 30.0,
-             "offset": 0.2},
-    "table": {"type": "table", "points": [[0.0, 0.0], [0.5, 1.0], [1.0, -0.5], [1.5, -0.5]]},
+    "constant": Constant(0.8),
+    "cosine_ramp": CosineRamp(1.0),
+    "linear_ramp": LinearRamp(1.0, -0.5),
+    "sine": Sine(amplitude=1.0, frequency_hz=1.0, phase_deg=30.0, offset=0.2),
+    "table": Table(((0.0, 0.0), (0.5, 1.0), (1.0, -0.5), (1.5, -0.5))),
 }
 
 
 @pytest.fixture(scope="module")
 def stiff_static_deflection() -> float:
     """Static tip deflection (m, signed) of the stiff 1 m cantilever under -1000 N."""
-    result = simulate(cantilever(elements=4, force=[0.0, -P_SMALL],
-                                 analysis_tables={"static": {}}))
+    result = simulate(cantilever(elements=4, force=[0.0, -P_SMALL], static=Static()))
     value = result.static_values["tip_y"]
     # beam theory within the 4-element discretisation error
-    assert -value == pytest.approx(tip_deflection(P_SMALL, STEEL["E"], 0.1, 0.1, 1.0), rel=0.02)
+    assert -value == pytest.approx(tip_deflection(P_SMALL, STEEL.E, 0.1, 0.1, 1.0), rel=0.02)
     return value
 
 
@@ -328,16 +336,14 @@ def test_point_force_follows_its_time_law_quasi_statically(name, stiff_static_de
     # of the table's kinks within a few steps
     law = LAWS[name]
     data = cantilever(elements=4, force=[0.0, -P_SMALL], law=law,
-                      analysis_tables={"dynamic": {"t_end": 2.0, "step": 1e-2,
-                                                   "integrator": "generalized_alpha",
-                                                   "rho_inf": 0.0, "output_every": 0.05}})
+                      dynamic=Dynamic(t_end=2.0, step=1e-2, integrator="generalized_alpha",
+                                      rho_inf=0.0, output_every=0.05))
     result = simulate(data)
-    value = parse_law(law, "law")
     checked = 0
     for t, tip in zip(result.t, result["tip_y"], strict=True):
         if t < 0.2:
             continue
-        expected = value.value(t) * stiff_static_deflection
+        expected = law.value(t) * stiff_static_deflection
         assert tip == pytest.approx(expected, abs=0.02 * abs(stiff_static_deflection)), t
         checked += 1
     assert checked >= 30
@@ -347,20 +353,20 @@ def test_gravity_deflection_matches_uniform_load_beam_theory():
     # w L^4 / (8 E I), w = rho A g; slender (L / h = 50) so shear is negligible, nu = 0
     length, h, w = 1.0, 0.02, 0.02
     data = cantilever(elements=8, length=length, height=h, width=w, gravity=[0.0, -G],
-                      analysis_tables={"static": {}})
+                      static=Static())
     result = simulate(data)
-    load = STEEL["rho"] * h * w * G
-    exact = load * length**4 / (8 * STEEL["E"] * second_moment(h, w))
+    load = STEEL.rho * h * w * G
+    exact = load * length**4 / (8 * STEEL.E * second_moment(h, w))
     assert -result.static_values["tip_y"] == pytest.approx(exact, rel=0.01)
 
 
 def test_gravity_is_the_weight_of_the_whole_mesh():
     length, h, w = 2.0, 0.1, 0.05
     data = cantilever(elements=3, length=length, height=h, width=w, gravity=[0.0, -G])
-    model = build(data)
+    model = Model(data)
     force = model.external_forces(0.0)
     positions = np.concatenate([model.node_dofs(i, "r") for i in range(4)])
-    weight = STEEL["rho"] * length * h * w * G
+    weight = STEEL.rho * length * h * w * G
     assert force[positions].reshape(-1, 2).sum(axis=0) == pytest.approx([0.0, -weight],
                                                                          abs=1e-9 * weight)
 
@@ -369,9 +375,8 @@ def test_gravity_is_the_weight_of_the_whole_mesh():
 
 def test_load_steps_reach_the_same_equilibrium():
     base = cantilever(elements=4, length=2.0, height=0.05, width=0.05, force=[0.0, -2e4],
-                      analysis_tables={"static": {}})
-    stepped = copy.deepcopy(base)
-    stepped["analysis"]["static"] = {"load_steps": 4}
+                      static=Static())
+    stepped = dataclasses.replace(base, static=Static(load_steps=4))
     one, four = simulate(base), simulate(stepped)
     assert four.static.load_steps == 4
     assert four.static.iterations > one.static.iterations
@@ -397,10 +402,10 @@ def test_failed_load_increment_is_halved_and_matches_the_elastica():
     # P L^2 / EI = 1: a large deflection (30 % of L) that plain Newton with 6 iterations
     # cannot reach in one increment
     length, h, n = 2.0, 0.05, 10
-    P = STEEL["E"] * second_moment(h, h) / length**2
+    P = STEEL.E * second_moment(h, h) / length**2
     data = cantilever(elements=n, length=length, height=h, width=h, force=[0.0, -P],
-                      analysis_tables={"static": {"max_iterations": 6}})
-    model = build(data)
+                      static=Static(max_iterations=6))
+    model = Model(data)
     settings = model.scene.static
     nominal = sum(vector for _, vector in model.nominal_loads())
     with pytest.raises(analysis.ConvergenceError, match="did not converge in 6"):
@@ -409,7 +414,7 @@ def test_failed_load_increment_is_halved_and_matches_the_elastica():
     result = analysis.solve_static(model, settings)
     assert result.load_steps > 1
     generous = simulate(cantilever(elements=n, length=length, height=h, width=h,
-                                   force=[0.0, -P], analysis_tables={"static": {}}))
+                                   force=[0.0, -P], static=Static()))
     assert generous.static.load_steps == 1
     assert np.abs(result.q - generous.static.q).max() <= 1e-8 * length
     # the large-deflection answer: the elastica, within the discretisation error of 10
@@ -421,9 +426,8 @@ def test_failed_load_increment_is_halved_and_matches_the_elastica():
 
 
 def test_static_that_cannot_converge_raises_a_convergence_error():
-    data = cantilever(elements=2, force=[0.0, -1e5],
-                      analysis_tables={"static": {"max_iterations": 1}})
-    model = build(data)
+    data = cantilever(elements=2, force=[0.0, -1e5], static=Static(max_iterations=1))
+    model = Model(data)
     with pytest.raises(analysis.ConvergenceError, match="1/1024"):
         analysis.solve_static(model, model.scene.static)
 
@@ -432,10 +436,9 @@ def test_static_that_cannot_converge_raises_a_convergence_error():
 
 def test_lowest_modal_frequency_matches_the_closed_form():
     length, h = 2.0, 0.05
-    data = cantilever(elements=10, length=length, height=h, width=h,
-                      analysis_tables={"modal": {"modes": 3}})
+    data = cantilever(elements=10, length=length, height=h, width=h, modal=Modal(modes=3))
     result = simulate(data)
-    exact = cantilever_frequency(STEEL["E"], STEEL["rho"], h, h, length)
+    exact = cantilever_frequency(STEEL.E, STEEL.rho, h, h, length)
     assert result.frequencies[0] == pytest.approx(exact, rel=0.01)
     # second bending mode: (4.6941 / 1.8751)^2 times the first
     assert result.frequencies[1] == pytest.approx(exact * (4.694091 / 1.875104) ** 2, rel=0.02)
@@ -458,14 +461,13 @@ def test_modal_about_the_static_state_feels_the_axial_preload(axial):
     # tension stiffens, compression softens (7 % of the buckling load): first order
     # omega^2 = omega_0^2 + T int phi'^2 / (rho A int phi^2)
     length, h = 2.0, 0.05
-    tables = {"static": {}, "modal": {"modes": 2, "about": "static"}}
     about_static = simulate(cantilever(elements=10, length=length, height=h, width=h,
-                                       force=[axial, 0.0], analysis_tables=tables))
-    tables = {"modal": {"modes": 2, "about": "reference"}}
+                                       force=[axial, 0.0], static=Static(),
+                                       modal=Modal(modes=2, about="static")))
     about_reference = simulate(cantilever(elements=10, length=length, height=h, width=h,
-                                          force=[axial, 0.0], analysis_tables=tables))
+                                          force=[axial, 0.0], modal=Modal(modes=2)))
     omega0 = about_reference.frequencies[0]
-    rho_a = STEEL["rho"] * h * h
+    rho_a = STEEL.rho * h * h
     expected = math.sqrt(omega0**2 + axial * _rayleigh_tension_ratio(length) / rho_a)
     assert about_static.frequencies[0] == pytest.approx(expected, rel=0.005)
     assert abs(about_static.frequencies[0] / omega0 - 1) > 0.02
@@ -476,8 +478,7 @@ def test_modal_about_static_and_reference_differ_slightly_under_a_tip_load():
     values = {}
     for about in ("reference", "static"):
         data = cantilever(elements=10, length=length, height=h, width=h, force=[0.0, -1000.0],
-                          analysis_tables={"static": {},
-                                           "modal": {"modes": 3, "about": about}})
+                          static=Static(), modal=Modal(modes=3, about=about))
         values[about] = simulate(data).frequencies
     assert np.all(values["reference"] > 0) and np.all(values["static"] > 0)
     change = np.abs(values["static"] / values["reference"] - 1)
@@ -488,21 +489,18 @@ def test_modal_about_static_and_reference_differ_slightly_under_a_tip_load():
 
 # =========================================================================== dynamic
 
-def _vibrating(integrator: str, rho_inf: float | None = None, step: float = 1e-3) -> dict:
+def _vibrating(integrator: str, rho_inf: float = 0.8, step: float = 1e-3) -> Scene:
     """A 2 m cantilever (omega_1 ~ 66 rad/s) under a tip load ramped in 0.02 s: it vibrates
     about the static deflection."""
-    dynamic = {"t_end": 0.6, "step": step, "integrator": integrator, "output_every": 2e-3,
-               "frequency_of": "tip_y", "frequency_after": 0.1}
-    if rho_inf is not None:
-        dynamic["rho_inf"] = rho_inf
     return cantilever(elements=4, length=2.0, height=0.05, width=0.05, force=[0.0, -1000.0],
-                      law={"type": "linear_ramp", "duration": 0.02},
-                      sensors=[{"name": "tip_y", "type": "displacement", "node": "beam:-1",
-                                "component": "y"}],
-                      analysis_tables={"modal": {"modes": 2}, "dynamic": dynamic})
+                      law=LinearRamp(0.02), sensors=[Displacement("tip_y", "beam:-1", "y")],
+                      modal=Modal(modes=2),
+                      dynamic=Dynamic(t_end=0.6, step=step, integrator=integrator,
+                                      output_every=2e-3, rho_inf=rho_inf, frequency_of="tip_y",
+                                      frequency_after=0.1))
 
 
-@pytest.mark.parametrize("integrator, rho_inf", [("trapezoidal", None),
+@pytest.mark.parametrize("integrator, rho_inf", [("trapezoidal", 0.8),
                                                   ("generalized_alpha", 1.0),
                                                   ("generalized_alpha", 0.8)])
 def test_response_frequency_equals_the_modal_frequency(integrator, rho_inf, tmp_path):
@@ -522,20 +520,18 @@ def test_generalized_alpha_without_damping_matches_the_trapezoidal_rule():
     assert np.abs(alpha["tip_y"] - trapezoidal["tip_y"]).max() <= 1e-4 * amplitude
 
 
-def _pulsed(integrator: str, rho_inf: float | None) -> dict:
+def _pulsed(integrator: str, rho_inf: float) -> Scene:
     """A tip load pulse (8 ms, shorter than the first period 95 ms) on the 2 m cantilever,
     then free vibration; a large step (2 ms) leaves the high modes with omega h >> 1."""
-    dynamic = {"t_end": 0.5, "step": 2e-3, "integrator": integrator}
-    if rho_inf is not None:
-        dynamic["rho_inf"] = rho_inf
     return cantilever(elements=4, length=2.0, height=0.05, width=0.05, force=[0.0, -5000.0],
-                      law={"type": "table", "points": [[0.0, 0.0], [0.004, 1.0], [0.008, 0.0]]},
-                      sensors=[{"name": "energy", "type": "total_energy"}],
-                      analysis_tables={"dynamic": dynamic})
+                      law=Table(((0.0, 0.0), (0.004, 1.0), (0.008, 0.0))),
+                      sensors=[TotalEnergy("energy")],
+                      dynamic=Dynamic(t_end=0.5, step=2e-3, integrator=integrator,
+                                      rho_inf=rho_inf))
 
 
 @pytest.mark.parametrize("integrator, rho_inf, dissipative", [
-    ("trapezoidal", None, False), ("generalized_alpha", 1.0, False),
+    ("trapezoidal", 0.8, False), ("generalized_alpha", 1.0, False),
     ("generalized_alpha", 0.5, True), ("generalized_alpha", 0.0, True)])
 def test_numerical_damping_only_below_rho_inf_one(integrator, rho_inf, dissipative):
     result = simulate(_pulsed(integrator, rho_inf))
@@ -553,12 +549,9 @@ def test_numerical_damping_only_below_rho_inf_one(integrator, rho_inf, dissipati
 
 
 def test_pendulum_energy_drift_is_small_and_second_order():
-    scene_ = load_toml("pendulum.toml")
     drifts = {}
     for step in (1e-3, 5e-4):
-        data = copy.deepcopy(scene_)
-        data["analysis"]["dynamic"]["step"] = step
-        result = simulate(data)
+        result = simulate(shipped("pendulum", step=step))
         energy, kinetic = result["total_energy"], result["kinetic_energy"]
         assert energy[0] == 0.0 and kinetic.max() > 1.0
         drifts[step] = np.abs(energy - energy[0]).max() / kinetic.max()
@@ -569,20 +562,16 @@ def test_pendulum_energy_drift_is_small_and_second_order():
 # =========================================================================== sensors
 
 SPIN_SENSORS = [
-    {"name": "transverse", "type": "displacement", "node": "beam:-1", "frame": "beam:0",
-     "component": "y"},
-    {"name": "axial", "type": "displacement", "node": "beam:-1", "frame": "beam:0",
-     "component": "x"},
-    {"name": "dy", "type": "displacement", "node": "beam:-1", "component": "y"},
-    {"name": "dnorm", "type": "displacement", "node": "beam:-1", "component": "norm"},
-    {"name": "px", "type": "position", "node": "beam:-1", "component": "x"},
-    {"name": "py", "type": "position", "node": "beam:-1", "component": "y"},
-    {"name": "pnorm", "type": "position", "node": "beam:-1", "component": "norm"},
-    {"name": "local_x", "type": "position", "node": "beam:-1", "frame": "beam:0",
-     "component": "x"},
-    {"name": "local_y", "type": "position", "node": "beam:-1", "frame": "beam:0",
-     "component": "y"},
-    {"name": "kinetic", "type": "kinetic_energy"},
+    Displacement("transverse", "beam:-1", "y", "beam:0"),
+    Displacement("axial", "beam:-1", "x", "beam:0"),
+    Displacement("dy", "beam:-1", "y"),
+    Displacement("dnorm", "beam:-1", "norm"),
+    Position("px", "beam:-1", "x"),
+    Position("py", "beam:-1", "y"),
+    Position("pnorm", "beam:-1", "norm"),
+    Position("local_x", "beam:-1", "x", "beam:0"),
+    Position("local_y", "beam:-1", "y", "beam:0"),
+    KineticEnergy("kinetic"),
 ]
 
 
@@ -590,20 +579,18 @@ def test_sensors_of_a_stiff_beam_spun_by_its_hub():
     # E = 1000 x steel: the beam turns rigidly; its deflection under the angular
     # acceleration alpha is 11 rho A alpha L^5 / (120 E I) (uniformly varying load)
     length, h, omega, t_ramp = 2.0, 0.1, 2.0, 1.0
-    material = {"E": 2.1e14, "nu": 0.0, "rho": 7800.0}
+    material = Material("m", E=2.1e14, nu=0.0, rho=7800.0)
     data = scene([body(elements=3, end=(length, 0.0), height=h, width=h)],
-                 [{"type": "prescribed_rotation", "node": "beam:0",
-                   "angle": {"type": "spin_up", "omega": omega, "t_ramp": t_ramp}}],
-                 [], SPIN_SENSORS, {"dynamic": {"t_end": 1.5, "step": 1e-2}},
-                 material=material)
+                 [Hub("beam:0", SpinUp(omega, t_ramp))], [], SPIN_SENSORS, material,
+                 dynamic=Dynamic(t_end=1.5, step=1e-2))
     result = simulate(data)
     alpha = 2 * omega / t_ramp
-    bound = 10 * 11 * material["rho"] * h * h * alpha * length**5 / (
-        120 * material["E"] * second_moment(h, h))
+    bound = 10 * 11 * material.rho * h * h * alpha * length**5 / (
+        120 * material.E * second_moment(h, h))
     assert bound < 1e-5
-    for name in SPIN_SENSORS:
-        assert result[name["name"]][0] == pytest.approx(
-            {"px": length, "pnorm": length, "local_x": length}.get(name["name"], 0.0), abs=0)
+    for sensor in SPIN_SENSORS:
+        assert result[sensor.name][0] == pytest.approx(
+            {"px": length, "pnorm": length, "local_x": length}.get(sensor.name, 0.0), abs=0)
     angle = np.array([spin_up(t, omega, t_ramp)[0] for t in result.t])
     rate = np.array([spin_up(t, omega, t_ramp)[1] for t in result.t])
     assert np.abs(result["transverse"]).max() < bound
@@ -618,41 +605,37 @@ def test_sensors_of_a_stiff_beam_spun_by_its_hub():
     assert np.abs(result["dnorm"] - 2 * length * np.abs(np.sin(angle / 2))).max() < bound
     # kinetic energy of a rigid rotation, I = rho w (h L^3 / 3 + L h^3 / 12); the trapezoidal
     # velocities carry an O((omega h)^2) = 4e-4 error
-    inertia = material["rho"] * h * (h * length**3 / 3 + length * h**3 / 12)
+    inertia = material.rho * h * (h * length**3 / 3 + length * h**3 / 12)
     kinetic = 0.5 * inertia * rate**2
     assert np.abs(result["kinetic"] - kinetic).max() < 1e-3 * kinetic.max()
 
 
 def test_sensors_on_hand_made_states():
     sensors = [
-        {"name": "d_x", "type": "displacement", "node": "b:-1", "component": "x"},
-        {"name": "d_y", "type": "displacement", "node": "b:-1", "component": "y"},
-        {"name": "d_norm", "type": "displacement", "node": "b:-1", "component": "norm"},
-        {"name": "p_x", "type": "position", "node": "b:-1", "component": "x"},
-        {"name": "p_y", "type": "position", "node": "b:-1", "component": "y"},
-        {"name": "local_x", "type": "position", "node": "b:-1", "frame": "a:0",
-         "component": "x"},
-        {"name": "local_y", "type": "position", "node": "b:-1", "frame": "a:0",
-         "component": "y"},
-        {"name": "local_d", "type": "displacement", "node": "b:-1", "frame": "a:0",
-         "component": "norm"},
-        {"name": "strain", "type": "strain_energy"},
-        {"name": "strain_a", "type": "strain_energy", "body": "a"},
-        {"name": "kinetic", "type": "kinetic_energy"},
-        {"name": "kinetic_a", "type": "kinetic_energy", "body": "a"},
-        {"name": "kinetic_b", "type": "kinetic_energy", "body": "b"},
-        {"name": "potential", "type": "potential_energy"},
-        {"name": "total", "type": "total_energy"},
-        {"name": "violation", "type": "constraint_violation"},
+        Displacement("d_x", "b:-1", "x"),
+        Displacement("d_y", "b:-1", "y"),
+        Displacement("d_norm", "b:-1", "norm"),
+        Position("p_x", "b:-1", "x"),
+        Position("p_y", "b:-1", "y"),
+        Position("local_x", "b:-1", "x", "a:0"),
+        Position("local_y", "b:-1", "y", "a:0"),
+        Displacement("local_d", "b:-1", "norm", "a:0"),
+        StrainEnergy("strain"),
+        StrainEnergy("strain_a", "a"),
+        KineticEnergy("kinetic"),
+        KineticEnergy("kinetic_a", "a"),
+        KineticEnergy("kinetic_b", "b"),
+        PotentialEnergy("potential"),
+        TotalEnergy("total"),
+        ConstraintViolation("violation"),
     ]
     h, w = 0.1, 0.05
     data = scene([body("a", elements=2, start=(0.0, 0.0), end=(1.0, 0.0), height=h, width=w),
                   body("b", elements=3, start=(1.0, 0.0), end=(3.0, 0.0), height=h, width=w)],
-                 [{"type": "revolute", "nodes": ["a:-1", "b:0"]}],
-                 [{"type": "gravity", "acceleration": [0.0, -G]}], sensors)
-    model = build(data)
+                 [Revolute(("a:-1", "b:0"))], [Gravity([0.0, -G])], sensors)
+    model = Model(data)
     probe = Sensors(model)
-    mass_a, mass_b = STEEL["rho"] * h * w * 1.0, STEEL["rho"] * h * w * 2.0
+    mass_a, mass_b = STEEL.rho * h * w * 1.0, STEEL.rho * h * w * 2.0
 
     # rigid motion: turn by 0.7 rad about the origin, then shift by (0.3, -0.2)
     angle, shift = 0.7, np.array([0.3, -0.2])
@@ -696,21 +679,16 @@ def test_sensors_on_hand_made_states():
     values = probe.values(q)
     # uniform axial Green strain 0.01005 with nu = 0: U = E V eps^2 / 2
     eps = (1.01**2 - 1) / 2
-    assert values["strain_a"] == pytest.approx(STEEL["E"] * h * w * 1.0 * eps**2 / 2, rel=1e-9)
+    assert values["strain_a"] == pytest.approx(STEEL.E * h * w * 1.0 * eps**2 / 2, rel=1e-9)
 
 
-@pytest.mark.parametrize("law", [
-    None,
-    {"type": "cosine_ramp", "duration": 1.0},
-])
+@pytest.mark.parametrize("law", [Constant(), CosineRamp(1.0)])
 def test_static_potential_energy_of_gravity(law, tmp_path):
     # linear response: the loads do work 2 U, so the potential of gravity is -2 U
-    data = cantilever(elements=4, gravity=[0.0, -G], analysis_tables={"static": {}},
-                      sensors=[{"name": "potential", "type": "potential_energy"},
-                               {"name": "strain", "type": "strain_energy"},
-                               {"name": "total", "type": "total_energy"}])
-    if law is not None:
-        data["load"][0]["time_law"] = law
+    data = cantilever(elements=4, static=Static(),
+                      sensors=[PotentialEnergy("potential"), StrainEnergy("strain"),
+                               TotalEnergy("total")])
+    data = dataclasses.replace(data, loads=[Gravity([0.0, -G], time_law=law)])
     summary, code = run_scene(data, tmp_path)
     assert code == 0
     values = summary["static"]["sensors"]
@@ -722,25 +700,16 @@ def test_static_potential_energy_of_gravity(law, tmp_path):
 # =========================================================================== methods, backends
 
 @pytest.fixture(scope="module")
-def rotating_3s() -> dict:
-    data = load_toml("rotating_beam.toml")
-    data["analysis"]["dynamic"]["t_end"] = 3.0
-    return data
-
-
-@pytest.fixture(scope="module")
-def rotating_reference(rotating_3s) -> np.ndarray:
-    return simulate(rotating_3s, "gram", "c")["tip_transverse"]
+def rotating_reference() -> np.ndarray:
+    return simulate(shipped("rotating_beam", t_end=3.0), "gram", "c")["tip_transverse"]
 
 
 @pytest.mark.parametrize("method, backend, t_end", [
     ("cij", "c", 3.0), ("quadrature", "c", 3.0), ("gram", "numpy", 3.0), ("cij", "numpy", 3.0),
     ("quadrature", "numpy", 0.5)])  # numpy quadrature is ~50x slower: a shorter run
-def test_methods_and_backends_give_the_same_rotating_beam(method, backend, t_end, rotating_3s,
+def test_methods_and_backends_give_the_same_rotating_beam(method, backend, t_end,
                                                           rotating_reference):
-    data = copy.deepcopy(rotating_3s)
-    data["analysis"]["dynamic"]["t_end"] = t_end
-    series = simulate(data, method, backend)["tip_transverse"]
+    series = simulate(shipped("rotating_beam", t_end=t_end), method, backend)["tip_transverse"]
     reference = rotating_reference[: series.size]
     assert np.abs(reference).max() > (0.1 if t_end == 3.0 else 1e-4)
     assert np.abs(series - reference).max() <= 1e-7 * np.abs(reference).max()
@@ -753,10 +722,11 @@ PAPER = {2: (1.065, 17.07), 5: (1.125, 16.37), 10: (1.134, 16.27)}
 
 @pytest.mark.parametrize("elements", [2, 5, 10])
 def test_paper_cantilever_table_one(elements, tmp_path):
-    data = load_toml("cantilever.toml")
-    data["body"][0]["elements"] = elements
+    data = load_scene(scenes.path("cantilever"))
+    data = dataclasses.replace(data, bodies=[dataclasses.replace(data.bodies[0],
+                                                                 elements=elements)])
     if elements != 10:
-        del data["analysis"]["dynamic"]  # the dynamic run once, with 10 elements
+        data = dataclasses.replace(data, dynamic=None)  # the dynamic run once, with 10
     summary, code = run_scene(data, tmp_path, f"cantilever{elements}")
     assert code == 0, summary["message"]
     deflection_cm, omega = PAPER[elements]

@@ -4,13 +4,13 @@ runs, and the rotating beam against our own solver.  Skipped without Exudyn."""
 
 from __future__ import annotations
 
-import tomllib
+import dataclasses
 from pathlib import Path
 
 import pytest
 from scenes_small import cantilever_frequency, simulate, tip_deflection
 
-from runtime import peers
+from runtime import load_scene, peers
 
 pytestmark = pytest.mark.skipif(
     not peers.exudyn_available(),
@@ -47,11 +47,11 @@ def test_cantilever_short_run_modified_and_full_newton_agree(integrator):
 
 
 def test_rotating_beam_matches_our_solver_at_two_seconds():
-    data = tomllib.loads((SCENES / "rotating_beam.toml").read_text())
-    dynamic = data["analysis"]["dynamic"]
-    dynamic.update(t_end=2.0, integrator="generalized_alpha")  # rho_inf 0.8 on both sides
-    ours = simulate(data)["tip_transverse"][-1]
-    peer = peers.exudyn_rotating_beam(10, t_end=2.0, step=dynamic["step"], rho_inf=0.8)
+    scene = load_scene(SCENES / "rotating_beam.toml")
+    dynamic = dataclasses.replace(scene.dynamic, t_end=2.0, integrator="generalized_alpha",
+                                  rho_inf=0.8)   # rho_inf 0.8 on both sides
+    ours = simulate(dataclasses.replace(scene, dynamic=dynamic))["tip_transverse"][-1]
+    peer = peers.exudyn_rotating_beam(10, t_end=2.0, step=dynamic.step, rho_inf=0.8)
     assert peer.steps == 400
     # the beam lags behind the spinning hub: a few cm, the same in both models (the peer is an
     # Euler-Bernoulli cable, ours a shear-deformable continuum beam)

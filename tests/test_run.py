@@ -13,10 +13,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from scenes_small import cantilever, to_toml
+from scenes_small import cantilever
 
 from runtime.cli import main
 from runtime.run import run
+from runtime.scene import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -42,14 +43,14 @@ def small_scene(analyses=("static", "modal", "dynamic"), **changes) -> dict:
               "dynamic": {"t_end": 0.05, "step": 2.5e-3, "output_every": 5e-3}}
     data = cantilever(elements=2, force=[0.0, -1000.0],
                       law={"type": "cosine_ramp", "duration": 0.02}, sensors=SENSORS,
-                      analysis_tables={k: tables[k] for k in analyses})
+                      **{k: tables[k] for k in analyses}).to_dict()
     data.update(changes)
     return data
 
 
 def write(folder: Path, data: dict | str, name: str = "scene.toml") -> Path:
     path = folder / name
-    path.write_text(data if isinstance(data, str) else to_toml(data))
+    path.write_text(data if isinstance(data, str) else toml_text(data))
     return path
 
 
@@ -239,7 +240,7 @@ def test_unknown_key_fails_with_exit_2_naming_the_key_path(tmp_path, capsys):
 
 
 def test_unknown_top_level_key_and_toml_errors_fail(tmp_path):
-    summary, code = run(write(tmp_path, to_toml(small_scene()) + "\nsolverr = 1\n"),
+    summary, code = run(write(tmp_path, toml_text(small_scene()) + "\nsolverr = 1\n"),
                         tmp_path / "a", quiet=True)
     assert code == 2 and summary["status"] == "failed" and "solverr" in summary["message"]
     summary, code = run(write(tmp_path, "title = \n", "broken.toml"), tmp_path / "b",
@@ -251,7 +252,7 @@ def test_unknown_top_level_key_and_toml_errors_fail(tmp_path):
 
 
 def test_revolute_joint_in_a_3d_scene_fails_with_exit_2(tmp_path):
-    data = cantilever(elements=2, element="beam3d", analysis_tables={"static": {}})
+    data = cantilever(elements=2, element="beam3d", static={}).to_dict()
     second = dict(data["body"][0], name="other", start=[1.0, 0.0, 0.0], end=[2.0, 0.0, 0.0])
     data["body"].append(second)
     data["constraint"].append({"type": "revolute", "nodes": ["beam:-1", "other:0"]})
@@ -267,7 +268,7 @@ def diverging_scene() -> dict:
     # quiet until t = 0.05 s, then a 1e12 N tip load: Newton cannot follow
     return cantilever(elements=2, force=[0.0, -1e12], sensors=SENSORS,
                       law={"type": "table", "points": [[0.0, 0.0], [0.05, 0.0], [0.06, 1.0]]},
-                      analysis_tables={"dynamic": {"t_end": 0.2, "step": 5e-3}})
+                      dynamic={"t_end": 0.2, "step": 5e-3}).to_dict()
 
 
 def test_diverging_run_keeps_what_it_computed(tmp_path, capsys):
@@ -317,9 +318,8 @@ def numpy_dynamic(sensors: list[dict], t_end: float = 0.3, **dynamic) -> dict:
     """A 2-element cantilever shaken at 5 Hz, numpy backend (no compiler), dynamic only."""
     return cantilever(elements=2, force=[0.0, -1000.0], sensors=sensors,
                       law={"type": "sine", "amplitude": 1.0, "frequency_hz": 5.0},
-                      analysis_tables={"dynamic": {"t_end": t_end, "step": 2.5e-3,
-                                                   **dynamic}},
-                      solver={"backend": "numpy"})
+                      dynamic={"t_end": t_end, "step": 2.5e-3, **dynamic},
+                      solver={"backend": "numpy"}).to_dict()
 
 
 def csv_column(path: Path, name: str) -> tuple[list[float], list[float]]:

@@ -10,6 +10,27 @@ from pathlib import Path
 
 import pytest
 
+from runtime import (
+    Arc,
+    Body,
+    Clamp,
+    ConstraintViolation,
+    Displacement,
+    Dynamic,
+    Gravity,
+    Hub,
+    KineticEnergy,
+    Material,
+    Modal,
+    NodeRef,
+    Pin,
+    PointForce,
+    Scene,
+    Solver,
+    Static,
+    StrainEnergy,
+    load_scene,
+)
 from runtime.laws import (
     Constant,
     ConstantRate,
@@ -21,22 +42,7 @@ from runtime.laws import (
     Table,
     parse_law,
 )
-from runtime.scene import (
-    Arc,
-    Body,
-    Constraint,
-    Dynamic,
-    Load,
-    Material,
-    Modal,
-    NodeRef,
-    Scene,
-    Sensor,
-    Solver,
-    Static,
-    load_scene,
-    parse_scene,
-)
+from runtime.scene import parse_scene
 
 # --------------------------------------------------------------------------- laws
 
@@ -312,10 +318,10 @@ def test_cantilever_scene_parses():
         materials={"steel": Material("steel", 132e9, 0.0, 8245.2)},
         bodies=(Body("beam", "beam3d", "steel", 0.1, 0.1, 10, (0.0, 0.0, 0.0), (5.0, 0.0, 0.0),
                      None, None),),
-        constraints=(Constraint("clamp", NodeRef("beam", 0), None, None, None),),
-        loads=(Load("point_force", NodeRef("beam", 10), (0.0, -300.0, 0.0),
-                    CosineRamp(duration=3.5)),),
-        sensors=(Sensor("tip_y", "displacement", NodeRef("beam", 10), "y", None, None),),
+        constraints=(Clamp(NodeRef("beam", 0)),),
+        loads=(PointForce(NodeRef("beam", 10), (0.0, -300.0, 0.0),
+                          time_law=CosineRamp(duration=3.5)),),
+        sensors=(Displacement("tip_y", NodeRef("beam", 10), "y"),),
         static=Static(),
         modal=Modal(modes=4),
         dynamic=Dynamic(t_end=4.0, step=1e-3, output_every=0.01),
@@ -331,13 +337,12 @@ def test_rotating_beam_scene_parses():
     scene = parse_scene(toml(ROTATING))
     assert scene.dim == 2
     assert scene.bodies[0].quadrature == (5, 3)
-    assert scene.constraints == (
-        Constraint("prescribed_rotation", NodeRef("beam", 0), None, SpinUp(4.0, 15.0), None),)
+    assert scene.constraints == (Hub(NodeRef("beam", 0), SpinUp(4.0, 15.0)),)
     assert scene.sensors == (
-        Sensor("tip_v", "displacement", NodeRef("beam", 10), "y", NodeRef("beam", 0), None),
-        Sensor("strain_energy", "strain_energy", None, None, None, None),
-        Sensor("kinetic_energy", "kinetic_energy", None, None, None, "beam"),
-        Sensor("violation", "constraint_violation", None, None, None, None),
+        Displacement("tip_v", NodeRef("beam", 10), "y", NodeRef("beam", 0)),
+        StrainEnergy("strain_energy"),
+        KineticEnergy("kinetic_energy", "beam"),
+        ConstraintViolation("violation"),
     )
     assert scene.loads == ()
     assert scene.static is None and scene.modal is None
@@ -352,11 +357,11 @@ def test_arc_joints_and_gravity_parse():
     assert scene.bodies[0].arc == Arc((0.0, 0.0, 0.0), 1.0, -90.0, 90.0)
     assert scene.bodies[0].start is None
     pin, spherical, hub = scene.constraints
-    assert pin == Constraint("pin", NodeRef("arm", 0), None, None, None)
+    assert pin == Pin(NodeRef("arm", 0))
     assert spherical.nodes == (NodeRef("arm", 4), NodeRef("link", 0))
     assert hub.node == NodeRef("link", 2)
     assert hub.axis == (0.0, 1.0, 0.0)
-    assert scene.loads == (Load("gravity", None, (0.0, -9.81, 0.0), Constant()),)
+    assert scene.loads == (Gravity((0.0, -9.81, 0.0)),)
     assert [(s.name, s.type) for s in scene.sensors] == [
         ("tip", "position"), ("V", "potential_energy"), ("total", "total_energy")]
 
@@ -492,8 +497,8 @@ BAD = [
     ("pendulum", _set("constraint", 1, "nodes", ["arm:-1", "lnk:0"]),
      'constraint[1].nodes[1]: unknown body "lnk"'),
     # constraints
-    ("3d", _set("constraint", 0, "type", "weld"),
-     'constraint[0].type: unknown constraint type "weld"; expected one of clamp, pin'),
+    ("3d", _set("constraint", 0, "type", "glue"),
+     'constraint[0].type: unknown constraint type "glue"; expected one of clamp, pin'),
     ("2d", _set("constraint", 0, "axis", [0.0, 0.0, 1.0]),
      "constraint[0].axis: only allowed in 3D"),
     ("pendulum", _set("constraint", 2, "axis", [0.0, 0.0, 0.0]),

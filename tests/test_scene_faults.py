@@ -19,6 +19,7 @@ import tomllib
 
 import pytest
 
+from runtime import Revolute
 from runtime.scene import Material, SceneError, load_scene, parse_scene
 
 BASE = """
@@ -425,7 +426,7 @@ def test_bases_are_valid():
     scene = parse_scene(tomllib.loads(BASE))
     assert [c.type for c in scene.constraints] == ["clamp"]
     scene = parse_scene(tomllib.loads(BASE_2D))
-    assert scene.constraints[1].axis is None
+    assert isinstance(scene.constraints[1], Revolute)
 
 
 @pytest.mark.parametrize("description, source, message", CASES, ids=[c[0] for c in CASES])

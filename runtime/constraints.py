@@ -1,0 +1,199 @@
+"""Constraints of scenes (``[[constraint]]`` tables): a typed registry, ``CONSTRAINTS``.
+
+A constraint either holds coordinates of one node (``NodeConstraint``: clamp, pin, a hub
+whose rotation is prescribed) or ties two nodes together with linear joint rows
+``A q = 0`` solved with Lagrange multipliers (``Joint``: spherical, revolute, weld).  Each
+class declares its TOML keys as fields (``runtime.schema.Record``) and implements its effect
+on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from runtime.laws import Law, SceneError, _show
+from runtime.schema import Context, NodeRef, Record, key, law_key, node_key, registry, unit_axis
+
+if TYPE_CHECKING:
+    from runtime.model import Model
+
+__all__ = ["CONSTRAINTS", "Clamp", "Constraint", "Hub", "Joint", "NodeConstraint", "Pin",
+           "Revolute", "Spherical", "Weld"]
+
+# weld coefficients below this (relative to 1: the reference frames are unit) are the
+# round-off of cosines of right angles, written as exact zeros
+WELD_ZERO = 1e-12
+
+
+@dataclass
+class Built:
+    """What the constraints of a model do to its ``size`` coordinates (``Constraint.apply``).
+
+    fixed: (size,) bool, coordinates held at their initial values; hubs: (node, angle law,
+    axis (3,)) of the nodes that follow a prescribed rigid rotation; rows: joint rows
+    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}.
+    """
+
+    fixed: np.ndarray
+    hubs: list[tuple[int, Law, np.ndarray]] = field(default_factory=list)
+    rows: list[dict[int, float]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Constraint(Record):
+    """Base of the constraints."""
+
+    def apply(self, model: Model, built: Built) -> None:
+        """Record the effect of this constraint on ``model``'s coordinates in ``built``."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class NodeConstraint(Constraint):
+    """A constraint on one node (``"BODY:INDEX"``, or a NodeRef); ``holds_gradients``: it
+    holds the node's gradients as well as its position."""
+
+    holds_gradients: ClassVar[bool] = True
+    node: NodeRef | str = key(node_key)
+
+    def held(self, dim: int, per_node: int) -> int:
+        """Number of coordinates it holds (a node has ``per_node``, its position ``dim``)."""
+        return per_node if self.holds_gradients else dim
+
+
+@dataclass(frozen=True)
+class Clamp(NodeConstraint):
+    """Holds every coordinate of the node (position and gradients)."""
+
+    type: ClassVar[str] = "clamp"
+
+    def apply(self, model: Model, built: Built) -> None:
+        built.fixed[model.node_dofs(model.node_index(self.node))] = True
+
+
+@dataclass(frozen=True)
+class Pin(NodeConstraint):
+    """Holds the position of the node; its gradients (the section) turn freely."""
+
+    type: ClassVar[str] = "pin"
+    holds_gradients: ClassVar[bool] = False
+
+    def apply(self, model: Model, built: Built) -> None:
+        built.fixed[model.node_dofs(model.node_index(self.node), "r")] = True
+
+
+def _axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+@dataclass(frozen=True)
+class Hub(NodeConstraint):
+    """``prescribed_rotation``: the node is a rigid hub, its position held and its gradients
+    turned by the angle ``angle(t)`` (rad, a time law) about the unit ``axis`` (3D only,
+    default +z; None in 2D, where rotations are about z)."""
+
+    type: ClassVar[str] = "prescribed_rotation"
+    angle: Law | dict = key(law_key)
+    axis: tuple[float, ...] | None = key(_axis_key, None, only_3d="a 2D rotation is about z")
+
+    def resolved(self, context: Context) -> Hub:
+        if context.dim == 3 and self.axis is None:
+            return dataclasses.replace(self, axis=(0.0, 0.0, 1.0))
+        return self
+
+    def apply(self, model: Model, built: Built) -> None:
+        built.hubs.append((model.node_index(self.node), self.angle,
+                           np.asarray(self.axis or (0.0, 0.0, 1.0), float)))
+
+
+def _nodes_key(value: Any, path: str, context: Context) -> tuple[NodeRef, NodeRef]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise SceneError(f'{path}: expected two node references ["A:-1", "B:0"], got '
+                         f"{_show(value)}")
+    a, b = context.node(value[0], f"{path}[0]"), context.node(value[1], f"{path}[1]")
+    if a == b:
+        raise SceneError(f"{path}: expected two different nodes, got {a} twice "
+                         f"({_show(value[0])} and {_show(value[1])})")
+    return a, b
+
+
+@dataclass(frozen=True)
+class Joint(Constraint):
+    """A joint between two distinct ``nodes`` at the same place in the reference: linear rows
+    ``A q = 0`` (Lagrange multipliers).  This base ties the positions: r_A = r_B."""
+
+    nodes: tuple[NodeRef | str, NodeRef | str] = key(_nodes_key)
+
+    def rows(self, dim: int, per_node: int) -> int:
+        """Number of joint rows (multipliers) it adds."""
+        return dim
+
+    def apply(self, model: Model, built: Built) -> None:
+        a, b = (model.node_dofs(model.node_index(n), "r") for n in self.nodes)
+        built.rows.extend({i: 1.0, j: -1.0} for i, j in zip(a, b, strict=True))
+
+
+@dataclass(frozen=True)
+class Spherical(Joint):
+    """Shared position, free relative rotation (a ball joint in 3D, a hinge in 2D)."""
+
+    type: ClassVar[str] = "spherical"
+
+
+@dataclass(frozen=True)
+class Revolute(Joint):
+    """Planar hinge: shared position, free relative rotation about z (2D scenes only)."""
+
+    type: ClassVar[str] = "revolute"
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    dims_message: ClassVar[str] = ('a revolute joint is planar (2D scenes only); use '
+                                   '"spherical" in 3D')
+
+
+@dataclass(frozen=True)
+class Weld(Joint):
+    """A rigid connection: shared position, and the sections of the two nodes turn together.
+
+    With G_A, G_B the (dim, dim) matrices of the nodes' reference gradients (columns r_x,
+    r_y(, r_z)), the current gradients satisfy [r_B,x r_B,y ...] = [r_A,x r_A,y ...] C with
+    the constant C = G_A^-1 G_B: both nodes share one deformation gradient F (r_k = F G[:, k]).
+    In the reference this is r_B,k = R r_A,k with R = G_B G_A^-1 the fixed rotation between
+    the two frames (an L-frame's corner: 90 degrees about z), and unlike R r_A,k it stays
+    true when the welded assembly turns as a whole (rigid rotations leave it satisfied).
+    Linear rows: dim for the position, dim per gradient (per_node rows in all).  This is the
+    slope-discontinuity joint of Shabana & Mikkola (J. Mech. Des. 125, 2003); sharing F also
+    ties the strains of the two end sections (stiffer than a beam-theory rigid joint by
+    O(h^2 / (L l_element)), e.g. 0.1 % for the L-frame of scenes/l_frame.toml).
+    """
+
+    type: ClassVar[str] = "weld"
+
+    def rows(self, dim: int, per_node: int) -> int:
+        return per_node
+
+    def apply(self, model: Model, built: Built) -> None:
+        super().apply(model, built)
+        dim = model.dim
+        gradients = [name for name in model.vectors if name != "r"]
+        a, b = (model.node_index(n) for n in self.nodes)
+
+        def coordinates(node: int) -> np.ndarray:   # (gradients, dim) global indices
+            return np.array([model.node_dofs(node, name) for name in gradients])
+
+        ia, ib = coordinates(a), coordinates(b)
+        ga, gb = model.reference[ia].T, model.reference[ib].T
+        coupling = np.linalg.solve(ga, gb)
+        coupling[np.abs(coupling) < WELD_ZERO] = 0.0
+        for k in range(len(gradients)):
+            for c in range(dim):
+                row = {int(ia[m, c]): float(coupling[m, k]) for m in range(len(gradients))
+                       if coupling[m, k] != 0.0}
+                row[int(ib[k, c])] = -1.0
+                built.rows.append(row)
+
+
+CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld)

@@ -1,0 +1,134 @@
+"""External loads of scenes (``[[load]]`` tables): a typed registry, ``LOADS``.
+
+A load is a constant generalised force vector (``nominal``, N per coordinate, at a time-law
+value of 1) scaled by its ``time_law`` (default: constant 1).  Each class declares its TOML
+keys as fields (``runtime.schema.Record``); adding one is one class here and one entry in
+``LOADS``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from runtime.laws import Constant, Law
+from runtime.schema import (
+    Context,
+    NodeRef,
+    Record,
+    key,
+    law_key,
+    node_key,
+    registry,
+    rotation_vector,
+    vector,
+)
+
+if TYPE_CHECKING:
+    from runtime.model import Model
+
+__all__ = ["LOADS", "Gravity", "Load", "NodeLoad", "PointForce", "PointMoment"]
+
+
+@dataclass(frozen=True)
+class Load(Record):
+    """Base of the loads: ``nominal(model)`` times ``time_law.value(t)``; ``potential``: its
+    work is the potential energy of the ``potential_energy`` sensor (gravity)."""
+
+    potential: ClassVar[bool] = False
+    time_law: Law | dict = key(law_key, Constant(), kw_only=True)
+
+    def nominal(self, model: Model) -> np.ndarray:
+        """Generalised force (size,) in N (per coordinate) at a time-law value of 1."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class NodeLoad(Load):
+    """A load on one ``node``; ``on_gradients``: it acts on the node's gradients (a moment),
+    else on its position (a force); ``noun`` names it in messages."""
+
+    on_gradients: ClassVar[bool] = False
+    noun: ClassVar[str] = "force"
+    node: NodeRef | str = key(node_key)
+
+
+def _vector_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, context.dim, f"the scene is {context.dim}D")
+
+
+@dataclass(frozen=True)
+class PointForce(NodeLoad):
+    """A force ``force`` (dim,) in N on the position of ``node`` (fixed direction)."""
+
+    type: ClassVar[str] = "point_force"
+    force: tuple[float, ...] = key(_vector_key)
+
+    def nominal(self, model: Model) -> np.ndarray:
+        out = np.zeros(model.size)
+        out[model.node_dofs(model.node_index(self.node), "r")] = self.force
+        return out
+
+
+def _moment_key(value: Any, path: str, context: Context) -> float | tuple[float, ...]:
+    return rotation_vector(value, path, context.dim, "the moment in N m")
+
+
+@dataclass(frozen=True)
+class PointMoment(NodeLoad):
+    """A moment ``moment`` in N m on the section of ``node``: a number about +z in 2D, a
+    vector (3,) in 3D; fixed in space.
+
+    Consistent generalised force: the virtual work of M on the small rotation d theta of the
+    node's section, read from its gradients r_y (and r_z) in the reference.  With (t1, t2,
+    t3) the node's reference frame (its gradients r_x, r_y, r_z orthonormalised, r_x first)
+    and a rotation d theta, d r_y = d theta x t2 and d r_z = d theta x t3, so
+    d theta . t3 = -t1 . d r_y, d theta . t2 = t1 . d r_z and d theta . t1 = (t3 . d r_y -
+    t2 . d r_z) / 2 (the twist read from both, averaged); M . d theta = Q_y . d r_y +
+    Q_z . d r_z gives, with M_i = M . t_i,
+
+        3D:  Q_y = (M_1 / 2) t3 - M_3 t1,   Q_z = M_2 t1 - (M_1 / 2) t2
+        2D:  Q_y = -M t1                     (M about z)
+
+    on the node's r_y and r_z coordinates (nothing on r and r_x).  It is also the work of a
+    linear distribution of tractions over the section (the bending stress -M y / I) with
+    resultant M.  Assumption: small rotations of the section; Q is constant, so a section
+    turned by a finite angle theta receives the moment of those fixed tractions, M cos(theta)
+    in bending, not M.
+    """
+
+    type: ClassVar[str] = "point_moment"
+    on_gradients: ClassVar[bool] = True
+    noun: ClassVar[str] = "moment"
+    moment: float | tuple[float, ...] = key(_moment_key)
+
+    def nominal(self, model: Model) -> np.ndarray:
+        node = model.node_index(self.node)
+        frame = model.node_frame(model.reference, node)
+        out = np.zeros(model.size)
+        if model.dim == 2:
+            out[model.node_dofs(node, "r_y")] = -self.moment * frame[:, 0]
+            return out
+        t1, t2, t3 = frame.T
+        m1, m2, m3 = frame.T @ np.asarray(self.moment, float)
+        out[model.node_dofs(node, "r_y")] = 0.5 * m1 * t3 - m3 * t1
+        out[model.node_dofs(node, "r_z")] = m2 * t1 - 0.5 * m1 * t2
+        return out
+
+
+@dataclass(frozen=True)
+class Gravity(Load):
+    """A uniform acceleration field ``acceleration`` (dim,) in m/s^2 on every body: the
+    consistent generalised force M u of the mass matrix M and the rigid translation u."""
+
+    type: ClassVar[str] = "gravity"
+    potential: ClassVar[bool] = True
+    acceleration: tuple[float, ...] = key(_vector_key)
+
+    def nominal(self, model: Model) -> np.ndarray:
+        return model.mass @ model.rigid_field(translation=self.acceleration)
+
+
+LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity)

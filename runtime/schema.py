@@ -1,0 +1,317 @@
+"""The scene schema's building blocks: value checkers, node references and ``Record``, the base
+of the typed registries of constraints, loads and sensors (``runtime.constraints``,
+``runtime.loads``, ``runtime.sensors``), modelled on the time laws of ``runtime.laws``.
+
+A record is a frozen dataclass whose fields are the keys of its TOML table
+``{type = "...", key = value, ...}``: each field says how its value is checked
+(``key(parse)``), ``Record.parse`` reads a table with the messages of every scene error (key
+path first), ``Record.to_dict`` writes the table back.  Adding a constraint, load or sensor is
+one subclass with a ``type`` and its fields, added to its module's registry.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from runtime.laws import Law, SceneError, _is_finite, _show, parse_law
+
+if TYPE_CHECKING:
+    from runtime.scene import Body
+
+# what a missing required key should hold, for error messages
+HINTS = {
+    "E": "Young's modulus in Pa",
+    "nu": "Poisson's ratio",
+    "rho": "the density in kg/m^3",
+    "name": "a name",
+    "element": "an element kind",
+    "material": "the NAME of a [material.NAME] table",
+    "section": "{height = H, width = W} in m",
+    "height": "the section height in m",
+    "width": "the section width in m",
+    "elements": "the number of elements",
+    "center": "the centre of the arc in m",
+    "radius": "the radius of the arc in m",
+    "angle_deg": "the opening angle of the arc in degrees",
+    "node": 'a node reference "BODY:INDEX"',
+    "nodes": 'two node references ["A:INDEX", "B:INDEX"]',
+    "angle": 'a time law of the angle in rad, e.g. {type = "spin_up", omega = 4.0, t_ramp = 15.0}',
+    "force": "the force vector in N",
+    "moment": "the moment in N m (a number, about z, in 2D; a vector in 3D)",
+    "acceleration": "the acceleration vector in m/s^2",
+    "component": "x, y, z or norm",
+    "omega": "the angular velocity in rad/s (a number, about z, in 2D; a vector in 3D)",
+    "about": "the point (m) the body spins about",
+    "t_end": "the end time in s",
+    "step": "the time step in s",
+}
+# longest name of a body, material or sensor (characters)
+NAME_LENGTH = 64
+# a node index: ASCII digits, an optional "-", no "+", blanks, "_" or leading zeros
+NODE_INDEX = re.compile(r"0|-?[1-9][0-9]*")
+
+
+@dataclass(frozen=True)
+class NodeRef:
+    """Node ``index`` of body ``body`` (in a validated scene: 0 .. elements; as input, negative
+    indices count from the end).  ``str`` gives ``"BODY:INDEX"`` with that index; ``written``
+    keeps a negative index as the scene wrote it (not compared), so that the scene's TOML
+    (``spelled``) still names the last node after its body is remeshed."""
+
+    body: str
+    index: int
+    written: int | None = dataclasses.field(default=None, compare=False, repr=False)
+
+    def __str__(self) -> str:
+        return f"{self.body}:{self.index}"
+
+    def spelled(self) -> str:
+        """``"BODY:INDEX"`` as the scene wrote it."""
+        return f"{self.body}:{self.index if self.written is None else self.written}"
+
+
+# --------------------------------------------------------------------------- checkers
+
+def keys(data: Any, path: str, required: tuple[str, ...], optional: tuple[str, ...],
+         what: str = "a table") -> dict:
+    """Check that ``data`` is a table holding all ``required`` keys and no unknown key."""
+    if not isinstance(data, dict):
+        raise SceneError(f"{path}: expected {what}, got {_show(data)}")
+    allowed = (*required, *optional)
+    prefix = f"{path}." if path else ""
+    for key_ in data:
+        if key_ not in allowed:
+            raise SceneError(f"{prefix}{key_}: unknown key; expected one of {', '.join(allowed)}")
+    for key_ in required:
+        if key_ not in data:
+            hint = f"; expected {HINTS[key_]}" if key_ in HINTS else ""
+            raise SceneError(f"{prefix}{key_}: missing required key{hint}")
+    return data
+
+
+def number(value: Any, path: str, positive: bool = False) -> float:
+    """A finite number (a positive one if asked) as a float."""
+    if not _is_finite(value):
+        raise SceneError(f"{path}: expected a {'positive' if positive else 'finite'} number, "
+                         f"got {_show(value)}")
+    if positive and value <= 0:
+        raise SceneError(f"{path}: expected a positive number, got {_show(value)}")
+    return float(value)
+
+
+def string(value: Any, path: str) -> str:
+    """A non-empty string."""
+    if not isinstance(value, str) or not value:
+        raise SceneError(f"{path}: expected a non-empty string, got {_show(value)}")
+    return value
+
+
+def choice(value: Any, path: str, choices: tuple[str, ...], what: str = "value") -> str:
+    """One of ``choices``."""
+    if not isinstance(value, str) or value not in choices:
+        raise SceneError(f"{path}: unknown {what} {_show(value)}; expected one of "
+                         f"{', '.join(choices)}")
+    return value
+
+
+def boolean(value: Any, path: str) -> bool:
+    """true or false."""
+    if not isinstance(value, bool):
+        raise SceneError(f"{path}: expected true or false, got {_show(value)}")
+    return value
+
+
+def vector(value: Any, path: str, dim: int, why: str) -> tuple[float, ...]:
+    """A list of ``dim`` finite numbers (``why`` says where ``dim`` comes from)."""
+    if not isinstance(value, list) or len(value) != dim or not all(map(_is_finite, value)):
+        raise SceneError(f"{path}: expected a list of {dim} numbers ({why}), got {_show(value)}")
+    return tuple(float(x) for x in value)
+
+
+def rotation_vector(value: Any, path: str, dim: int, what: str) -> float | tuple[float, ...]:
+    """A pseudo-vector (moment, angular velocity): a number about z in 2D, a 3-vector in 3D."""
+    if dim == 3:
+        return vector(value, path, 3, "the scene is 3D")
+    if not _is_finite(value):
+        raise SceneError(f"{path}: expected a number ({what} about z; the scene is 2D), got "
+                         f"{_show(value)}")
+    return float(value)
+
+
+class Nodes:
+    """Resolves ``"BODY:INDEX"`` against the bodies of a scene."""
+
+    def __init__(self, bodies: tuple[Body, ...]) -> None:
+        self.bodies = {b.name: b for b in bodies}
+
+    def __call__(self, value: Any, path: str) -> NodeRef:
+        if not isinstance(value, str) or value.count(":") != 1:
+            raise SceneError(f'{path}: expected a node reference "BODY:INDEX", got '
+                             f"{_show(value)}")
+        name, index_text = value.split(":")
+        if name not in self.bodies:
+            raise SceneError(f"{path}: unknown body {_show(name)} in {_show(value)}; bodies: "
+                             f"{', '.join(self.bodies)}")
+        if not NODE_INDEX.fullmatch(index_text):
+            raise SceneError(f'{path}: expected an integer node index after ":" (ASCII digits '
+                             f'and an optional leading "-"; no "+", blanks, "_" or leading '
+                             f'zeros, "-0" neither: 0 is the first node, -1 the last), got '
+                             f"{_show(value)}")
+        n = self.bodies[name].n_nodes
+        index = int(index_text) if len(index_text) <= 20 else None
+        if index is None or not -n <= index < n:
+            shown = index_text if index is not None else f"{index_text[:20]}..."
+            raise SceneError(f"{path}: node index {shown} out of range for body {_show(name)} "
+                             f"with {n} nodes (0..{n - 1} or -{n}..-1)")
+        return NodeRef(name, index % n, index if index < 0 else None)
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a record's values are checked against: the scene's dimension and bodies."""
+
+    dim: int
+    node: Nodes
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        """Names of the scene's bodies, in order."""
+        return tuple(self.node.bodies)
+
+
+# --------------------------------------------------------------------------- TOML values
+
+def plain(value: Any) -> Any:
+    """``value`` as TOML data (tables, lists, strings, numbers, booleans): scene objects by
+    their ``to_dict``, node references as ``"BODY:INDEX"`` (as written), NumPy arrays and
+    scalars as lists and Python numbers; anything else unchanged (the parser then says what
+    is wrong)."""
+    if hasattr(value, "to_dict"):
+        return value.to_dict()
+    if isinstance(value, NodeRef):
+        return value.spelled()
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def table(obj: Any, skip: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The TOML table of a dataclass: its fields (named as the TOML keys) as ``plain`` data,
+    without ``skip`` and those left at None or at their default."""
+    out: dict[str, Any] = {}
+    for f in sorted(dataclasses.fields(obj), key=lambda f: f.kw_only):   # keyword-only last
+        value = getattr(obj, f.name)
+        if f.name in skip or value is None or (f.default is not dataclasses.MISSING
+                                               and same(value, f.default)):
+            continue
+        out[f.name] = plain(value)
+    return out
+
+
+def same(value: Any, default: Any) -> bool:
+    """``value == default`` for scene values of any type (False where == is not a bool)."""
+    try:
+        return type(value) is type(default) and bool(value == default)
+    except (TypeError, ValueError):
+        return False
+
+
+# --------------------------------------------------------------------------- records
+
+Parse = Callable[[Any, str, Context], Any]
+
+
+def key(parse: Parse, default: Any = dataclasses.MISSING, only_3d: str = "",
+        kw_only: bool = False) -> Any:
+    """A record field read by ``parse(value, path, context)``; without ``default`` the TOML key
+    is required; ``only_3d`` (why) makes it an error in 2D scenes; ``kw_only`` makes it a
+    keyword-only argument (a base class field with a default)."""
+    return dataclasses.field(default=default, kw_only=kw_only,
+                             metadata={"parse": parse, "only_3d": only_3d})
+
+
+def node_key(value: Any, path: str, context: Context) -> NodeRef:
+    """A node reference "BODY:INDEX"."""
+    return context.node(value, path)
+
+
+def law_key(value: Any, path: str, context: Context) -> Law:
+    """A time law table."""
+    return parse_law(value, path)
+
+
+@dataclass(frozen=True)
+class Record:
+    """Base of constraints, loads and sensors: ``type`` names the class in scenes, ``dims`` the
+    scene dimensions it exists in (``dims_message`` says why not, at the ``type`` key)."""
+
+    type: ClassVar[str] = ""
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+    dims_message: ClassVar[str] = ""
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        """The record of the TOML table ``data`` (its ``type`` already read) at ``path``."""
+        if context.dim not in cls.dims:
+            raise SceneError(f"{path}.type: {cls.dims_message}")
+        fields = [f for f in dataclasses.fields(cls) if "parse" in f.metadata]
+        for f in fields:
+            if f.metadata["only_3d"] and context.dim == 2 and f.name in data:
+                raise SceneError(f"{path}.{f.name}: only allowed in 3D scenes "
+                                 f"({f.metadata['only_3d']})")
+        present = [f for f in fields if context.dim == 3 or not f.metadata["only_3d"]]
+        required = tuple(f.name for f in present if f.default is dataclasses.MISSING)
+        optional = tuple(f.name for f in present if f.default is not dataclasses.MISSING)
+        keys(data, path, ("type", *required), optional)
+        values = {f.name: f.metadata["parse"](data[f.name], f"{path}.{f.name}", context)
+                  for f in present if f.name in data}
+        return cls(**values).resolved(context)
+
+    def resolved(self, context: Context) -> Record:
+        """This record with defaults that depend on the scene filled in (after ``parse``)."""
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table of this record (``parse`` of it gives the record back)."""
+        return {"type": self.type, **table(self)}
+
+
+def parse_record(registry: dict[str, type[Record]], what: str, data: dict, path: str,
+                 context: Context) -> Record:
+    """The record of one TOML table of an array ``[[what]]`` (``type`` chooses its class in
+    ``registry``)."""
+    if "type" not in data:
+        raise SceneError(f"{path}.type: missing required key; expected one of "
+                         f"{', '.join(registry)}")
+    name = choice(data["type"], f"{path}.type", tuple(registry), f"{what} type")
+    return registry[name].parse(data, path, context)
+
+
+def registry(*classes: type[Record]) -> dict[str, type[Record]]:
+    """{type: class} of record classes, in the order given."""
+    return {cls.type: cls for cls in classes}
+
+
+def unit_axis(value: Any, path: str) -> tuple[float, ...]:
+    """A non-zero 3D axis, normalised (an axis already of unit length to 1e-12 is kept as it
+    is, so that reading a written scene gives the same numbers)."""
+    axis = vector(value, path, 3, "an axis is 3D")
+    norm = math.hypot(*axis)
+    if norm == 0.0:
+        raise SceneError(f"{path}: expected a non-zero axis, got {_show(value)}")
+    if abs(norm - 1.0) <= 1e-12:
+        return axis
+    return tuple(x / norm for x in axis)

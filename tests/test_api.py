@@ -1,0 +1,447 @@
+"""The public Python API of scenes: the scene dataclasses validate as TOML files do (one
+validation path, the same key-path messages), ``Scene.to_toml()`` and ``load_scene`` round-trip
+exactly (a seeded property test over random valid scenes), and constraints, loads and sensors
+are typed registries."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import random
+import tomllib
+
+import numpy as np
+import pytest
+
+import scenes
+from runtime import (
+    Arc,
+    Body,
+    Clamp,
+    Constant,
+    ConstantRate,
+    ConstraintViolation,
+    CosineRamp,
+    Displacement,
+    Dynamic,
+    Gravity,
+    Hub,
+    KineticEnergy,
+    LinearRamp,
+    Material,
+    Modal,
+    NodeRef,
+    Output,
+    Pin,
+    PointForce,
+    PointMoment,
+    Position,
+    PotentialEnergy,
+    Revolute,
+    Scene,
+    SceneError,
+    Sine,
+    Solver,
+    Spherical,
+    Spin,
+    SpinUp,
+    Static,
+    StrainEnergy,
+    Table,
+    TotalEnergy,
+    Weld,
+    load_scene,
+)
+from runtime.constraints import CONSTRAINTS
+from runtime.loads import LOADS
+from runtime.scene import parse_scene
+from runtime.sensors import SENSORS
+
+STEEL = Material("steel", E=2.1e11, nu=0.3, rho=7800.0)
+
+
+def cantilever(**changes) -> Scene:
+    """A 3D cantilever of 4 elements with a tip force, as the API builds it."""
+    values = dict(title="api", materials=[STEEL],
+                  bodies=[Body("beam", "beam3d", "steel", 0.1, 0.1, 4, (0, 0, 0), (1, 0, 0))],
+                  constraints=[Clamp("beam:0")],
+                  loads=[PointForce("beam:-1", (0, -100, 0), time_law=CosineRamp(0.5))],
+                  sensors=[Displacement("tip_y", "beam:-1", "y")],
+                  static=Static(), dynamic=Dynamic(t_end=0.01, step=1e-3))
+    return Scene(**{**values, **changes})
+
+
+# --------------------------------------------------------------------------- one validation
+
+def test_a_python_scene_equals_its_toml_twin():
+    scene = cantilever()
+    assert scene == parse_scene(tomllib.loads(scene.to_toml()))
+    # parsed values: resolved node references, floats, tuples, materials by name
+    assert scene.constraints == (Clamp(NodeRef("beam", 0)),)
+    assert scene.loads[0].node == NodeRef("beam", 4)
+    assert scene.loads[0].force == (0.0, -100.0, 0.0)
+    assert scene.bodies[0].start == (0.0, 0.0, 0.0)
+    assert scene.materials == {"steel": STEEL}
+    assert scene.source == "<scene>"
+
+
+def test_the_brief_example_names_the_key_path():
+    with pytest.raises(SceneError, match=r"^body\[0\]\.elements: expected a positive integer, "
+                                         r"got 0$"):
+        cantilever(bodies=[Body("beam", "beam3d", "steel", 0.1, 0.1, 0, (0, 0, 0), (1, 0, 0))])
+
+
+def _message(build) -> str:
+    with pytest.raises(SceneError) as info:
+        build()
+    return str(info.value)
+
+
+BODY = Body("beam", "beam3d", "steel", 0.1, 0.1, 4, (0, 0, 0), (1, 0, 0))
+# (Python change, the same change made to the TOML table)
+SAME_ERRORS = [
+    ({"bodies": [dataclasses.replace(BODY, height=-0.1)]},
+     lambda d: d["body"][0]["section"].update(height=-0.1)),
+    ({"bodies": [dataclasses.replace(BODY, element="beam9d")]},
+     lambda d: d["body"][0].update(element="beam9d")),
+    ({"bodies": [dataclasses.replace(BODY, end=(1.0, 0.0))]},
+     lambda d: d["body"][0].update(end=[1.0, 0.0])),
+    ({"bodies": [dataclasses.replace(BODY, initial_velocity=(1.0, 0.0))]},
+     lambda d: d["body"][0].update(initial_velocity=[1.0, 0.0])),
+    ({"bodies": [dataclasses.replace(BODY, initial_angular_velocity=Spin(2.0, (0, 0, 0)))]},
+     lambda d: d["body"][0].update(initial_angular_velocity={"omega": 2.0,
+                                                             "about": [0, 0, 0]})),
+    ({"materials": [dataclasses.replace(STEEL, nu=0.5)]},
+     lambda d: d["material"]["steel"].update(nu=0.5)),
+    ({"constraints": [Clamp("beam:11")]}, lambda d: d["constraint"][0].update(node="beam:11")),
+    ({"constraints": [Clamp("bem:0")]}, lambda d: d["constraint"][0].update(node="bem:0")),
+    ({"constraints": [Clamp(NodeRef("beam", -6))]},
+     lambda d: d["constraint"][0].update(node="beam:-6")),
+    ({"constraints": [Clamp("beam:0"), Pin("beam:0")]},
+     lambda d: d["constraint"].append({"type": "pin", "node": "beam:0"})),
+    ({"constraints": [Clamp("beam:0"), Revolute(("beam:1", "beam:2"))]},
+     lambda d: d["constraint"].append({"type": "revolute", "nodes": ["beam:1", "beam:2"]})),
+    ({"constraints": [Clamp("beam:0"), Weld(("beam:1", "beam:1"))]},
+     lambda d: d["constraint"].append({"type": "weld", "nodes": ["beam:1", "beam:1"]})),
+    ({"constraints": [Clamp("beam:0"), Hub("beam:2", SpinUp(1.0, 1.0), (0, 0, 0))]},
+     lambda d: d["constraint"].append({"type": "prescribed_rotation", "node": "beam:2",
+                                       "angle": {"type": "spin_up", "omega": 1.0,
+                                                 "t_ramp": 1.0}, "axis": [0, 0, 0]})),
+    ({"loads": [PointForce("beam:0", (0, 1, 0))]},
+     lambda d: d["load"][0].update(node="beam:0")),
+    ({"loads": [PointMoment("beam:0", (0, 0, 1))]},
+     lambda d: d["load"].__setitem__(0, {"type": "point_moment", "node": "beam:0",
+                                         "moment": [0, 0, 1]})),
+    ({"loads": [PointMoment("beam:-1", 1.0)]},
+     lambda d: d["load"].__setitem__(0, {"type": "point_moment", "node": "beam:-1",
+                                         "moment": 1.0})),
+    ({"loads": [Gravity((0, -9.81, 0), time_law=CosineRamp(-1.0))]},
+     lambda d: d["load"].__setitem__(0, {"type": "gravity", "acceleration": [0, -9.81, 0],
+                                         "time_law": {"type": "cosine_ramp",
+                                                      "duration": -1.0, "value": 1.0}})),
+    ({"sensors": [Displacement("t", "beam:-1", "y")]},
+     lambda d: d["sensor"][0].update(name="t")),
+    ({"sensors": [Displacement("tip", "beam:-1", "w")]},
+     lambda d: d["sensor"][0].update(name="tip", component="w")),
+    ({"sensors": [StrainEnergy("U", "bem")]},
+     lambda d: d["sensor"].__setitem__(0, {"name": "U", "type": "strain_energy",
+                                           "body": "bem"})),
+    ({"dynamic": Dynamic(t_end=0.0105, step=1e-3)},
+     lambda d: d["analysis"]["dynamic"].update(t_end=0.0105)),
+    ({"static": Static(load_steps=0)},
+     lambda d: d["analysis"]["static"].update(load_steps=0)),
+    ({"modal": Modal(about="deformed")}, lambda d: d["analysis"].update(modal={
+        "about": "deformed"})),
+    ({"solver": Solver(method="fast")}, lambda d: d.update(solver={"method": "fast"})),
+    ({"output": Output(vtk="yes")}, lambda d: d.update(output={"vtk": "yes"})),
+    ({"title": "a\nb"}, lambda d: d.update(title="a\nb")),
+]
+
+
+@pytest.mark.parametrize("changes, mutate", SAME_ERRORS,
+                         ids=[",".join(c) + str(i) for i, (c, _) in enumerate(SAME_ERRORS)])
+def test_python_and_toml_fail_with_the_same_message(changes, mutate):
+    data = cantilever().to_dict()
+    mutate(data)
+    toml_message = _message(lambda: parse_scene(copy.deepcopy(data)))
+    assert _message(lambda: cantilever(**changes)) == toml_message
+    path = toml_message.split(":")[0]
+    assert path and " " not in path.split(".")[0], toml_message
+
+
+def test_replace_revalidates():
+    scene = cantilever()
+    longer = dataclasses.replace(scene, dynamic=Dynamic(t_end=0.02, step=1e-3))
+    assert longer.dynamic.t_end == 0.02 and longer.bodies == scene.bodies
+    with pytest.raises(SceneError, match=r"^analysis\.dynamic\.step: expected a step of at"):
+        dataclasses.replace(scene, dynamic=Dynamic(t_end=0.01, step=1.0))
+
+
+def test_node_references_from_the_end_follow_a_remeshed_body():
+    scene = cantilever()
+    assert scene.loads[0].node == NodeRef("beam", 4) and str(scene.loads[0].node) == "beam:4"
+    finer = dataclasses.replace(scene, bodies=[dataclasses.replace(BODY, elements=8)])
+    assert finer.loads[0].node == NodeRef("beam", 8)
+    assert finer.sensors[0].node == NodeRef("beam", 8)
+    # an index written from the start stays where it was
+    fixed = dataclasses.replace(scene, loads=[PointForce(NodeRef("beam", 4), (0, -1, 0))])
+    finer = dataclasses.replace(fixed, bodies=[dataclasses.replace(BODY, elements=8)])
+    assert finer.loads[0].node == NodeRef("beam", 4)
+
+
+def test_materials_as_a_sequence_or_by_name():
+    by_name = cantilever(materials={"steel": STEEL})
+    assert by_name == cantilever()
+    with pytest.raises(SceneError, match=r"^material\.steel: duplicate material name"):
+        cantilever(materials=[STEEL, STEEL])
+    with pytest.raises(SceneError, match=r'^material\.iron: the material under this key is '
+                                         r'called "steel"'):
+        cantilever(materials={"iron": STEEL})
+    with pytest.raises(SceneError, match=r"^material: expected Material objects"):
+        cantilever(materials=[{"E": 1.0}])
+
+
+def test_raw_tables_and_numpy_values_are_accepted():
+    scene = cantilever(constraints=[{"type": "clamp", "node": "beam:0"}],
+                       loads=[PointForce("beam:-1", np.array([0.0, -100.0, 0.0]),
+                                         time_law=CosineRamp(np.float64(0.5)))],
+                       bodies=[dataclasses.replace(BODY, elements=np.int64(4))])
+    assert scene == cantilever()
+    assert type(scene.bodies[0].elements) is int
+
+
+def test_unknown_types_are_errors_listing_the_registry():
+    data = cantilever().to_dict()
+    data["load"][0]["type"] = "moment"
+    message = _message(lambda: parse_scene(data))
+    assert message == ('load[0].type: unknown load type "moment"; expected one of '
+                       'point_force, point_moment, gravity')
+    data["load"][0] = {"acceleration": [0, -9.81, 0]}
+    assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
+
+
+def test_registries_are_keyed_by_type():
+    for registry in (CONSTRAINTS, LOADS, SENSORS):
+        assert all(cls.type == name for name, cls in registry.items())
+    assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
+                                 "revolute", "weld"]
+    assert list(LOADS) == ["point_force", "point_moment", "gravity"]
+    assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
+                             "potential_energy", "total_energy", "constraint_violation"]
+
+
+def test_output_table():
+    scene = cantilever(output=Output(vtk=True, states=True))
+    assert scene.output == Output(vtk=True, animation=False, states=True)
+    assert "[output]\nvtk = true\nstates = true\n" in scene.to_toml()
+    assert cantilever().output == Output()
+    data = cantilever().to_dict()
+    data["output"] = {"gif": True}
+    assert _message(lambda: parse_scene(data)).startswith(
+        "output.gif: unknown key; expected one of vtk, animation, states")
+    data["output"] = {"animation": 1}
+    assert _message(lambda: parse_scene(data)) == \
+        "output.animation: expected true or false, got 1"
+
+
+def test_initial_conditions_parse_per_dimension():
+    spin = Spin((0.0, 0.0, 2.0), (0.5, 0.0, 0.0))
+    scene = cantilever(bodies=[dataclasses.replace(BODY, initial_velocity=[1, 0, 0],
+                                                   initial_angular_velocity=spin)])
+    assert scene.bodies[0].initial_velocity == (1.0, 0.0, 0.0)
+    assert scene.bodies[0].initial_angular_velocity == spin
+    data = scene.to_dict()
+    assert data["body"][0]["initial_angular_velocity"] == {"omega": [0.0, 0.0, 2.0],
+                                                           "about": [0.5, 0.0, 0.0]}
+    del data["body"][0]["initial_angular_velocity"]["about"]
+    assert _message(lambda: parse_scene(data)).startswith(
+        "body[0].initial_angular_velocity.about: missing required key; expected the point")
+    message = _message(lambda: cantilever(bodies=[dataclasses.replace(
+        BODY, initial_angular_velocity=Spin(2.0, (0, 0, 0)))]))
+    assert message == ("body[0].initial_angular_velocity.omega: expected a list of 3 numbers "
+                       "(the scene is 3D), got 2.0")
+
+
+# --------------------------------------------------------------------------- round trip
+
+NAMES = ["beam", "link", "arm ü", "b-2", "x.y", "Bar_3"]
+MATERIAL_NAMES = ["steel", "alu 2", 'q"uote', "ü-mat", "a.b", "back\\slash"]
+TITLES = ["untitled", 'a "quoted" title', "back \\ slash", "ünïcode — dash", "x" * 200]
+
+
+def _number(rng: random.Random, low: float, high: float) -> float:
+    """A float with all its digits (round trips must keep every bit)."""
+    return rng.uniform(low, high)
+
+
+def _law(rng: random.Random):
+    kind = rng.randrange(7)
+    if kind == 0:
+        return Constant(_number(rng, -2, 2))
+    if kind == 1:
+        return CosineRamp(_number(rng, 0.1, 2), _number(rng, -2, 2))
+    if kind == 2:
+        return LinearRamp(_number(rng, 0.1, 2), _number(rng, -2, 2))
+    if kind == 3:
+        return Sine(_number(rng, -2, 2), _number(rng, 0.1, 5), _number(rng, -90, 90),
+                    _number(rng, -1, 1))
+    if kind == 4:
+        times = sorted({round(_number(rng, 0, 5), 6) for _ in range(rng.randint(1, 4))})
+        return Table(tuple((t, _number(rng, -1, 1)) for t in times))
+    if kind == 5:
+        return SpinUp(_number(rng, -5, 5), _number(rng, 0.1, 20))
+    return ConstantRate(_number(rng, -5, 5))
+
+
+def _vector(rng: random.Random, dim: int, scale: float = 1.0) -> tuple[float, ...]:
+    return tuple(_number(rng, -scale, scale) for _ in range(dim))
+
+
+def _rotation(rng: random.Random, dim: int):
+    return _number(rng, -3, 3) if dim == 2 else _vector(rng, 3, 3)
+
+
+def random_scene(rng: random.Random) -> Scene:
+    """A random valid scene using every kind of body, constraint, load, sensor and table."""
+    dim = rng.choice([2, 3])
+    element = "beam2d" if dim == 2 else "beam3d"
+    materials = []
+    for name in rng.sample(MATERIAL_NAMES, rng.randint(1, 3)):
+        law = rng.choice(["svk", "ecm"])
+        materials.append(Material(
+            name, _number(rng, 1e9, 3e11), _number(rng, -0.5, 0.49), _number(rng, 100, 9000),
+            law, _number(rng, 0.5, 1.0) if law == "ecm" and rng.random() < 0.5 else None,
+            _number(rng, 0, 1e-3) if rng.random() < 0.3 else 0.0))
+    # a chain of bodies, each starting where the previous one ends
+    point = _vector(rng, dim, 2.0)
+    bodies = []
+    for name in rng.sample(NAMES, rng.randint(1, 3)):
+        elements = rng.randint(1, 4)
+        common = dict(name=name, element=element, material=rng.choice(materials).name,
+                      height=_number(rng, 0.01, 0.2), width=_number(rng, 0.01, 0.2),
+                      elements=elements)
+        if rng.random() < 0.3:
+            radius, start = _number(rng, 0.5, 2.0), _number(rng, -180, 180)
+            angle = rng.choice([-1, 1]) * _number(rng, 10, 120)
+            center = (point[0] - radius * math.cos(math.radians(start)),
+                      point[1] - radius * math.sin(math.radians(start)), *point[2:])
+            body = Body(**common, arc=Arc(center, radius, start, angle))
+            end = math.radians(start + angle)
+            point = (center[0] + radius * math.cos(end), center[1] + radius * math.sin(end),
+                     *point[2:])
+        else:
+            end = tuple(p + d for p, d in zip(point, _vector(rng, dim, 1.5), strict=True))
+            body = Body(**common, start=point, end=end)
+            point = end
+        if rng.random() < 0.4:
+            body = dataclasses.replace(body, quadrature=tuple(rng.randint(1, 6)
+                                                              for _ in range(dim)))
+        if rng.random() < 0.4:
+            body = dataclasses.replace(body, initial_velocity=_vector(rng, dim))
+        if rng.random() < 0.4:
+            body = dataclasses.replace(body, initial_angular_velocity=Spin(
+                _rotation(rng, dim), _vector(rng, dim)))
+        bodies.append(body)
+
+    constraints, held = [], {}
+    first = f"{bodies[0].name}:0"
+    kind = rng.choice([Clamp, Pin, Hub, None])
+    if kind is Hub:
+        constraints.append(Hub(first, _law(rng), _vector(rng, 3) if dim == 3 and
+                               rng.random() < 0.5 else None))
+    elif kind is not None:
+        constraints.append(kind(first))
+    if kind is not None:
+        held[(bodies[0].name, 0)] = kind
+    joints = [Spherical, Weld] + ([Revolute] if dim == 2 else [])
+    for a, b in zip(bodies, bodies[1:], strict=False):
+        constraints.append(rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0))))
+    for body in bodies:           # pins on interior nodes
+        for index in range(1, body.elements):
+            if rng.random() < 0.2:
+                constraints.append(Pin(NodeRef(body.name, index)))
+                held[(body.name, index)] = Pin
+
+    loads = []
+    for _ in range(rng.randint(0, 3)):
+        body = rng.choice(bodies)
+        index = rng.randrange(body.n_nodes)
+        holder = held.get((body.name, index))
+        law = _law(rng) if rng.random() < 0.5 else Constant()
+        options = [Gravity(_vector(rng, dim, 10), time_law=law)]
+        if holder is None:
+            options.append(PointForce(f"{body.name}:{index - body.n_nodes}",
+                                      _vector(rng, dim, 100), time_law=law))
+        if holder in (None, Pin):
+            options.append(PointMoment(NodeRef(body.name, index), _rotation(rng, dim),
+                                       time_law=law))
+        loads.append(rng.choice(options))
+
+    sensors = []
+    for i in range(rng.randint(0, 6)):
+        body = rng.choice(bodies)
+        node = NodeRef(body.name, rng.randrange(body.n_nodes))
+        name = rng.choice(["s", "tip.x", "U-", "_v"]) + str(i)
+        components = ("x", "y", "norm") if dim == 2 else ("x", "y", "z", "norm")
+        options = [
+            Displacement(name, node, rng.choice(components),
+                         NodeRef(body.name, 0) if rng.random() < 0.5 else None),
+            Position(name, node, rng.choice(components)),
+            StrainEnergy(name, rng.choice([None, body.name])),
+            KineticEnergy(name, rng.choice([None, body.name])),
+            PotentialEnergy(name), TotalEnergy(name), ConstraintViolation(name)]
+        sensors.append(rng.choice(options))
+
+    static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
+        if rng.random() < 0.5 else None
+    modal = Modal(rng.randint(1, 2), rng.choice(["reference", "static"])) \
+        if rng.random() < 0.5 else None
+    dynamic = None
+    if rng.random() < 0.6:
+        step = rng.choice([1e-3, 2.5e-3, 0.01, 1 / 3])
+        steps = rng.randint(10, 40)
+        frequency = rng.choice([s.name for s in sensors]) if sensors and rng.random() < 0.5 \
+            else None
+        dynamic = Dynamic(steps * step, step, rng.choice(["trapezoidal", "generalized_alpha"]),
+                          rng.choice([None, step, 2 * step]), _number(rng, 0, 1),
+                          _number(rng, 1e-12, 1e-4), rng.randint(1, 50), frequency, 0.0,
+                          rng.choice(["full", "modified"]))
+    solver = Solver(rng.choice(["gram", "cij", "quadrature"]), rng.choice(["c", "numpy"]),
+                    rng.choice([None, "python", "compiled"]))
+    output = Output(*(rng.random() < 0.5 for _ in range(3)))
+    return Scene(title=rng.choice(TITLES), materials=materials, bodies=bodies,
+                 constraints=constraints, loads=loads, sensors=sensors, static=static,
+                 modal=modal, dynamic=dynamic, solver=solver, output=output)
+
+
+def test_random_scenes_round_trip_through_toml(tmp_path):
+    rng = random.Random(9)
+    kinds = set()
+    for i in range(300):
+        scene = random_scene(rng)
+        text = scene.to_toml()
+        again = parse_scene(tomllib.loads(text))
+        assert again == scene, text
+        assert again.to_toml() == text
+        if i % 30 == 0:
+            path = tmp_path / f"scene{i}.toml"
+            path.write_text(text, encoding="utf-8")
+            assert load_scene(path) == scene
+        kinds.update(type(x).__name__ for x in (*scene.constraints, *scene.loads,
+                                                 *scene.sensors))
+        kinds.update(k for k in ("arc", "initial_angular_velocity", "quadrature")
+                     if any(getattr(b, k) is not None for b in scene.bodies))
+    # every class of every registry was exercised
+    expected = {cls.__name__ for r in (CONSTRAINTS, LOADS, SENSORS) for cls in r.values()}
+    assert expected | {"arc", "initial_angular_velocity", "quadrature"} <= kinds
+
+
+@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever",
+                                  "l_frame", "spinning_beam"])
+def test_shipped_scenes_round_trip(name):
+    scene = load_scene(scenes.path(name))
+    text = scene.to_toml()
+    again = parse_scene(tomllib.loads(text), str(scenes.path(name)))
+    assert again == scene
+    assert again.to_toml() == text
