@@ -1,7 +1,8 @@
 """Runtime of the ANCF toolchain: generated kernels, elements, models and the CLI.
 
-The public Python API: ``Element``, and scenes built from the dataclasses below (the same
-validation and messages as TOML files, ``Scene.to_toml()``, ``load_scene(path)``).
+The public Python API: ``Element``; scenes built from the dataclasses below (the same
+validation and messages as TOML files, ``Scene.to_toml()``, ``load_scene(path)``); and
+``run_scene(scene) -> Result`` (every analysis in memory, no file written).
 """
 
 from runtime.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
@@ -17,6 +18,7 @@ from runtime.laws import (
     Table,
 )
 from runtime.loads import Gravity, PointForce, PointMoment
+from runtime.result import Result, run_scene
 from runtime.scene import (
     Arc,
     Body,
@@ -34,6 +36,7 @@ from runtime.scene import (
 from runtime.sensors import (
     ConstraintViolation,
     Displacement,
+    DissipatedEnergy,
     KineticEnergy,
     Position,
     PotentialEnergy,
@@ -42,12 +45,11 @@ from runtime.sensors import (
     TotalEnergy,
 )
 
-# run_scene(scene) -> Result (runtime/run.py, in memory, no file I/O) joins this API here
-
 __all__ = [
     "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
-    "Displacement", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy", "LinearRamp",
-    "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment", "Position",
-    "PotentialEnergy", "Revolute", "Scene", "SceneError", "Sensor", "Sine", "Solver", "Spherical",
-    "Spin", "SpinUp", "StrainEnergy", "Static", "Table", "TotalEnergy", "Weld", "load_scene",
+    "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
+    "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment",
+    "Position", "PotentialEnergy", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine",
+    "Solver", "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy",
+    "Weld", "load_scene", "run_scene",
 ]

@@ -16,6 +16,20 @@ class ConvergenceError(RuntimeError):
     """Newton did not converge (the message says where and why)."""
 
 
+class FreeMechanismError(ValueError):
+    """A static analysis of a model that some body can move in freely (no equilibrium to
+    find): the message names the bodies and their free motions."""
+
+
+def check_held(model: Model) -> None:
+    """FreeMechanismError naming every body free to move (``Model.free_motions``)."""
+    motions = model.free_motions()
+    if motions:
+        raise FreeMechanismError(
+            f"analysis.static: {'; '.join(motions)}: a static analysis needs every body held "
+            f"(add a clamp, a pin or a joint to a held body), or remove [analysis.static]")
+
+
 @dataclass
 class StaticResult:
     """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used."""
@@ -65,6 +79,7 @@ def _solve_static(model: Model, settings) -> StaticResult:
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
     lets the next grow again (doubling, up to the initial increment).
     """
+    check_held(model)
     nominal = model.nominal_load()
     q = model.reference.copy()
     multipliers = np.zeros(model.joints.shape[0])

@@ -151,6 +151,9 @@ class Simulation:
         self.timing["preprocess_s"] = model.timing["preprocess_s"]
         self.sensors = Sensors(model)
         self.model = model
+        if self.scene.static is not None or (self.scene.modal is not None
+                                             and self.scene.modal.about == "static"):
+            analysis.check_held(model)   # before any work: a free body has no equilibrium
         for text in locking_warnings(self.scene):
             self.summary["warnings"].append(text)
             progress.warn(text)

@@ -31,8 +31,9 @@ from runtime.schema import (
 if TYPE_CHECKING:
     from runtime.model import Model
 
-__all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "Displacement", "KineticEnergy",
-           "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy", "TotalEnergy"]
+__all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
+           "KineticEnergy", "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy",
+           "TotalEnergy"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -178,6 +179,18 @@ class TotalEnergy(Sensor):
 
 
 @dataclass(frozen=True)
+class DissipatedEnergy(Sensor):
+    """Energy (J) dissipated by Kelvin-Voigt damping since the start of the dynamic run (the
+    engines integrate the dissipated power step by step; 0 in static analysis and without
+    damping).  total_energy + dissipated_energy is conserved in a free motion."""
+
+    type: ClassVar[str] = "dissipated_energy"
+
+    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        return float(getattr(model, "dissipated_energy", 0.0)) if t is not None else 0.0
+
+
+@dataclass(frozen=True)
 class ConstraintViolation(Sensor):
     """max |A q| of the joint rows (m; 0 without joints)."""
 
@@ -193,7 +206,7 @@ class ConstraintViolation(Sensor):
 
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
-    ConstraintViolation)
+    DissipatedEnergy, ConstraintViolation)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 

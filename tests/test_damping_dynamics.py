@@ -11,7 +11,7 @@ import pytest
 from scenes_small import cantilever
 from scipy.signal import find_peaks
 
-from runtime import analysis, engines
+from runtime import Material, analysis, engines
 from runtime.model import Model
 from runtime.scene import parse_scene
 
@@ -24,10 +24,10 @@ def _pulse(integrator: str = "generalized_alpha", t_end: float = 0.3, law: str =
     return cantilever(
         elements=4, element="beam2d", height=0.05, width=0.05, force=[0.0, -50.0],
         law={"type": "table", "points": [[0.0, 1.0], [0.002, 1.0], [0.0021, 0.0]]},
-        material={"E": 2.1e11, "nu": 0.3 if law == "ecm" else 0.0, "rho": 7800.0,
-                  "law": law, "damping": damping},
-        analysis_tables={"dynamic": {"t_end": t_end, "step": 1e-4, "output_every": 1e-4,
-                                     "integrator": integrator, "rho_inf": 1.0}})
+        material=Material("m", E=2.1e11, nu=0.3 if law == "ecm" else 0.0, rho=7800.0,
+                          law=law, damping=damping),
+        dynamic={"t_end": t_end, "step": 1e-4, "output_every": 1e-4,
+                 "integrator": integrator, "rho_inf": 1.0}).to_dict()
 
 
 def _run(model: Model, settings, engine: str):

@@ -41,13 +41,6 @@ from runtime.run import run
 
 ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
-# templates/stepper.c.j2: dense_lu_solve applies the row interchanges of the Schur LU between
-# the elimination steps although dense_lu swapped whole rows (multipliers included); the
-# 6x6 (2D) and 12x12 (3D) Schur complements of a weld pivot, so the compiled engine's linear
-# solves are wrong and its Newton iterations converge slower (states still agree).  The fix
-# (all interchanges first, then the elimination) is in the report of branch wt-api.
-STEPPER_LU = pytest.mark.xfail(strict=True, reason="compiled dense_lu_solve pivot order")
-
 
 def _shipped(name: str, t_end: float | None = None) -> Scene:
     scene_ = load_scene(scenes.path(name))
@@ -124,8 +117,7 @@ def test_engines_agree_on_the_shipped_scenes(name):
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 @pytest.mark.parametrize("element,joint", [
     ("beam2d", Revolute), ("beam3d", Spherical),
-    pytest.param("beam2d", Weld, marks=STEPPER_LU), pytest.param("beam3d", Weld,
-                                                                 marks=STEPPER_LU)])
+    ("beam2d", Weld), ("beam3d", Weld)])
 def test_engines_agree_with_joints(element, joint, integrator):
     counters, states, _ = _compare(_two_bodies(element, joint, integrator))
     assert counters["newton_iterations"] > counters["steps"]   # a real nonlinear motion

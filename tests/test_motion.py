@@ -145,3 +145,22 @@ def test_free_motions_name_the_null_space_of_the_constrained_stiffness(
     model = Model(scene(bodies, constraints, dynamic=Dynamic(t_end=0.1, step=0.1)))
     assert model.free_motions() == expected
     assert _nullity_of_constrained_stiffness(model) == nullity
+
+
+def test_static_analysis_of_a_free_body_names_the_body_and_motion(tmp_path):
+    """Issue 10: an unrestrained body in static analysis was "Newton did not converge"
+    without a cause; now it is an invalid scene (exit 2) naming the body and its motions."""
+    from runtime.run import run
+    from runtime.scene import parse_scene
+
+    data = {"material": {"m": {"E": 2.1e11, "nu": 0.0, "rho": 7800.0}},
+            "body": [{"name": "rod", "element": "beam2d", "material": "m", "elements": 2,
+                      "section": {"height": 0.1, "width": 0.1}, "start": [0.0, 0.0],
+                      "end": [1.0, 0.0]}],
+            "load": [{"type": "point_force", "node": "rod:-1", "force": [0.0, -1.0]}],
+            "analysis": {"static": {}}}
+    summary, code = run(parse_scene(data), tmp_path / "out", quiet=True)
+    assert code == 2 and summary["status"] == "failed"
+    assert "body 'rod' is free to translate along x and y and to rotate about z" in \
+        summary["message"]
+    assert summary["message"].startswith("analysis.static:")

@@ -152,7 +152,7 @@ def test_a_dynamic_run_reports_simulated_time(monkeypatch, capsys):
     monkeypatch.setattr(progress, "DELAY", 0.0)
     monkeypatch.setattr(progress, "LINE_INTERVAL", 0.0)
     data = cantilever(elements=2, force=[0.0, -1000.0], solver={"backend": "numpy"},
-                      analysis_tables={"dynamic": {"t_end": 0.02, "step": 5e-3}})
+                      dynamic={"t_end": 0.02, "step": 5e-3}).to_dict()
     run_scene(parse_scene(data))
     err = lines(capsys.readouterr().err)
     assert err[0].startswith("dynamic analysis: 0.005/0.02 s (25%), elapsed")

@@ -12,12 +12,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import scipy.linalg
-from scenes_small import body, cantilever, scene, to_toml
+from scenes_small import body, cantilever, scene
 
 from runtime.analysis import modal_shapes
 from runtime.result import Modes, Observer, Result, States, requested, run_scene
 from runtime.run import run
-from runtime.scene import SceneError, parse_scene
+from runtime.scene import SceneError, parse_scene, toml_text
 
 SENSORS = [
     {"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -31,7 +31,7 @@ def small(analyses=("static", "modal", "dynamic"), **changes) -> dict:
               "dynamic": {"t_end": 0.05, "step": 2.5e-3, "output_every": 5e-3}}
     data = cantilever(elements=2, force=[0.0, -1000.0],
                       law={"type": "cosine_ramp", "duration": 0.02}, sensors=SENSORS,
-                      analysis_tables={k: tables[k] for k in analyses})
+                      **{k: tables[k] for k in analyses}).to_dict()
     data.update(changes)
     return data
 
@@ -40,7 +40,7 @@ def diverging() -> dict:
     # quiet until t = 0.05 s, then a 1e12 N tip load: Newton cannot follow
     return cantilever(elements=2, force=[0.0, -1e12], sensors=SENSORS,
                       law={"type": "table", "points": [[0.0, 0.0], [0.05, 0.0], [0.06, 1.0]]},
-                      analysis_tables={"static": {}, "dynamic": {"t_end": 0.2, "step": 5e-3}})
+                      static={}, dynamic={"t_end": 0.2, "step": 5e-3}).to_dict()
 
 
 @pytest.fixture(scope="module")
@@ -137,7 +137,7 @@ def test_mode_shapes_with_a_joint_satisfy_it():
                   body("b", "beam2d", n, [1.0, 0.0], [2.0, 0.0], h, h)],
                  [{"type": "clamp", "node": "a:0"}, {"type": "clamp", "node": "b:-1"},
                   {"type": "revolute", "nodes": ["a:-1", "b:0"]}], [], [],
-                 {"modal": {"modes": 3}}, solver={"backend": "numpy"})
+                 modal={"modes": 3}, solver={"backend": "numpy"}).to_dict()
     result = run_scene(parse_scene(data), progress=False)
     model, modes = result.model, result.modes
     assert np.abs(model.joints @ modes.shapes.T).max() <= 1e-12
@@ -179,7 +179,7 @@ def test_output_table_is_read_when_present():
 
 def test_a_scene_file_path_is_accepted(tmp_path):
     path = tmp_path / "scene.toml"
-    path.write_text(to_toml(small(("static",))))
+    path.write_text(toml_text(small(("static",))))
     result = run_scene(path, method="cij", backend="numpy", progress=False)
     assert result.summary["scene"] == str(path)
     assert result.summary["method"] == "cij" and result.summary["backend"] == "numpy"

@@ -12,14 +12,14 @@ import xml.etree.ElementTree as ET
 import meshio
 import numpy as np
 import pytest
-from scenes_small import body, cantilever, scene, to_toml
+from scenes_small import body, cantilever, scene
 
 from runtime import output, shapes
 from runtime.cli import main
 from runtime.model import Model
 from runtime.result import run_scene
 from runtime.run import run
-from runtime.scene import parse_scene
+from runtime.scene import parse_scene, toml_text
 from runtime.shapes import PER_ELEMENT, CentreLine, Frames, VtkSeries
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -34,8 +34,8 @@ def small(element: str = "beam2d", analyses=("static", "modal", "dynamic"),
     force = [0.0, -1e5] + ([0.0] if element == "beam3d" else [])
     return cantilever(elements=2, element=element, force=force, sensors=SENSORS,
                       law={"type": "linear_ramp", "duration": 0.01},
-                      analysis_tables={k: tables[k] for k in analyses},
-                      solver={"backend": backend})
+                      **{k: tables[k] for k in analyses},
+                      solver={"backend": backend}).to_dict()
 
 
 def hermite(xi: float, length: float) -> np.ndarray:
@@ -89,7 +89,7 @@ def test_several_bodies_are_separate_polylines():
                   body("b", "beam2d", 3, [1.0, 0.0], [1.0, 1.0])],
                  [{"type": "clamp", "node": "a:0"}, {"type": "revolute",
                                                      "nodes": ["a:-1", "b:0"]}],
-                 solver={"backend": "numpy"})
+                 solver={"backend": "numpy"}).to_dict()
     line = CentreLine(Model(parse_scene(data)))
     first = 2 * PER_ELEMENT + 1
     assert line.points == first + 3 * PER_ELEMENT + 1
@@ -158,8 +158,8 @@ def test_static_and_mode_vtu(series_run):
 def test_a_diverged_run_keeps_its_vtu_series(tmp_path):
     data = cantilever(elements=2, force=[0.0, -1e12], sensors=SENSORS,
                       law={"type": "table", "points": [[0.0, 0.0], [0.02, 0.0], [0.03, 1.0]]},
-                      analysis_tables={"dynamic": {"t_end": 0.2, "step": 5e-3}},
-                      solver={"backend": "numpy"})
+                      dynamic={"t_end": 0.2, "step": 5e-3},
+                      solver={"backend": "numpy"}).to_dict()
     summary, code = run(parse_scene(data), tmp_path / "out", quiet=True, vtk=True)
     assert code == 1
     with (tmp_path / "out" / "timeseries.csv").open(newline="") as f:
@@ -173,7 +173,7 @@ def test_a_diverged_run_keeps_its_vtu_series(tmp_path):
 
 def test_ancf_run_vtk_and_gif(tmp_path, capsys):
     path = tmp_path / "scene.toml"
-    path.write_text(to_toml(small("beam3d", backend="c")))
+    path.write_text(toml_text(small("beam3d", backend="c")))
     out = tmp_path / "out"
     assert main(["run", str(path), "--out", str(out), "--quiet", "--vtk", "--gif",
                  "--plane", "xz"]) == 0

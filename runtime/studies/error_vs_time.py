@@ -204,7 +204,7 @@ def cantilever(scene: Scene, label: str, measure: str) -> Cantilever:
     h, w = body.height, body.width
     area = h * w
     length = float(np.linalg.norm(np.subtract(body.end, body.start)))
-    load = np.asarray(force.vector, float)
+    load = np.asarray(force.force, float)
     local = frame.T @ load                      # axial, along height (y), along width (z)
     inertias = [w * h**3 / 12, h * w**3 / 12][: dim - 1]   # bending towards y, towards z
     local_deflection = [local[0] * length / (E * area)]
