@@ -6,15 +6,13 @@ from __future__ import annotations
 import pytest
 from scenes_small import cantilever
 
-from runtime.result import run_scene
-from runtime.scene import parse_scene
+from runtime import Material, Modal, Static, run_scene
 
 
 def _scene(law: str, nu: float, damping: float = 0.0, modal: bool = False):
-    material = {"E": 2.1e11, "nu": nu, "rho": 7800.0, "law": law, "damping": damping}
-    tables = {"static": {}, **({"modal": {"modes": 2}} if modal else {})}
-    return parse_scene(cantilever(elements=2, force=[0.0, -100.0], material=material,
-                                  analysis_tables=tables))
+    material = Material("m", E=2.1e11, nu=nu, rho=7800.0, law=law, damping=damping)
+    return cantilever(elements=2, force=[0.0, -100.0], material=material, static=Static(),
+                      modal=Modal(modes=2) if modal else None)
 
 
 def test_svk_with_poisson_ratio_warns_once_naming_material_and_remedy(capsys):
