@@ -6,12 +6,11 @@ from __future__ import annotations
 import argparse
 import csv
 import socket
-import tomllib
 from pathlib import Path
 
 import pytest
 
-from runtime.studies.error_vs_time import CSV_COLUMNS, StudyError, add_cli, dump_toml, study
+from runtime.studies.error_vs_time import CSV_COLUMNS, StudyError, add_cli, study
 from runtime.sweep import SchedulerError
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
@@ -136,12 +135,6 @@ def test_closed_form_follows_the_section_axes_of_a_rectangular_beam(tmp_path):
     weak = LOAD * LENGTH**3 / (3 * E_MODULUS * 0.2 * 0.1**3 / 12)       # 5.68 mm
     assert rows[0]["exact"] == pytest.approx(-weak, rel=1e-12)
     assert rows[0]["error"] < 0.02                      # 4x off if the axes were swapped
-
-
-def test_shipped_scenes_survive_the_toml_writer():
-    for path in sorted(SCENES.glob("*.toml")):
-        data = tomllib.loads(path.read_text())
-        assert tomllib.loads(dump_toml(data)) == data
 
 
 # --------------------------------------------------------------------------- bad input

@@ -43,15 +43,14 @@ from __future__ import annotations
 import argparse
 import copy
 import csv
+import dataclasses
 import itertools
-import json
 import math
 import re
 import socket
 import sys
 import tempfile
 import time
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,7 +60,7 @@ import numpy as np
 
 from runtime.element import METHODS
 from runtime.kernels import BACKENDS
-from runtime.scene import INTEGRATORS, Scene, SceneError, parse_scene, read_scene_file
+from runtime.scene import INTEGRATORS, Scene, SceneError, Static, parse_scene, read_scene_file
 from runtime.sweep import SchedulerError, run_cases
 
 __all__ = [
@@ -436,62 +435,27 @@ def _reference(picked: tuple[Any, str], plan: Plan) -> tuple[int, float, str, st
 # --------------------------------------------------------------------------- cases
 
 def case_scene(plan: Plan, elements: int, step: float | None, integrator: str | None,
-               method: str) -> dict:
-    """The scene data of one run: the sweep values set, only the analysis and the sensor the
-    error needs kept."""
-    data = copy.deepcopy(plan.data)
-    for body in data.get("body", []):
-        body["elements"] = elements
-    data["sensor"] = [s for s in data.get("sensor", []) if s.get("name") == plan.sensor]
-    analysis = data.get("analysis", {})
+               method: str) -> Scene:
+    """The scene of one run (validated: SceneError otherwise): the sweep values set, only
+    the analysis and the sensor the error needs kept."""
+    scene = plan.scene
+    changes: dict[str, Any] = {
+        "bodies": tuple(dataclasses.replace(body, elements=elements) for body in scene.bodies),
+        "sensors": tuple(s for s in scene.sensors if s.name == plan.sensor),
+        "modal": None,
+        "solver": dataclasses.replace(scene.solver, method=method, backend=plan.backend)}
     if plan.measure == "static_tip":
-        data["analysis"] = {"static": analysis.get("static", {})}
+        changes.update(static=scene.static or Static(), dynamic=None)
     else:
-        dynamic = dict(analysis.get("dynamic", {}))
-        dynamic.update(t_end=plan.t_end, step=step, integrator=integrator)
-        if dynamic.get("output_every") is not None:
-            # outputs at a whole number of steps
-            dynamic["output_every"] = step * max(1, round(dynamic["output_every"] / step))
-        # the response frequency is fitted here, after the run, so that simulate_s stays
-        # the time of the integration alone
-        dynamic.pop("frequency_of", None)
-        dynamic.pop("frequency_after", None)
-        data["analysis"] = {"dynamic": dynamic}
-    data["solver"] = {"method": method, "backend": plan.backend}
-    return data
-
-
-def dump_toml(data: dict) -> str:
-    """TOML text of scene data (every table written inline); round-trip checked."""
-    text = "".join(f"{_toml_key(key)} = {_toml_value(value)}\n" for key, value in data.items())
-    if tomllib.loads(text) != data:
-        raise ValueError("dump_toml: the scene does not survive a TOML round trip")
-    return text
-
-
-def _toml_key(key: str) -> str:
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key, ensure_ascii=False)
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "nan"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return repr(value)
-    if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) \
-            + "}"
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise ValueError(f"dump_toml: cannot write {type(value).__name__} value {value!r}")
+        dynamic = scene.dynamic
+        every = dynamic.output_every
+        # outputs at a whole number of steps; the response frequency is fitted here, after
+        # the run, so that simulate_s stays the time of the integration alone
+        changes.update(static=None, dynamic=dataclasses.replace(
+            dynamic, t_end=plan.t_end, step=step, integrator=integrator,
+            output_every=None if every is None else step * max(1, round(every / step)),
+            frequency_of=None, frequency_after=0.0))
+    return dataclasses.replace(scene, **changes)
 
 
 def run_case(scene_text: str, repeat: int = 1, series: str | None = None) -> dict:
@@ -590,18 +554,13 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
         runs.append(plan.reference)
     cases = []
     for i, (n, h, integ, meth) in enumerate(runs):
-        data = case_scene(plan, n, h, integ, meth)
         try:
-            parse_scene(copy.deepcopy(data), str(plan.path))
+            text = case_scene(plan, n, h, integ, meth).to_toml()
         except SceneError as scene_error:
             what = "the reference run" if plan.reference is not None and i == len(runs) - 1 \
                 else "a run"
             raise StudyError(f"study: {what} with {n} elements is not a valid scene: "
                              f"{scene_error}") from None
-        try:
-            text = dump_toml(data)
-        except ValueError as failure:
-            raise StudyError(f"study: cannot hand the scene to a run: {failure}") from None
         cases.append({"scene_text": text, "repeat": plan.repeat,
                       "series": None if plan.measure == "static_tip" else plan.sensor})
     if scheduler is not None:
