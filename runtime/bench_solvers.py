@@ -19,19 +19,18 @@ built and the stepper compiled before; sensors are not evaluated), as Exudyn's s
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import statistics
 import time
-import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import scenes
 from runtime import engines, peers
+from runtime.laws import Constant
 from runtime.model import Model
 from runtime.progress import Bar, enabled
-from runtime.scene import parse_scene
+from runtime.scene import Scene, load_scene
 from runtime.sensors import Sensors
 
 
@@ -48,27 +47,32 @@ class Case:
     tip: float = float("nan")
 
 
-def _scene(name: str, elements: int | None = None, **dynamic) -> dict:
-    data = tomllib.loads(scenes.path(name).read_text())
-    data.pop("study", None)
+def _scene(name: str, elements: int | None = None, grow: bool = False, **dynamic) -> Scene:
+    """A shipped scene with ``elements`` per body (``grow``: the body lengthens with them,
+    same element length), only its dynamic analysis (``dynamic`` overrides), one output at
+    the end and no frequency fit."""
+    scene = load_scene(scenes.path(name))
+    bodies = scene.bodies
     if elements is not None:
-        body = data["body"][0]
-        body["end"] = [body["end"][0] * elements / body["elements"], *body["end"][1:]]
-        body["elements"] = elements
-    settings = data["analysis"]["dynamic"]
-    for key in ("frequency_of", "frequency_after"):
-        settings.pop(key, None)
-    settings.update(dynamic)
-    settings["output_every"] = settings["t_end"]
-    data["analysis"] = {"dynamic": settings}
-    return data
+        def meshed(body):
+            end = body.end
+            if grow:
+                end = (body.start[0] + (body.end[0] - body.start[0]) * elements / body.elements,
+                       *body.end[1:])
+            return dataclasses.replace(body, elements=elements, end=end)
+        bodies = tuple(meshed(body) for body in bodies)
+    settings = dataclasses.replace(scene.dynamic, frequency_of=None, frequency_after=0.0,
+                                   **dynamic)
+    settings = dataclasses.replace(settings, output_every=settings.t_end)
+    return dataclasses.replace(scene, bodies=bodies, static=None, modal=None,
+                               dynamic=settings)
 
 
-def _ours(data: dict, engine: str, newton: str, method: str = "gram", tip: str | None = None):
+def _ours(scene: Scene, engine: str, newton: str, method: str = "gram",
+          tip: str | None = None):
     """A case of the project: builds the model and the engine, returns the timed run."""
 
     def prepare():
-        scene = parse_scene(copy.deepcopy(data))
         settings = dataclasses.replace(scene.dynamic, newton=newton)
         model = Model(scene, method=method)
         sensors = Sensors(model)
@@ -109,26 +113,25 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
     with_peer = peers.exudyn_available()
     for elements in ((2,) if quick else (2, 5, 10)):
         table = f"cantilever, {elements} beam3d, {t_cantilever:g} s"
-        data = _scene("cantilever", t_end=t_cantilever)
-        data["body"][0]["elements"] = elements
+        scene = _scene("cantilever", elements=elements, t_end=t_cantilever)
         for engine, newton, method in (("compiled", "full", "gram"),
                                        ("compiled", "modified", "gram"),
                                        ("compiled", "full", "quadrature"),
                                        ("python", "full", "gram")):
             cases.append(Case(table, f"{engine} {newton} {method}",
-                              _ours(data, engine, newton, method, "tip_y")))
+                              _ours(scene, engine, newton, method, "tip_y")))
         if with_peer:
             for newton in ("modified", "full"):
                 cases.append(Case(table, f"Exudyn ANCFBeam {newton}", _exudyn(
                     peers.exudyn_cantilever, elements=elements, t_end=t_cantilever,
                     step=1e-3, newton=newton)))
     table = f"rotating beam, 10 beam2d, {t_rotating:g} s, generalized-alpha, h = 1e-3"
-    data = _scene("rotating_beam", t_end=t_rotating, step=1e-3, integrator="generalized_alpha",
+    scene = _scene("rotating_beam", t_end=t_rotating, step=1e-3, integrator="generalized_alpha",
                   rho_inf=0.8)
     for engine, newton in (("compiled", "full"), ("compiled", "modified"),
                            ("python", "full"), ("python", "modified")):
         cases.append(Case(table, f"{engine} {newton} gram",
-                          _ours(data, engine, newton, tip="tip_transverse")))
+                          _ours(scene, engine, newton, tip="tip_transverse")))
     if with_peer:
         for newton in ("modified", "full"):
             cases.append(Case(table, f"Exudyn ANCFCable2D {newton}", _exudyn(
@@ -171,9 +174,9 @@ def whole_run_table(cases: list[Case]) -> str:
 def step_cost(elements: int, engine: str, steps: int = 10, method: str = "gram") -> dict:
     """Cost of a trapezoidal step of the paper cantilever meshed with ``elements`` beam3d
     elements of the same length (the beam grows with them), loaded from the first step."""
-    data = _scene("cantilever", elements=elements, t_end=steps * 1e-3, step=1e-3)
-    data["load"][0]["time_law"] = {"type": "constant"}
-    scene = parse_scene(data)
+    scene = _scene("cantilever", elements=elements, grow=True, t_end=steps * 1e-3, step=1e-3)
+    scene = dataclasses.replace(scene, loads=tuple(dataclasses.replace(
+        load, time_law=Constant()) for load in scene.loads))
     start = time.perf_counter()
     model = Model(scene, method=method)
     runner = engines.make(engine, model, scene.dynamic, model.reference)
