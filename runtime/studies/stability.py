@@ -38,6 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
+from runtime.constraints import Clamp
+from runtime.loads import Gravity, PointForce
+from runtime.scene import Body, Material, Scene, Static
+
 EPS = float(np.finfo(float).eps)
 
 # --------------------------------------------------------------------------- rows
@@ -256,21 +260,25 @@ def _tip_load() -> float:
     return 0.3 * p["E"] * inertia / p["length"] ** 3
 
 
-def slender_scene(tip_load: float = 0.0) -> dict:
-    """The slender cantilever of the integrator rows as a scene dict (``tip_load`` in N)."""
+def cantilever_scene(element: str, material: Material, elements: int, length: float,
+                     height: float, width: float, loads=(), title: str = "") -> Scene:
+    """A cantilever of the study along +x from the origin, clamped at node 0 (the body is
+    ``beam``, so loads refer to ``beam:-1``)."""
+    origin = (0.0,) * (2 if element == "beam2d" else 3)
+    end = (length,) + origin[1:]
+    return Scene(title=title or "stability study cantilever", materials=[material],
+                 bodies=[Body("beam", element, material.name, height, width, elements,
+                              origin, end)],
+                 constraints=[Clamp("beam:0")], loads=list(loads))
+
+
+def slender_scene(tip_load: float = 0.0) -> Scene:
+    """The slender cantilever of the integrator rows (``tip_load`` in N, -y at the tip)."""
     p = SLENDER
-    data = {
-        "title": "slender beam2d (stability study)",
-        "material": {"steel": {"E": p["E"], "nu": p["nu"], "rho": p["rho"]}},
-        "body": [{"name": "beam", "element": "beam2d", "material": "steel",
-                  "elements": p["elements"],
-                  "section": {"height": p["height"], "width": p["width"]},
-                  "start": [0.0, 0.0], "end": [p["length"], 0.0]}],
-        "constraint": [{"type": "clamp", "node": "beam:0"}],
-    }
-    if tip_load:
-        data["load"] = [{"type": "point_force", "node": "beam:-1", "force": [0.0, -tip_load]}]
-    return data
+    loads = [PointForce("beam:-1", (0.0, -tip_load))] if tip_load else []
+    return cantilever_scene("beam2d", Material("steel", E=p["E"], nu=p["nu"], rho=p["rho"]),
+                            p["elements"], p["length"], p["height"], p["width"], loads,
+                            "slender beam2d (stability study)")
 
 
 @functools.cache
@@ -278,11 +286,10 @@ def _slender_start() -> tuple:
     """(unloaded model, static deflected coordinates) of the slender beam."""
     from runtime import analysis
     from runtime.model import Model
-    from runtime.scene import Static, parse_scene
 
-    loaded = Model(parse_scene(slender_scene(_tip_load())))
+    loaded = Model(slender_scene(_tip_load()))
     static = analysis.solve_static(loaded, Static())
-    return Model(parse_scene(slender_scene())), static.q
+    return Model(slender_scene()), static.q
 
 
 def slender_frequencies() -> dict:
@@ -487,19 +494,12 @@ ORDER_TOLERANCE = 1.8
 
 def _newton_model():
     from runtime.model import Model
-    from runtime.scene import parse_scene
 
     p = NEWTON
-    data = {
-        "material": {"steel": {"E": p["E"], "nu": p["nu"], "rho": p["rho"]}},
-        "body": [{"name": "beam", "element": "beam3d", "material": "steel",
-                  "elements": p["elements"], "section": {"height": p["height"],
-                                                         "width": p["width"]},
-                  "start": [0.0, 0.0, 0.0], "end": [p["length"], 0.0, 0.0]}],
-        "constraint": [{"type": "clamp", "node": "beam:0"}],
-        "load": [{"type": "point_force", "node": "beam:-1", "force": [0.0, -p["load"], 0.0]}],
-    }
-    return Model(parse_scene(data))
+    return Model(cantilever_scene(
+        "beam3d", Material("steel", E=p["E"], nu=p["nu"], rho=p["rho"]), p["elements"],
+        p["length"], p["height"], p["width"],
+        [PointForce("beam:-1", (0.0, -p["load"], 0.0))]))
 
 
 def _fd_jacobian(model, q: np.ndarray, force: np.ndarray, scheme: str,
@@ -674,18 +674,11 @@ def poisson_case(nu: float, elements: int, law: str = "svk") -> list[dict]:
     8.099e-4 m (passes within 1 %)."""
     from runtime import analysis
     from runtime.model import Model
-    from runtime.scene import Static, parse_scene
 
     p = POISSON
-    data = {
-        "material": {"steel": {"E": p["E"], "nu": nu, "rho": 7850.0, "law": law}},
-        "body": [{"name": "beam", "element": "beam2d", "material": "steel",
-                  "elements": elements, "section": {"height": p["height"], "width": p["width"]},
-                  "start": [0.0, 0.0], "end": [p["length"], 0.0]}],
-        "constraint": [{"type": "clamp", "node": "beam:0"}],
-        "load": [{"type": "point_force", "node": "beam:-1", "force": [0.0, -p["load"]]}],
-    }
-    model = Model(parse_scene(data))
+    model = Model(cantilever_scene(
+        "beam2d", Material("steel", E=p["E"], nu=nu, rho=7850.0, law=law), elements,
+        p["length"], p["height"], p["width"], [PointForce("beam:-1", (0.0, -p["load"]))]))
     result = analysis.solve_static(model, Static())
     tip = -float(result.q[model.node_dofs(elements, "r")][1])
     error = tip / p["reference"] - 1
@@ -743,29 +736,25 @@ def chrono_beam_case(law: str, load: str) -> list[dict]:
     q L^4 / 8EI) with the material ``law``: static deflection against the closed form."""
     from runtime import analysis
     from runtime.model import Model
-    from runtime.scene import Static, parse_scene
 
     c = CHRONO_BEAM
     length, thin, wide, E = c["length"], c["thin"], c["wide"], c["E"]
     # bending across the thin side of the section (local y = height): I = w h^3 / 12
     height, width = (wide, thin) if load == "gravity" else (thin, wide)
-    loads, component = [], 2
+    component = 2
     if load == "axial":
-        loads.append({"type": "point_force", "node": "beam:-1", "force": [1000.0, 0.0, 0.0]})
+        loads = [PointForce("beam:-1", (1000.0, 0.0, 0.0))]
         closed, component = 1000.0 * length / (E * height * width), 0
     elif load == "tip":
-        loads.append({"type": "point_force", "node": "beam:-1", "force": [0.0, 0.0, 10.0]})
+        loads = [PointForce("beam:-1", (0.0, 0.0, 10.0))]
         closed = 10.0 * length**3 / (3 * E * height * width**3 / 12)
     else:
-        loads.append({"type": "gravity", "acceleration": [0.0, 0.0, -c["g"]]})
+        loads = [Gravity((0.0, 0.0, -c["g"]))]
         q = c["rho"] * height * width * c["g"]
         closed = -q * length**4 / (8 * E * height * width**3 / 12)
-    data = {"material": {"al": {"E": E, "nu": c["nu"], "rho": c["rho"], "law": law}},
-            "body": [{"name": "beam", "element": "beam3d", "material": "al",
-                      "elements": c["elements"], "section": {"height": height, "width": width},
-                      "start": [0.0, 0.0, 0.0], "end": [length, 0.0, 0.0]}],
-            "constraint": [{"type": "clamp", "node": "beam:0"}], "load": loads}
-    model = Model(parse_scene(data))
+    model = Model(cantilever_scene(
+        "beam3d", Material("al", E=E, nu=c["nu"], rho=c["rho"], law=law), c["elements"],
+        length, height, width, loads))
     result = analysis.solve_static(model, Static())
     tip = float((result.q - model.reference)[model.node_dofs(c["elements"], "r")][component])
     error = tip / closed - 1
