@@ -9,6 +9,7 @@ import numpy as np
 
 from runtime.element import METHODS, Element
 from runtime.kernels import BACKENDS, element_kind, known_kinds
+from runtime.progress import Bar
 
 #: The paper's operation counts per element force (section 7): with and without invariants.
 PAPER_OPERATIONS = {"cij": 5.52e4, "quadrature": 9.16e6}
@@ -50,27 +51,34 @@ def measure(kind: str, batches=(1, 10_000), methods=METHODS, backends=BACKENDS,
             budget_s: float = 0.2) -> list[dict]:
     """Rows {method, backend, batch, force_us, jacobian_us, energy_us} in microseconds/element."""
     rows = []
-    for backend in backends:
-        for method in methods:
-            element = Element(kind, 1.0, 0.1, 0.1, 2.1e11, 0.3, 7800.0, method=method,
-                              backend=backend)
-            for batch in batches:
-                e = configurations(element, batch)
-                argument = e[0] if batch == 1 else e
-                row = {"method": method, "backend": backend, "batch": batch}
-                for quantity, name in QUANTITIES.items():
-                    method_ = getattr(element, name)
-                    if quantity == "force_jacobian":
-                        # a simulation reuses its buffers: keep page faults out of the timing
-                        force, jacobian = (np.empty_like(x) for x in method_(argument))
-                        method_ = functools.partial(method_, out_force=force,
-                                                    out_jacobian=jacobian)
-                    elif quantity != "energy":
-                        method_ = functools.partial(method_,
-                                                    out=np.empty_like(method_(argument)))
-                    per_call = seconds_per_call(method_, argument, budget_s)
-                    row[f"{quantity}_us"] = per_call / batch * 1e6
-                rows.append(row)
+    runs = [(backend, method) for backend in backends for method in methods]
+    with Bar(f"bench kernels {kind}", len(runs), "cases") as bar:
+        for backend, method in runs:
+            rows += _measure_one(kind, method, backend, batches, budget_s)
+            bar.advance(f"{method} {backend}")
+    return rows
+
+
+def _measure_one(kind: str, method: str, backend: str, batches, budget_s: float) -> list[dict]:
+    """The rows of ``measure`` of one method and backend."""
+    rows = []
+    element = Element(kind, 1.0, 0.1, 0.1, 2.1e11, 0.3, 7800.0, method=method,
+                      backend=backend)
+    for batch in batches:
+        e = configurations(element, batch)
+        argument = e[0] if batch == 1 else e
+        row = {"method": method, "backend": backend, "batch": batch}
+        for quantity, name in QUANTITIES.items():
+            method_ = getattr(element, name)
+            if quantity == "force_jacobian":
+                # a simulation reuses its buffers: keep page faults out of the timing
+                force, jacobian = (np.empty_like(x) for x in method_(argument))
+                method_ = functools.partial(method_, out_force=force, out_jacobian=jacobian)
+            elif quantity != "energy":
+                method_ = functools.partial(method_, out=np.empty_like(method_(argument)))
+            per_call = seconds_per_call(method_, argument, budget_s)
+            row[f"{quantity}_us"] = per_call / batch * 1e6
+        rows.append(row)
     return rows
 
 

@@ -43,7 +43,8 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
         families = [f for m in methods for f in METHOD_FAMILIES[m]]
     written = []
     for name in elements:
-        written += emit.generate(get(name), out, backends=backends, families=families)
+        with progress.phase(f"generating {name} (SymPy derivations and rendering)"):
+            written += emit.generate(get(name), out, backends=backends, families=families)
     return written
 
 
