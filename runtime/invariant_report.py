@@ -97,7 +97,7 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
     material = (lam, shear, MATERIAL["rho"])
     builders = kernel_family(kind, "invariants", backend)
     if reference == "straight":
-        variant, e0 = "straight", meta.straight_reference(GEOMETRY[0])
+        variant, e0 = "straight", meta.straight_reference(*GEOMETRY)
         mapping = builders
         exact, exact_s = _timed(lambda: inv.stored_invariants(
             mapping, variant, inv.straight_integrals(meta, builders, GEOMETRY), material))
@@ -156,7 +156,7 @@ def _storage(meta, variant: str) -> dict:
 def _compare_law(meta, reference: str, orders, backend: str, law: str) -> dict:
     builders = kernel_family(meta.name, "invariants", backend)
     if reference == "straight":
-        variant, e0 = "straight", meta.straight_reference(GEOMETRY[0])
+        variant, e0 = "straight", meta.straight_reference(*GEOMETRY)
     else:
         variant = "general"
         e0 = arc_reference(meta, [0.0, 2.0, 0.0], 2.0, -np.pi / 2, GEOMETRY[0] / 2.0)

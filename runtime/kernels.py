@@ -46,10 +46,57 @@ class ElementKind:
     quadrature: tuple[int, ...]
     meta: dict = field(repr=False, compare=False)
 
-    def straight_reference(self, length: float) -> np.ndarray:
-        """Coordinates e0 (ndof,) of the straight element along x from the origin."""
-        coeffs = np.array(self.meta["straight_reference"], dtype=float)
-        return coeffs[:, 0] * length + coeffs[:, 1]
+    def _linear(self, coeffs, geometry) -> np.ndarray:
+        """Values of entries linear in the domain parameters ([a0, a1, a2, b] each)."""
+        coeffs = np.array(coeffs, dtype=float).reshape(-1, 4)
+        values = np.zeros(3)
+        for i, value in enumerate(geometry):
+            if value is not None:
+                values[i] = value
+        missing = [self.parameter_labels[i] for i in range(3)
+                   if (i >= len(geometry) or geometry[i] is None) and coeffs[:, i].any()]
+        if missing:
+            raise ValueError(f"{', '.join(missing)}: needed for the reference of {self.name}")
+        return coeffs[:, :3] @ values + coeffs[:, 3]
+
+    def straight_reference(self, length: float, height: float | None = None,
+                           width: float | None = None) -> np.ndarray:
+        """Coordinates e0 (ndof,) of the straight (flat) element from the origin: positions at
+        the node points, unit gradients (a beam's depends on the length only, a plate's on
+        its sides: ``length`` and ``height`` are the sizes along local x and y)."""
+        return self._linear(self.meta["straight_reference"], (length, height, width))
+
+    @property
+    def n_nodes(self) -> int:
+        """Nodes per element."""
+        return len(self.meta["nodes"])
+
+    @property
+    def vectors(self) -> tuple[str, ...]:
+        """Nodal vectors of every node, in storage order (``r``, ``r_x``, ...)."""
+        return tuple(self.meta["vectors"])
+
+    @property
+    def per_node(self) -> int:
+        """Coordinates per node: nodal vectors times dim."""
+        return len(self.meta["vectors"]) * self.dim
+
+    @property
+    def parameter_labels(self) -> tuple[str, ...]:
+        """What the three geometry parameters (length, height, width) are for this kind."""
+        return tuple(self.meta["domain"]["labels"])
+
+    def node_points(self, length: float, height: float | None = None,
+                    width: float | None = None) -> np.ndarray:
+        """Local coordinates (n_nodes, dim) of the nodes in the reference domain."""
+        points = self._linear([c for node in self.meta["nodes"] for c in node],
+                              (length, height, width))
+        return points.reshape(self.n_nodes, self.dim)
+
+    def law_not_applicable(self, law: str) -> str | None:
+        """Why material law ``law`` does not apply to this kind (None when it does or is
+        unknown)."""
+        return self.meta.get("laws_not_applicable", {}).get(law)
 
     def pattern(self, variant: str, name: str) -> np.ndarray:
         """Storage pattern ``name`` (i4, gram, cij) of ``variant`` as an int array."""
