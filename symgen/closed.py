@@ -245,7 +245,7 @@ def straight_tables(spec: ElementSpec) -> StraightTables:
         value = _integrate(spec, poly, "volume")
         mass[(k, m)] = {_add(_add(f.exps[k], f.exps[m]), measure): value} if value else {}
     i2: dict = {}
-    for (a, k, m), (exps, value) in volume_tables.pi.items():
+    for (_, k, m), (exps, value) in volume_tables.pi.items():
         _accumulate(i2, (k, m), exps, value)
     index = {km: i for i, km in enumerate(pairs(n))}
     i4: dict = {}

@@ -275,7 +275,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                         + "\n")
         written.append(path)
     if families is None:
-        for name, law in laws.LAWS.items():
+        for law in laws.LAWS.values():
             reason = laws.not_applicable(law, spec.domain)
             if reason is not None:
                 print(f"{spec.name}: {reason} (not generated)", file=sys.stderr)

@@ -64,14 +64,24 @@ DAMPING_KERNELS = ("damping_force", "damping_jacobians", "damped_force_jacobians
 LOOPED_ABOVE = 9
 #: ... and the gram (damping) families whose storage pattern has more entries than this are
 #: looped in any element: unrolled they are megabytes of C that take minutes to compile
-#: (beam3d's damping_general: 1 MB, 185 s), for little or no speed gain.
-LOOPED_PATTERN_ABOVE = {"gram": 700, "damping": 200}
+#: (beam3d's damping_general: 1 MB, 185 s).  Below, unrolled wins at run time and stays
+#: (beam3d_3node's gram_straight: 0.84 against 1.87 us per force + Jacobian; beam3d's
+#: damping_straight: 3.9 against 5.6 us per damped force + Jacobians, batch 1000).
+LOOPED_PATTERN_ABOVE = {"gram": 700, "damping": 250}
+
+
+#: ... and the quadrature families of elements with at least this many coordinates get the
+#: looped Jacobian at each point (unrolled, beam3d_3node's quadrature_law took 200 s).
+LOOPED_QUADRATURE_FROM = 27
 
 
 def looped(spec: ElementSpec, family: str | None = None) -> bool:
-    """Whether ``spec`` (or its gram or damping ``family``) gets the looped forms."""
+    """Whether ``spec`` (or its gram, damping or quadrature ``family``) gets the looped
+    forms."""
     if spec.n_shape > LOOPED_ABOVE:
         return True
+    if family in ("quadrature", "quadrature_law"):
+        return spec.ndof >= LOOPED_QUADRATURE_FROM
     if family is None or not family.startswith(("gram_", "damping_")):
         return False
     method, _, variant = family.partition("_")
@@ -234,8 +244,8 @@ def _shape_values_kernel(spec: ElementSpec) -> Kernel:
     arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
               Array("geometry", 3, "shared", _geometry_doc(spec)),
               Array("values", spec.n_shape, "output", "shape functions s_k")]
-    subs = {**_geometry_subs(spec, "geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
-                                                      strict=True))}
+    subs = {**_geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
     body: list = []
     emit_cse(body, [(f"values[{k}]", s.subs(subs), False)
                     for k, s in enumerate(spec.shape_functions)], Temporaries())
@@ -249,8 +259,8 @@ def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
               Array("geometry", 3, "shared", _geometry_doc(spec)),
               Array("gradients", len(pattern), "output",
                     "structurally nonzero ds_k/dx_alpha, in gradient-pattern order")]
-    subs = {**_geometry_subs(spec, "geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
-                                                      strict=True))}
+    subs = {**_geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
     body: list = []
     emit_cse(body, [(f"gradients[{j}]", grads[k, c].subs(subs), False)
                     for j, (k, c) in enumerate(pattern)], Temporaries())
@@ -351,8 +361,8 @@ def _law_coefficients_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
     coefficients = law.domain_coefficients(spec.dim)
     body: list = []
     emit_cse(body, [(f"{domain}[{i}]", sp.sympify(value).subs(subs), False)
-                    for domain in derive.law_domains(spec) for i, value in enumerate(coefficients[domain])],
-             Temporaries())
+                    for domain in derive.law_domains(spec)
+                    for i, value in enumerate(coefficients[domain])], Temporaries())
     return Kernel(f"law_{law.name}", f"Law coefficients per domain of {law.name}: "
                   f"{law.description}.", arrays, body)
 
@@ -453,7 +463,7 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
             bs = sp.Matrix(n, d, _materialize(point, temps, list(b * stress)))
             force = -wdet * (bs * f.T)
             _store(point, "force", list(force), accumulate=True)
-        if "jacobian" in quantities and looped(spec):
+        if "jacobian" in quantities and looped(spec, "quadrature"):
             dn = sp.Matrix(d, d, lambda x_, y_: lam_ + (2 * g_ if x_ == y_ else 0))
             _looped_point_jacobian(spec, point, b, f, stress, dn,
                                    [g_] * len(laws.shear_pairs(d)), -wdet)
@@ -478,11 +488,11 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
             _store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_points(spec)))
-    if looped(spec) and "jacobian" in quantities:
+    if looped(spec, "quadrature") and "jacobian" in quantities:
         arrays += _point_locals(spec, damped=False)
     return Kernel(_kernel_name(quantities), f"Elastic {' and '.join(quantities)} by Gauss "
                   "quadrature at every call (no invariants).", arrays, body,
-                  _loop_tables(spec, "straight") if looped(spec) else None)
+                  _loop_tables(spec, "straight") if looped(spec, "quadrature") else None)
 
 
 def _default_points(spec: ElementSpec) -> int:
@@ -895,7 +905,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
     if "force" in quantities:
         bs = sp.Matrix(n, d, _materialize(point, temps, list(bmat * s_total)))
         _store(point, "force", list(-(bs * f.T)), accumulate=True)
-    if "jacobian" in quantities and looped(spec):
+    if "jacobian" in quantities and looped(spec, "quadrature_law"):
         if not damped:
             _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1)
         else:
@@ -936,7 +946,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
             _store_symmetric(point, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
-    if looped(spec) and "jacobian" in quantities:
+    if looped(spec, "quadrature_law") and "jacobian" in quantities:
         arrays += _point_locals(spec, damped)
     doc = {"force": "elastic force", "jacobian": "elastic Jacobian", "energy": "strain energy",
            "force_jacobian": "elastic force and Jacobian",
@@ -946,7 +956,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
            "respect to e and e_dot"}[name]
     return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
                   "call (volume and axis rules).", arrays, body,
-                  _loop_tables(spec, "straight") if looped(spec) else None)
+                  _loop_tables(spec, "straight") if looped(spec, "quadrature_law") else None)
 
 
 def _law_rows(dn, dshear, z, d: int) -> list:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 
+import independent
 import numpy as np
 import pytest
 from conftest import (
@@ -41,8 +42,6 @@ from runtime import Element
 from runtime import invariants as inv
 from runtime.kernels import element_kind, kernel_family
 from runtime.studies import highprecision as reference
-
-import independent
 
 EPS = np.finfo(float).eps
 VOLUME = LENGTH * HEIGHT * WIDTH
@@ -557,14 +556,17 @@ def test_bad_coordinates(kind, method, backend):
 
 
 def r_y_rows(kind: str) -> list[int]:
-    """Rows of the (n, dim) nodal-vector matrix holding r_y, one per node."""
+    """Rows of the (n, dim) nodal-vector matrix holding the gradient across the element, one
+    per node: r_y for beams (their positions vary along x only), r_z for plates."""
     info = element_kind(kind)
     per_node = len(info.vectors)
-    return [node * per_node + info.vectors.index("r_y") for node in range(info.n_nodes)]
+    across = "r_z" if info.meta["domain"]["name"] == "plate" else "r_y"
+    return [node * per_node + info.vectors.index(across) for node in range(info.n_nodes)]
 
 
 def inverted_reference(kind: str) -> np.ndarray:
-    """Straight reference with r_y of every node flipped: a mirror image, det J0 < 0."""
+    """Straight reference with r_y (plates: r_z) of every node flipped: a mirror image,
+    det J0 < 0."""
     d = dim_of(kind)
     q = straight_reference(kind).reshape(-1, d).copy()
     q[r_y_rows(kind)] *= -1
@@ -572,7 +574,7 @@ def inverted_reference(kind: str) -> np.ndarray:
 
 
 def degenerate_reference(kind: str) -> np.ndarray:
-    """Straight reference with r_y = 0 at every node: det J0 = 0."""
+    """Straight reference with r_y (plates: r_z) = 0 at every node: det J0 = 0."""
     d = dim_of(kind)
     q = straight_reference(kind).reshape(-1, d).copy()
     q[r_y_rows(kind)] = 0.0

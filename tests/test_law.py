@@ -273,8 +273,11 @@ def test_damping_jacobians_are_the_damping_force_derivatives(kind, method, shape
     at_rest = el.damping_jacobians(e, np.zeros(el.ndof))[0]
     assert np.abs(at_rest).max() <= 1e-12 * np.abs(de).max()
     force, total_de, total_de_dot = el.internal_force_and_jacobians(e, e_dot)
-    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= 1e-12
-    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= 1e-12
+    # cij's elastic force is K(e) e with terms that cancel (1e-12 for the plate), the
+    # combined kernel forms the strain first
+    tol = 1e-10 if method == "cij" else 1e-12
+    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= tol
+    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= tol
     assert rel_diff(total_de_dot, de_dot) <= 1e-14
 
 
@@ -321,25 +324,28 @@ def test_damping_batches_buffers_and_group_kernel(kind, backend):
     e, e_dot = states(kind, "straight")
     m, ndof = e.shape
     force = el.damping_force(e, e_dot)
+    # a rounding or two (the looped NumPy kernels of large elements use BLAS products, whose
+    # summation order may depend on the batch size: a few more)
+    tol = 1e-12 if backend == "numpy" else 1e-14
     de, de_dot = el.damping_jacobians(e, e_dot)
     assert force.shape == (m, ndof) and de.shape == de_dot.shape == (m, ndof, ndof)
     single = el.damping_force(e[1], e_dot[1])
-    assert single.shape == (ndof,) and rel_diff(single, force[1]) <= 1e-14
+    assert single.shape == (ndof,) and rel_diff(single, force[1]) <= tol
     one_de, one_de_dot = el.damping_jacobians(e[1], e_dot[1])
-    assert one_de.shape == (ndof, ndof) and rel_diff(one_de_dot, de_dot[1]) <= 1e-14
+    assert one_de.shape == (ndof, ndof) and rel_diff(one_de_dot, de_dot[1]) <= tol
     # one configuration against several velocities
     broadcast = el.damping_force(e[1], e_dot)
-    assert rel_diff(broadcast[0], el.damping_force(e[1], e_dot[0])) <= 1e-14
+    assert rel_diff(broadcast[0], el.damping_force(e[1], e_dot[0])) <= tol
     out = np.full((m, ndof), np.nan)
     assert np.shares_memory(el.damping_force(e, e_dot, out=out), out)
-    assert rel_diff(out, force) <= 1e-14
+    assert rel_diff(out, force) <= tol
     buffers = [np.full((m, ndof), np.nan), np.full((m, ndof, ndof), np.nan),
                np.full((m, ndof, ndof), np.nan)]
     total = el.internal_force_and_jacobians(e, e_dot, *buffers)
     assert all(np.shares_memory(a, b) for a, b in zip(total, buffers, strict=True))
     group = el.damping_group_kernel("damping_force")
     grouped = group({"e": e, "e0": np.repeat(el.e0[None, :], m, axis=0), "e_dot": e_dot})
-    assert rel_diff(grouped["force"], force) <= 1e-14
+    assert rel_diff(grouped["force"], force) <= tol
     with pytest.raises(ValueError, match="e_dot"):
         el.damping_force(e, e_dot[:2])
     with pytest.raises(ValueError, match="e_dot"):

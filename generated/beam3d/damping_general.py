@@ -89,6 +89,22 @@ def _gamma(q):
     return out.reshape(NPAIRS, NDOF, -1)
 
 
+_DOF_ROWS, _DOF_COLS = np.triu_indices(NDOF)
+
+
+def _sym_dof(upper):
+    """The symmetric (NDOF, NDOF, m) matrix of an upper-triangle (row-major) vector."""
+    out = np.zeros((NDOF, NDOF, upper.shape[-1]))
+    out[_DOF_ROWS, _DOF_COLS] = upper
+    out[_DOF_COLS, _DOF_ROWS] = upper
+    return out
+
+
+def _kron_k1(k1):
+    """K1 kron I_dim (NDOF, NDOF) from the shape-level upper triangle."""
+    return np.kron(k1[pair_index].reshape(N_SHAPE, N_SHAPE), np.eye(DIM))
+
+
 def _tprime(h):
     """T'(h), (N_SHAPE, N_SHAPE, m): 4 h_kk on the diagonal, 2 h_km off it."""
     return _PAIR_WEIGHT * h[pair_index].reshape(N_SHAPE, N_SHAPE, -1)
