@@ -202,7 +202,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
             for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
         },
         "cij_sizes": {v: kernels.cij_sizes(spec, v) for v in derive.VARIANTS},
-        "closed_tables": "closed.json" if kernels.looped(spec) else None,
+        "closed_tables": "closed.json" if kernels.closed_as_data(spec) else None,
         "laws": {
             law.name: {"description": law.description,
                        "parts": [{"name": part.name, "domain": part.domain}
@@ -269,7 +269,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                 path = folder / name
                 path.write_text(text)
                 written.append(path)
-    if families is None and kernels.looped(spec):
+    if families is None and kernels.closed_as_data(spec):
         path = folder / "closed.json"
         path.write_text(json.dumps(closed_tables(spec), sort_keys=True, separators=(",", ":"))
                         + "\n")

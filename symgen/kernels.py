@@ -70,6 +70,17 @@ LOOPED_ABOVE = 9
 LOOPED_PATTERN_ABOVE = {"gram": 700, "damping": 250}
 
 
+#: Elements with at least this many coordinates keep their straight closed forms as exact
+#: data (closed.json, evaluated by the runtime with the law algebra) instead of unrolled
+#: closed-form kernels (beam3d_3node's took 15 s to compile, the plate's did not finish).
+CLOSED_AS_DATA_FROM = 27
+
+
+def closed_as_data(spec: ElementSpec) -> bool:
+    """Whether the straight closed forms of ``spec`` are emitted as data (closed.json)."""
+    return spec.n_shape > LOOPED_ABOVE or spec.ndof >= CLOSED_AS_DATA_FROM
+
+
 #: ... and the quadrature families of elements with at least this many coordinates get the
 #: looped Jacobian at each point (unrolled, beam3d_3node's quadrature_law took 200 s).
 LOOPED_QUADRATURE_FROM = 27
@@ -92,7 +103,7 @@ def families(spec: ElementSpec) -> list[str]:
     """Names of every kernel family generated for an element."""
     # the general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
     # map of the whole general pattern); otherwise curved references take the law path
-    general = ["invariants_general"] if not looped(spec) and len(
+    general = ["invariants_general"] if not closed_as_data(spec) and len(
         derive.patterns(spec, "general").gram) <= LOOPED_PATTERN_ABOVE["gram"] else []
     return ["invariants", *general, "quadrature", "cij"] + [
         f"gram_{v}" for v in derive.VARIANTS] + ["laws", "quadrature_law"] + [
@@ -102,7 +113,7 @@ def families(spec: ElementSpec) -> list[str]:
 def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     """All kernels of one family."""
     if family == "invariants":
-        if looped(spec):  # closed forms as data (closed.json), integrated by the runtime
+        if closed_as_data(spec):  # closed forms as data (closed.json), for the runtime
             return [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
         return invariant_kernels(spec)
     if family == "laws":
@@ -334,7 +345,7 @@ def law_kernels(spec: ElementSpec) -> list[Kernel]:
     built = [_law_coefficients_kernel(spec, law) for law in applicable]
     built += [_law_correction_kernel(spec, law) for law in applicable
               if law.default_corrections is not None]
-    if looped(spec):  # closed forms as data (closed.json), integrated by the runtime
+    if closed_as_data(spec):  # closed forms as data (closed.json), for the runtime
         derive.check_law_patterns(spec)
         return built
     return built + [_law_invariants_straight_kernel(spec)]
