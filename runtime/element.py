@@ -90,6 +90,8 @@ class Element:
         self.variant = "straight" if self.straight else "general"
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
+        #: kernel families loaded (compiled on first use with backend c), in load order
+        self.loaded_families: list[str] = []
         self.law, self.damping = self._law(law), self._damping(damping)
         builders = self._family("invariants")
         start = time.perf_counter()
@@ -297,6 +299,8 @@ class Element:
 
     def _family(self, family: str):
         kernels = kernel_family(self.kind.name, family, self.backend)
+        if family not in self.loaded_families:
+            self.loaded_families.append(family)
         self.timing["compile_s"] += kernels.compile_s
         self.timing["load_s"] += kernels.load_s
         return kernels

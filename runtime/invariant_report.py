@@ -41,7 +41,9 @@ def _symbolic_derivation_s(kind: str) -> float | None:
     for cached in (derive.straight_integrals, closed.straight_tables, closed.domain_tables,
                    closed.factored):
         cached.cache_clear()
-    if closed.factored(spec) is not None and spec.n_shape > 9:
+    from symgen.kernels import closed_as_data
+
+    if closed.factored(spec) is not None and closed_as_data(spec):
         # large elements: the exact tables only (what the generator emits for them)
         return _timed(closed.straight_tables, spec)[1]
     return _timed(derive.straight_integrals, spec)[1]

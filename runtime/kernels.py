@@ -29,9 +29,23 @@ def generated_dir() -> Path:
     return Path(str(resources.files("generated")))
 
 
-def known_kinds() -> list[str]:
-    """Element kinds with generated kernels, sorted."""
+def generated_kinds() -> list[str]:
+    """Every element kind with generated kernels (``runtime.Element`` takes any), sorted."""
     return sorted(p.parent.name for p in generated_dir().glob("*/element.json"))
+
+
+def known_kinds() -> list[str]:
+    """Element kinds a scene can mesh, sorted: the 2-node line elements, since the scene
+    model meshes a body as a chain of elements sharing end nodes.  Kinds with more nodes
+    (beam2d_3node, beam3d_3node) or a plate domain (plate3d) are generated and usable through
+    ``runtime.Element`` and ``runtime.geometry.structured_mesh``; scenes get them when the
+    model meshes by connectivity (docs/new-element.md)."""
+    out = []
+    for name in generated_kinds():
+        meta = _load_kind(name).meta
+        if len(meta["nodes"]) == 2 and meta["domain"]["name"] == "beam":
+            out.append(name)
+    return out
 
 
 @dataclass(frozen=True)
@@ -110,16 +124,16 @@ class ElementKind:
 def element_kind(name: str) -> ElementKind:
     """The generated element kind ``name``; ValueError naming the known kinds otherwise."""
     if not isinstance(name, str):  # checked before the cache, which needs hashable names
-        raise ValueError(f"kind: expected an element kind name ({', '.join(known_kinds())}), "
+        raise ValueError(f"kind: expected an element kind name ({', '.join(generated_kinds())}), "
                          f"got {name!r}")
     return _load_kind(str(name))
 
 
 @cache
 def _load_kind(name: str) -> ElementKind:
-    if name not in known_kinds():
+    if name not in generated_kinds():
         raise ValueError(f"kind: unknown element kind {name!r}; known kinds: "
-                         f"{', '.join(known_kinds())}")
+                         f"{', '.join(generated_kinds())}")
     meta = json.loads((generated_dir() / name / "element.json").read_text())
     return ElementKind(meta["name"], meta["dim"], meta["n_shape"], meta["ndof"],
                        tuple(meta["position_vectors"]), tuple(meta["quadrature"]), meta)
