@@ -84,17 +84,22 @@ class Element:
         self.method = _choice("method", method, METHODS)
         self.backend = _choice("backend", backend, BACKENDS)
         self.quadrature = self._orders(quadrature)
-        self.e0 = (self.kind.straight_reference(self.geometry[0]) if e0 is None
+        self.e0 = (self.kind.straight_reference(*self.geometry) if e0 is None
                    else self._coordinates(e0, "e0", batch=False))
-        self.straight = inv.is_straight(self.kind, self.e0, self.geometry[0])
+        self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
         self.variant = "straight" if self.straight else "general"
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
+        #: kernel families loaded (compiled on first use with backend c), in load order
+        self.loaded_families: list[str] = []
         self.law, self.damping = self._law(law), self._damping(damping)
         builders = self._family("invariants")
         start = time.perf_counter()
         self.shear_correction = self._shear_correction(shear_correction)
-        if self.law == "svk":
+        # svk through its own kernels where the kind has them (the 2-node beams), otherwise
+        # (closed forms as data, or no general svk map) through the law path
+        if self.law == "svk" and not inv.has_closed_tables(self.kind) and (
+                self.straight or "invariants_general" in self.kind.meta["families"]):
             self.invariants = self._svk_invariants(builders)
         else:
             self.invariants = self._law_invariants(builders)
@@ -117,6 +122,10 @@ class Element:
 
     def _law(self, law) -> str:
         known = list(self.kind.meta["laws"])
+        reason = self.kind.law_not_applicable(law) if isinstance(law, str) else None
+        if reason is not None:
+            raise ValueError(f"law: {reason}; expected one of {tuple(known)} for "
+                             f"{self.kind.name}")
         if not isinstance(law, str) or law not in known:
             raise ValueError(f"law: expected one of {tuple(known)}, got {law!r}")
         return law
@@ -162,6 +171,9 @@ class Element:
         coefficients = self.law_coefficients()
         if self.straight:
             inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
+            if inv.has_closed_tables(self.kind):  # exact tables (closed.json), any law
+                return inv.closed_law_invariants(self.kind, self.geometry, coefficients,
+                                                 self.rho)
             return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho)
         rules = self._law_rules(builders)
         return inv.numeric_law_invariants(self.kind, builders, self.variant, self.geometry,
@@ -287,6 +299,8 @@ class Element:
 
     def _family(self, family: str):
         kernels = kernel_family(self.kind.name, family, self.backend)
+        if family not in self.loaded_families:
+            self.loaded_families.append(family)
         self.timing["compile_s"] += kernels.compile_s
         self.timing["load_s"] += kernels.load_s
         return kernels

@@ -13,7 +13,7 @@ import numpy as np
 
 from runtime import invariants as inv
 from runtime.element import lame
-from runtime.geometry import arc_reference
+from runtime.geometry import bent_reference
 from runtime.kernels import element_kind, kernel_family
 
 #: Element and material used for the comparison (SI units).
@@ -35,9 +35,24 @@ def _symbolic_derivation_s(kind: str) -> float | None:
         from symgen.elements import get
     except ImportError:  # runtime installed without the generator
         return None
+    from symgen import closed
+
     spec = get(kind)
-    derive.straight_integrals.cache_clear()
+    for cached in (derive.straight_integrals, closed.straight_tables, closed.domain_tables,
+                   closed.factored):
+        cached.cache_clear()
+    from symgen.kernels import closed_as_data
+
+    if closed.factored(spec) is not None and closed_as_data(spec):
+        # large elements: the exact tables only (what the generator emits for them)
+        return _timed(closed.straight_tables, spec)[1]
     return _timed(derive.straight_integrals, spec)[1]
+
+
+def curved_reference(meta):
+    """The curved reference of the comparison: the element bent along x onto a circle of
+    radius 2 m (an arc for beams, a cylindrical panel for plates; runtime.geometry)."""
+    return bent_reference(meta, GEOMETRY, 2.0)
 
 
 def _law_pair(meta, builders, law: str, backend: str, reference: str, e0, orders):
@@ -56,8 +71,12 @@ def _law_pair(meta, builders, law: str, backend: str, reference: str, e0, orders
                                           coefficients, MATERIAL["rho"])
 
     if reference == "straight":
-        exact, exact_s = _timed(lambda: inv.straight_law_invariants(
-            laws, GEOMETRY, coefficients, MATERIAL["rho"]))
+        if inv.has_closed_tables(meta):   # exact tables (closed.json)
+            exact, exact_s = _timed(lambda: inv.closed_law_invariants(
+                meta, GEOMETRY, coefficients, MATERIAL["rho"]))
+        else:
+            exact, exact_s = _timed(lambda: inv.straight_law_invariants(
+                laws, GEOMETRY, coefficients, MATERIAL["rho"]))
         label = "closed form"
     else:
         orders_exact = tuple(4 * o for o in orders)
@@ -91,13 +110,19 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
         raise ValueError(f"--reference: expected straight or curved, got {reference!r}")
     if law not in meta.meta["laws"]:
         raise ValueError(f"--law: expected one of {', '.join(meta.meta['laws'])}, got {law!r}")
-    if law != "svk":
-        return _compare_law(meta, reference, orders, backend, law)
+    if law != "svk" or inv.has_closed_tables(meta) or (
+            reference == "curved" and "invariants_general" not in meta.meta["families"]):
+        # kinds whose svk invariants come from the law path (closed forms as data tables, or
+        # no general svk map) compare through it too
+        result = _compare_law(meta, reference, orders, backend, law)
+        if law == "svk" and reference == "straight":
+            result["sympy_s"] = _symbolic_derivation_s(kind)
+        return result
     lam, shear = lame(MATERIAL["E"], MATERIAL["nu"])
     material = (lam, shear, MATERIAL["rho"])
     builders = kernel_family(kind, "invariants", backend)
     if reference == "straight":
-        variant, e0 = "straight", meta.straight_reference(GEOMETRY[0])
+        variant, e0 = "straight", meta.straight_reference(*GEOMETRY)
         mapping = builders
         exact, exact_s = _timed(lambda: inv.stored_invariants(
             mapping, variant, inv.straight_integrals(meta, builders, GEOMETRY), material))
@@ -105,7 +130,7 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
         orders_exact = None
     else:
         variant = "general"
-        e0 = arc_reference(meta, [0.0, 2.0, 0.0], 2.0, -np.pi / 2, GEOMETRY[0] / 2.0)
+        e0 = curved_reference(meta)
         mapping = kernel_family(kind, "invariants_general", backend)
         orders_exact = tuple(4 * o for o in orders)
         exact, exact_s = _timed(lambda: inv.stored_invariants(mapping, variant, (
@@ -156,10 +181,10 @@ def _storage(meta, variant: str) -> dict:
 def _compare_law(meta, reference: str, orders, backend: str, law: str) -> dict:
     builders = kernel_family(meta.name, "invariants", backend)
     if reference == "straight":
-        variant, e0 = "straight", meta.straight_reference(GEOMETRY[0])
+        variant, e0 = "straight", meta.straight_reference(*GEOMETRY)
     else:
         variant = "general"
-        e0 = arc_reference(meta, [0.0, 2.0, 0.0], 2.0, -np.pi / 2, GEOMETRY[0] / 2.0)
+        e0 = curved_reference(meta)
     exact, exact_s, numeric, numeric_s, label, off_pattern = _law_pair(
         meta, builders, law, backend, reference, e0, orders)
     rows = []

@@ -9,7 +9,10 @@ obtained.
 
 from __future__ import annotations
 
+import functools
+import json
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 import scipy.sparse
@@ -27,24 +30,39 @@ class Integrals:
     i4: np.ndarray
 
 
-def gauss_rule(kind: ElementKind, geometry: tuple[float, float, float],
-               orders: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Tensor Gauss-Legendre points (p, dim) in local box coordinates and weights (p,) in m^3.
-
-    In 2D the weights include the thickness ``width``.
-    """
-    length, height, width = geometry
-    spans = [(0.0, length), (-height / 2, height / 2), (-width / 2, width / 2)][: kind.dim]
+def domain_rule(kind: ElementKind, geometry, orders: tuple[int, ...],
+                subdomain: str = "volume") -> tuple[np.ndarray, np.ndarray]:
+    """Tensor Gauss-Legendre points (p, dim) in local coordinates and weights (p,) in m^3 over
+    ``subdomain`` of the kind's reference domain (element.json ``domain``): a fixed axis of a
+    subdomain contributes one point at its value and its extent to the weights; a 2D
+    domain's thickness scales the weights."""
+    domain = kind.meta["domain"]
+    values = dict(zip(domain["parameters"], (float(v) for v in geometry), strict=True))
+    fixed = {axis: value[0] / value[1] for axis, value in domain["subdomains"][subdomain]}
+    factor = values[domain["thickness"]] if domain["thickness"] else 1.0
     axes, weights = [], []
-    for order, (low, high) in zip(orders, spans, strict=True):
+    for i, (axis, order) in enumerate(zip(domain["axes"], orders, strict=True)):
+        scale = values[axis["scale"]]
+        low, high = (axis["low"][0] / axis["low"][1] * scale,
+                     axis["high"][0] / axis["high"][1] * scale)
+        if i in fixed:
+            axes.append(np.array([fixed[i] * scale]))
+            weights.append(np.array([1.0]))
+            factor *= high - low
+            continue
         x, w = np.polynomial.legendre.leggauss(order)
         axes.append(low + (x + 1) * (high - low) / 2)
         weights.append(w * (high - low) / 2)
     points = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
     weight = np.prod([g.ravel() for g in np.meshgrid(*weights, indexing="ij")], axis=0)
-    if kind.dim == 2:
-        weight = weight * width
-    return points, weight
+    return points, weight * factor
+
+
+def gauss_rule(kind: ElementKind, geometry: tuple[float, float, float],
+               orders: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Tensor Gauss-Legendre points (p, dim) over the reference domain and weights (p,) in
+    m^3 (in 2D the weights include the thickness ``width``)."""
+    return domain_rule(kind, geometry, orders)
 
 
 def shape_gradient_table(kind: ElementKind, family: KernelFamily, geometry,
@@ -144,8 +162,9 @@ def stored_invariants(family: KernelFamily, variant: str, integrals: dict,
     return {name: value[0] for name, value in out.items()}
 
 
-def is_straight(kind: ElementKind, e0: np.ndarray, length: float, rtol: float = 1e-12) -> bool:
-    """Whether ``e0`` is a rigid placement of the straight reference (closed forms apply).
+def is_straight(kind: ElementKind, e0: np.ndarray, geometry, rtol: float = 1e-12) -> bool:
+    """Whether ``e0`` is a rigid placement of the straight (flat) reference of ``geometry``
+    (length, height, width; a bare number is the length): closed forms apply.
 
     Compares Gram matrices Q0 Q0^T after translating to the first node: they are invariant
     under rotation, so any rotated straight beam qualifies.  They are invariant under
@@ -157,7 +176,8 @@ def is_straight(kind: ElementKind, e0: np.ndarray, length: float, rtol: float = 
         q[list(kind.position_vectors)] -= q[first]
         return q @ q.T
 
-    reference = gram(kind.straight_reference(length))
+    geometry = tuple(np.atleast_1d(np.asarray(geometry, float)))
+    reference = gram(kind.straight_reference(*geometry))
     return bool(np.allclose(gram(e0), reference, rtol=0, atol=rtol * np.abs(reference).max()))
 
 
@@ -229,26 +249,28 @@ class LawRule:
 
 
 def axis_rule(kind: ElementKind, geometry, order: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre points on the axis (y = z = 0) and weights times the area h w."""
-    length, height, width = geometry
-    x, w = np.polynomial.legendre.leggauss(order)
-    points = np.zeros((order, kind.dim))
-    points[:, 0] = (x + 1) * length / 2
-    return points, w * length / 2 * height * width
+    """Gauss-Legendre points on the beam axis (y = z = 0) and weights times the area h w."""
+    return subdomain_rule(kind, geometry, (order,) * kind.dim, "axis")
+
+
+def subdomain_rule(kind: ElementKind, geometry, orders: tuple[int, ...],
+                   subdomain: str) -> tuple[np.ndarray, np.ndarray]:
+    """The Gauss rule of a law domain: ``volume`` with ``orders``; a lower-dimensional
+    subdomain (the beam ``axis``, the plate ``midsurface``) with the orders of its free axes
+    (a beam's axis rule has order ``orders[0]``), its fixed axes' extents in the weights."""
+    return domain_rule(kind, geometry, orders, subdomain)
 
 
 def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
               orders: tuple[int, ...]) -> dict[str, LawRule]:
-    """The volume rule (Gauss orders ``orders``) and the axis rule (order ``orders[0]``).
+    """The Gauss rule of every law domain of the kind (``volume`` with ``orders``, the
+    others with the orders of their free axes).
 
     Raises ValueError when the reference mapping is degenerate or inverted at a point.
     """
     rules = {}
     for domain in kind.meta["law_domains"]:
-        if domain == "volume":
-            points, weights = gauss_rule(kind, geometry, orders)
-        else:
-            points, weights = axis_rule(kind, geometry, orders[0])
+        points, weights = subdomain_rule(kind, geometry, orders, domain)
         table = shape_gradient_table(kind, family, geometry, points)
         j0, det = reference_mapping(kind, e0, full_gradients(kind, table))
         if not (det > 1e-12 * np.abs(j0).max() ** kind.dim).all():
@@ -300,18 +322,42 @@ def numeric_law_invariants(kind: ElementKind, family: KernelFamily, variant: str
     + T^ab_lnkm); c^{kp}_{mq} = 1/2 sum DN_ab T^ab_kmpq + sum_shear DS (T^ab + T^ba)_kqmp;
     K1 = -1/2 sum_a (sum_c DN_ac) int P^a; U0 = 1/8 sum DN times the domain's measure.
     """
+    parts = []
+    for domain, rule in rules.items():
+        b = np.einsum("pka,pab->pkb", full_gradients(kind, rule.table), rule.u_inv)
+        p_dir = np.einsum("pka,pla->pakl", b, b)
+        parts.append((coefficients[domain],
+                      lambda rule=rule, p_dir=p_dir: np.einsum(
+                          "p,pakl,pbmn->abklmn", rule.wdet, p_dir, p_dir, optimize=True),
+                      np.einsum("p,pakl->akl", rule.wdet, p_dir), rule.wdet.sum()))
+    volume = rules["volume"]
+    values = family("shape_values", {"point": volume.points,
+                                     "geometry": np.asarray(geometry, float)})["values"]
+    mass = np.einsum("p,pk,pl->kl", volume.wdet, values, values)
+    return law_algebra(kind, variant, parts, mass, density)
+
+
+def law_algebra(kind: ElementKind, variant: str, parts, mass: np.ndarray,
+                density: float) -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij and U0 from the directional integrals of each law domain.
+
+    parts: per domain (law coefficients, a function giving T^ab_klmn = int P^a_kl P^b_mn as
+    a (dim, dim, n, n, n, n) array, int P^a (dim, n, n), the measure); mass: int s s^T.
+    Per domain (symgen.derive.law_gram_value and friends):
+    Dsym = 1/8 sum DN_ab T^ab_klmn + 1/8 sum_shear DS (T^ab_kmln + T^ab_knlm + T^ab_lmkn
+    + T^ab_lnkm); c^{kp}_{mq} = 1/2 sum DN_ab T^ab_kmpq + sum_shear DS (T^ab + T^ba)_kqmp;
+    K1 = -1/2 sum_a (sum_c DN_ac) int P^a; U0 = 1/8 sum DN times the domain's measure.
+    """
     n, d = kind.n_shape, kind.dim
     dsym = np.zeros((n, n, n, n))
     cfull = np.zeros((n, n, n, n))         # c[k, p, m, q]
     k1 = np.zeros((n, n))
     u0 = 0.0
-    for domain, rule in rules.items():
-        normal, shear = _law_blocks(kind, np.asarray(coefficients[domain], float))
+    for coefficient, tensor, pi, measure in parts:
+        normal, shear = _law_blocks(kind, np.asarray(coefficient, float))
         if not (normal.any() or shear.any()):
             continue
-        b = np.einsum("pka,pab->pkb", full_gradients(kind, rule.table), rule.u_inv)
-        p_dir = np.einsum("pka,pla->pakl", b, b)
-        t = np.einsum("p,pakl,pbmn->abklmn", rule.wdet, p_dir, p_dir, optimize=True)
+        t = tensor()
         dsym += np.einsum("ab,abklmn->klmn", normal, t) / 8
         cfull += np.einsum("ab,abkmpq->kpmq", normal, t) / 2
         for value, (x, y) in zip(shear, shear_pairs(d), strict=True):
@@ -320,13 +366,9 @@ def numeric_law_invariants(kind: ElementKind, family: KernelFamily, variant: str
                                  + np.einsum("lmkn->klmn", txy) + np.einsum("lnkm->klmn", txy))
             both = txy + t[y, x]
             cfull += value * np.einsum("kqmp->kpmq", both)
-        k1 -= np.einsum("a,akl->kl", normal.sum(axis=1),
-                        np.einsum("p,pakl->akl", rule.wdet, p_dir)) / 2
-        u0 += normal.sum() * rule.wdet.sum() / 8
-    volume = rules["volume"]
-    values = family("shape_values", {"point": volume.points,
-                                     "geometry": np.asarray(geometry, float)})["values"]
-    mass = np.einsum("p,pk,pl->kl", volume.wdet, values, values) * density
+        k1 -= np.einsum("a,akl->kl", normal.sum(axis=1), pi) / 2
+        u0 += normal.sum() * measure / 8
+    mass = mass * density
     rows, cols = np.triu_indices(n)
     gram = kind.pattern(variant, "gram")
     a_k, a_m = rows[gram[:, 0]], cols[gram[:, 0]]
@@ -337,6 +379,88 @@ def numeric_law_invariants(kind: ElementKind, family: KernelFamily, variant: str
             "gram": mu * dsym[a_k, a_m, b_k, b_m],
             "cij": cfull[cij[:, 0], cij[:, 1], cij[:, 2], cij[:, 3]],
             "u0": np.array([u0])}
+
+
+# --- closed forms as data (elements with closed.json, symgen.emit.closed_tables) ------------
+
+
+@functools.cache
+def _closed_data(kind_name: str) -> dict:
+    from runtime.kernels import generated_dir
+
+    data = json.loads((generated_dir() / kind_name / "closed.json").read_text())
+    out = {"shape": np.array(data["shape_exponents"], dtype=np.int64),
+           "measure": np.array(data["measure_exponents"], dtype=np.int64), "domains": {}}
+
+    def split(rows, count):
+        rows = np.array(rows, dtype=object).reshape(-1, count + 2)
+        index = rows[:, :count].astype(np.int64)
+        value = np.array([float(Fraction(int(p), int(q))) for p, q in rows[:, count:]])
+        return index, value
+
+    for domain, tables in data["domains"].items():
+        out["domains"][domain] = {"measure": float(Fraction(*tables["measure"])),
+                                  "pi": split(tables["pi"], 3), "psi": split(tables["psi"], 6)}
+    out["mass"] = split(data["mass"], 2)
+    return out
+
+
+def has_closed_tables(kind: ElementKind) -> bool:
+    """Whether the kind's straight closed forms are data (closed.json) rather than kernels."""
+    return bool(kind.meta.get("closed_tables"))
+
+
+def closed_parts(kind: ElementKind, geometry, coefficients: dict[str, np.ndarray]):
+    """(parts, mass) of ``law_algebra`` for the straight reference of ``geometry`` from the
+    exact tables: every entry is its rational times its monomial in the parameters."""
+    data = _closed_data(kind.name)
+    params = np.asarray(geometry, float)
+    n, d = kind.n_shape, kind.dim
+    axes = kind.meta["domain"]["axes"]
+    names = kind.meta["domain"]["parameters"]
+    unit = np.zeros((d, 3), dtype=np.int64)        # exponents of 1 / s_a
+    for a, axis in enumerate(axes):
+        unit[a, names.index(axis["scale"])] = 1
+    shape = data["shape"]
+
+    def monomial(exps):
+        return np.prod(params[None, :] ** exps, axis=1)
+
+    parts = []
+    for domain, tables in data["domains"].items():
+        (index, value), measure = tables["pi"], tables["measure"]
+        a, k, m = index.T
+        pi = np.zeros((d, n, n))
+        e_pi = shape[k] + shape[m] - 2 * unit[a] + data["measure"]
+        pi[a, k, m] = pi[a, m, k] = value * monomial(e_pi)
+        index, value = tables["psi"]
+
+        def tensor(index=index, value=value):
+            a, b, k, l_, m, q = index.T
+            exps = (shape[k] + shape[l_] - 2 * unit[a] + shape[m] + shape[q] - 2 * unit[b]
+                    + data["measure"])
+            v = value * monomial(exps)
+            t = np.zeros((d, d, n, n, n, n))
+            for kk, ll in ((k, l_), (l_, k)):
+                for mm, qq in ((m, q), (q, m)):
+                    t[a, b, kk, ll, mm, qq] = v
+                    t[b, a, mm, qq, kk, ll] = v
+            return t
+
+        volume = measure * np.prod(params ** data["measure"])
+        parts.append((coefficients[domain], tensor, pi, volume))
+    (index, value) = data["mass"]
+    k, m = index.T
+    mass = np.zeros((n, n))
+    mass[k, m] = mass[m, k] = value * monomial(shape[k] + shape[m] + data["measure"])
+    return parts, mass
+
+
+def closed_law_invariants(kind: ElementKind, geometry, coefficients: dict[str, np.ndarray],
+                          density: float) -> dict[str, np.ndarray]:
+    """Closed-form straight invariants of a law from the exact tables (straight pattern)."""
+    parts, mass = closed_parts(kind, geometry, coefficients)
+    return law_algebra(kind, "straight", parts, mass, density)
 
 
 def straight_law_invariants(family: KernelFamily, geometry, coefficients: dict[str, np.ndarray],

@@ -29,9 +29,23 @@ def generated_dir() -> Path:
     return Path(str(resources.files("generated")))
 
 
-def known_kinds() -> list[str]:
-    """Element kinds with generated kernels, sorted."""
+def generated_kinds() -> list[str]:
+    """Every element kind with generated kernels (``runtime.Element`` takes any), sorted."""
     return sorted(p.parent.name for p in generated_dir().glob("*/element.json"))
+
+
+def known_kinds() -> list[str]:
+    """Element kinds a scene can mesh, sorted: the 2-node line elements, since the scene
+    model meshes a body as a chain of elements sharing end nodes.  Kinds with more nodes
+    (beam2d_3node, beam3d_3node) or a plate domain (plate3d) are generated and usable through
+    ``runtime.Element`` and ``runtime.geometry.structured_mesh``; scenes get them when the
+    model meshes by connectivity (docs/new-element.md)."""
+    out = []
+    for name in generated_kinds():
+        meta = _load_kind(name).meta
+        if len(meta["nodes"]) == 2 and meta["domain"]["name"] == "beam":
+            out.append(name)
+    return out
 
 
 @dataclass(frozen=True)
@@ -46,10 +60,57 @@ class ElementKind:
     quadrature: tuple[int, ...]
     meta: dict = field(repr=False, compare=False)
 
-    def straight_reference(self, length: float) -> np.ndarray:
-        """Coordinates e0 (ndof,) of the straight element along x from the origin."""
-        coeffs = np.array(self.meta["straight_reference"], dtype=float)
-        return coeffs[:, 0] * length + coeffs[:, 1]
+    def _linear(self, coeffs, geometry) -> np.ndarray:
+        """Values of entries linear in the domain parameters ([a0, a1, a2, b] each)."""
+        coeffs = np.array(coeffs, dtype=float).reshape(-1, 4)
+        values = np.zeros(3)
+        for i, value in enumerate(geometry):
+            if value is not None:
+                values[i] = value
+        missing = [self.parameter_labels[i] for i in range(3)
+                   if (i >= len(geometry) or geometry[i] is None) and coeffs[:, i].any()]
+        if missing:
+            raise ValueError(f"{', '.join(missing)}: needed for the reference of {self.name}")
+        return coeffs[:, :3] @ values + coeffs[:, 3]
+
+    def straight_reference(self, length: float, height: float | None = None,
+                           width: float | None = None) -> np.ndarray:
+        """Coordinates e0 (ndof,) of the straight (flat) element from the origin: positions at
+        the node points, unit gradients (a beam's depends on the length only, a plate's on
+        its sides: ``length`` and ``height`` are the sizes along local x and y)."""
+        return self._linear(self.meta["straight_reference"], (length, height, width))
+
+    @property
+    def n_nodes(self) -> int:
+        """Nodes per element."""
+        return len(self.meta["nodes"])
+
+    @property
+    def vectors(self) -> tuple[str, ...]:
+        """Nodal vectors of every node, in storage order (``r``, ``r_x``, ...)."""
+        return tuple(self.meta["vectors"])
+
+    @property
+    def per_node(self) -> int:
+        """Coordinates per node: nodal vectors times dim."""
+        return len(self.meta["vectors"]) * self.dim
+
+    @property
+    def parameter_labels(self) -> tuple[str, ...]:
+        """What the three geometry parameters (length, height, width) are for this kind."""
+        return tuple(self.meta["domain"]["labels"])
+
+    def node_points(self, length: float, height: float | None = None,
+                    width: float | None = None) -> np.ndarray:
+        """Local coordinates (n_nodes, dim) of the nodes in the reference domain."""
+        points = self._linear([c for node in self.meta["nodes"] for c in node],
+                              (length, height, width))
+        return points.reshape(self.n_nodes, self.dim)
+
+    def law_not_applicable(self, law: str) -> str | None:
+        """Why material law ``law`` does not apply to this kind (None when it does or is
+        unknown)."""
+        return self.meta.get("laws_not_applicable", {}).get(law)
 
     def pattern(self, variant: str, name: str) -> np.ndarray:
         """Storage pattern ``name`` (i4, gram, cij) of ``variant`` as an int array."""
@@ -63,16 +124,16 @@ class ElementKind:
 def element_kind(name: str) -> ElementKind:
     """The generated element kind ``name``; ValueError naming the known kinds otherwise."""
     if not isinstance(name, str):  # checked before the cache, which needs hashable names
-        raise ValueError(f"kind: expected an element kind name ({', '.join(known_kinds())}), "
+        raise ValueError(f"kind: expected an element kind name ({', '.join(generated_kinds())}), "
                          f"got {name!r}")
     return _load_kind(str(name))
 
 
 @cache
 def _load_kind(name: str) -> ElementKind:
-    if name not in known_kinds():
+    if name not in generated_kinds():
         raise ValueError(f"kind: unknown element kind {name!r}; known kinds: "
-                         f"{', '.join(known_kinds())}")
+                         f"{', '.join(generated_kinds())}")
     meta = json.loads((generated_dir() / name / "element.json").read_text())
     return ElementKind(meta["name"], meta["dim"], meta["n_shape"], meta["ndof"],
                        tuple(meta["position_vectors"]), tuple(meta["quadrature"]), meta)

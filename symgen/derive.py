@@ -18,7 +18,7 @@ from functools import cache
 
 import sympy as sp
 
-from symgen.element import ElementSpec, height, length, width
+from symgen.element import ElementSpec
 
 lam, shear, rho = sp.symbols("lambda G rho", positive=True)
 
@@ -57,24 +57,9 @@ def gradient_pattern(spec: ElementSpec) -> list[tuple[int, int]]:
 
 
 def box_integral(spec: ElementSpec, expr: sp.Expr) -> sp.Expr:
-    """Exact integral of a polynomial in (x, y[, z]) over the straight element volume.
-
-    Integrates monomial by monomial: int_0^l x^a dx = l^(a+1)/(a+1), and the symmetric
-    transverse intervals kill odd powers.  In 2D the thickness ``w`` scales the area.
-    """
-    poly = sp.Poly(sp.expand(expr), *spec.coordinates)
-    total = sp.Integer(0)
-    for powers, coeff in poly.terms():
-        term = coeff * length ** (powers[0] + 1) / (powers[0] + 1)
-        for power, size in zip(powers[1:], (height, width), strict=False):
-            if power % 2:
-                term = 0
-                break
-            term *= 2 * (size / 2) ** (power + 1) / (power + 1)
-        total += term
-    if spec.dim == 2:
-        total *= width
-    return sp.factor(total)
+    """Exact integral of a polynomial in the local coordinates over the straight element
+    volume (the element's domain, times the thickness in 2D), factored."""
+    return sp.factor(spec.domain.integrate(expr))
 
 
 @dataclass(frozen=True)
@@ -93,26 +78,26 @@ class Integrals:
 
 @cache
 def straight_integrals(spec: ElementSpec) -> Integrals:
-    """Closed-form integrals of the straight reference (J0 = I, so B = ds/dx), in l, h, w."""
+    """Closed-form integrals of the straight reference (J0 = I, so B = ds/dx), in the domain
+    parameters, factored (from the exact tables of ``symgen.closed``)."""
+    from symgen import closed
+
+    tables = closed.straight_tables(spec)
     n = spec.n_shape
-    grads = shape_gradients(spec)
-    s = sp.Matrix(spec.shape_functions)
-    p_matrix = (grads * grads.T).applyfunc(sp.expand)
-    p_poly = {
-        ab: sp.Poly(p_matrix[ab], *spec.coordinates) for ab in pairs(n)
-    }
-    mass = sp.Matrix(n, n, lambda k, m: box_integral(spec, s[k] * s[m]))
-    i2 = sp.Matrix(n, n, lambda k, m: box_integral(spec, p_matrix[k, m]))
+    mass = sp.Matrix(n, n, lambda k, m: sp.factor(
+        closed.to_sympy(spec, tables.mass[(min(k, m), max(k, m))])))
+    i2 = sp.Matrix(n, n, lambda k, m: sp.factor(
+        closed.to_sympy(spec, tables.i2.get((min(k, m), max(k, m)), {}))))
     i4_values: dict[tuple[int, int], sp.Expr] = {}
-    keys = pairs(n)
-    for a, ka in enumerate(keys):
-        for b in range(a, len(keys)):
-            product = (p_poly[ka] * p_poly[keys[b]]).as_expr()
-            value = box_integral(spec, product)
-            if value != 0:
-                i4_values[(a, b)] = value
-    volume = box_integral(spec, sp.Integer(1))
-    return Integrals(volume, mass, i2, lambda key: i4_values.get(key, sp.Integer(0)))
+
+    def i4(key):
+        if key not in i4_values:
+            value = tables.i4.get(key)
+            i4_values[key] = sp.Integer(0) if not value else sp.factor(
+                closed.to_sympy(spec, value))
+        return i4_values[key]
+
+    return Integrals(sp.factor(closed.to_sympy(spec, tables.volume)), mass, i2, i4)
 
 
 # --- invariant algebra: from the four integrals to what each method stores -------------------
@@ -174,24 +159,41 @@ VARIANTS = ("straight", "general")
 
 @cache
 def patterns(spec: ElementSpec, variant: str) -> Patterns:
-    """Storage patterns of ``variant`` (see ``Patterns``), found symbolically for straight."""
+    """Storage patterns of ``variant`` (see ``Patterns``), found exactly for straight."""
+    from symgen import closed
+
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     n = spec.n_shape
     npairs = len(pairs(n))
     all_i4 = [(a, b) for a in range(npairs) for b in range(a, npairs)]
-    all_gram = list(all_i4)
-    all_cij = [(k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
-               for q in range(n)]
     if variant == "general":
-        return Patterns(variant, tuple(all_i4), tuple(all_gram), tuple(all_cij))
-    i4 = straight_integrals(spec).i4
-    return Patterns(
-        variant,
-        tuple(key for key in all_i4 if i4(key) != 0),
-        tuple(ab for ab in all_gram if sp.expand(gram_value(spec, i4, *ab)) != 0),
-        tuple(kpmq for kpmq in all_cij if sp.expand(cij_value(spec, i4, *kpmq)) != 0),
-    )
+        all_cij = [(k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
+                   for q in range(n)]
+        return Patterns(variant, tuple(all_i4), tuple(all_i4), tuple(all_cij))
+    i4 = closed.straight_tables(spec).i4
+    index = pair_index(n)
+
+    def key(k, m, p, q):
+        a, b = index[(k, m)], index[(p, q)]
+        return (a, b) if a <= b else (b, a)
+
+    def both_zero(first, second):
+        """The sum of two closed i4 values is zero (exactly)."""
+        total = dict(i4.get(first, {}))
+        for exps, value in i4.get(second, {}).items():
+            total[exps] = total.get(exps, 0) + value
+        return not any(total.values())
+
+    gram = []
+    for a, b in all_i4:
+        (k, m), (p, q) = pairs(n)[a], pairs(n)[b]
+        if key(k, m, p, q) in i4 or not both_zero(key(k, p, m, q), key(k, q, m, p)):
+            gram.append((a, b))
+    cij = [(k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
+           for q in range(n) if key(k, m, q, p) in i4 or key(k, q, m, p) in i4]
+    return Patterns(variant, tuple(key for key in all_i4 if key in i4), tuple(gram),
+                    tuple(cij))
 
 
 def invariant_values(
@@ -232,67 +234,35 @@ class DomainIntegrals:
     psi: Callable[[int, int, tuple[int, int], tuple[int, int]], object]
 
 
-def _integrate_poly(spec: ElementSpec, poly: sp.Poly, domain: str) -> sp.Expr:
-    """Exact integral of a polynomial (a ``Poly`` in the local coordinates) over ``domain``
-    of the straight element: ``volume`` as ``box_integral``, or ``axis``: over x at
-    y = z = 0, times the cross-section area h w."""
-    total = sp.Integer(0)
-    for powers, coeff in poly.terms():
-        term = coeff * length ** (powers[0] + 1) / (powers[0] + 1)
-        if domain == "axis":
-            if any(powers[1:]):
-                continue
-            term *= height * width
-        else:
-            for power, size in zip(powers[1:], (height, width), strict=False):
-                if power % 2:
-                    term = 0
-                    break
-                term *= 2 * (size / 2) ** (power + 1) / (power + 1)
-            if spec.dim == 2:
-                term *= width
-        total += term
-    return total
-
-
 def _psi_key(a: int, b: int, kl: tuple[int, int], mn: tuple[int, int]):
     """Canonical key of psi^ab_(kl),(mn): a <= b, sorted pairs, (kl) <= (mn) when a == b."""
-    kl, mn = tuple(sorted(kl)), tuple(sorted(mn))
-    if a > b:
-        a, b, kl, mn = b, a, mn, kl
-    if a == b and mn < kl:
-        kl, mn = mn, kl
-    return a, b, kl, mn
+    from symgen.closed import psi_key
+
+    return psi_key(a, b, kl, mn)
 
 
 @cache
 def straight_domain_integrals(spec: ElementSpec, domain: str) -> DomainIntegrals:
-    """Closed-form directional integrals of the straight reference over ``domain``."""
-    def integrate(spec, expr):
-        return sp.factor(_integrate_poly(spec, sp.Poly(expr, *spec.coordinates), domain))
+    """Closed-form directional integrals of the straight reference over ``domain`` (a
+    subdomain of the element's domain): measure and pi factored, psi as canonical sums."""
+    from symgen import closed
 
-    grads = shape_gradients(spec)
-    n, d = spec.n_shape, spec.dim
-    p_dir = [{(k, m): sp.Poly(grads[k, a] * grads[m, a], *spec.coordinates)
-              for k, m in pairs(n) if grads[k, a] != 0 and grads[m, a] != 0}
-             for a in range(d)]
-    pi = {(a, k, m): integrate(spec, value.as_expr()) for a in range(d)
-          for (k, m), value in p_dir[a].items()}
-    psi = {}
-    for a in range(d):
-        for b in range(a, d):
-            for kl, first in p_dir[a].items():
-                for mn, second in p_dir[b].items():
-                    key = _psi_key(a, b, kl, mn)
-                    if key not in psi:
-                        value = _integrate_poly(spec, first * second, domain)
-                        if value != 0:
-                            psi[key] = value
+    tables = closed.domain_tables(spec, domain)
     zero = sp.Integer(0)
+    pi = {key: sp.factor(closed.to_sympy(spec, value)) for key, value in tables.pi.items()}
+    psi: dict = {}
+
+    def psi_value(a, b, kl, mn):
+        key = _psi_key(a, b, kl, mn)
+        if key not in psi:
+            value = tables.psi.get(key)
+            psi[key] = zero if value is None else closed.to_sympy(spec, value)
+        return psi[key]
+
     return DomainIntegrals(
-        integrate(spec, sp.Integer(1)),
+        sp.factor(closed.to_sympy(spec, tables.measure)),
         lambda a, k, m: pi.get((a, min(k, m), max(k, m)), zero),
-        lambda a, b, kl, mn: psi.get(_psi_key(a, b, kl, mn), zero))
+        psi_value)
 
 
 def _law_blocks(dim: int, coefficients):
@@ -389,35 +359,71 @@ def law_invariant_values(spec: ElementSpec, pattern: Patterns, parts, mass,
     }
 
 
+def law_domains(spec: ElementSpec) -> tuple[str, ...]:
+    """Subdomains of the element's domain that some applicable law integrates a part over
+    (``volume`` always), in ``laws.DOMAINS`` order."""
+    from symgen import laws
+
+    used = {"volume"} | {part.domain for law in applicable_laws(spec).values()
+                         for part in law.parts(spec.dim)}
+    return tuple(d for d in laws.DOMAINS if d in used and d in spec.domain.subdomain_names)
+
+
+def applicable_laws(spec: ElementSpec) -> dict:
+    """The laws whose every part integrates over a subdomain the element's domain has."""
+    from symgen import laws
+
+    return {name: law for name, law in laws.LAWS.items()
+            if laws.not_applicable(law, spec.domain) is None}
+
+
 def check_law_patterns(spec: ElementSpec) -> None:
     """Raise ValueError unless every law of the orthotropic form (any coefficients on any
     domain) is zero outside the straight storage patterns, so the straight kernels (found
-    for the isotropic law) serve every law.  Exact rational values stand in for l, h, w and
-    the coefficients (a nonzero polynomial vanishes there with probability zero)."""
-    from symgen import laws
+    for the isotropic law) serve every law.  Exact: each generic coefficient multiplies a sum
+    of closed-form integrals, checked to vanish."""
+    from symgen import closed, laws
 
-    size = len(laws.coefficient_layout(spec.dim))
-    generic = {domain: sp.symbols(f"c_{domain}_0:{size}") for domain in laws.DOMAINS}
-    parts = [(straight_domain_integrals(spec, domain), generic[domain])
-             for domain in laws.DOMAINS]
-    values = [sp.Rational(p, q) for p, q in zip(range(3, 200, 7), range(2, 200, 3),
-                                                strict=False)]
-    symbols = [length, height, width, *[c for domain in laws.DOMAINS for c in generic[domain]]]
-    numbers = dict(zip(symbols, values, strict=False))
+    n, d = spec.n_shape, spec.dim
     pattern = patterns(spec, "straight")
-    n = spec.n_shape
-    npairs = len(pairs(n))
+    normal = [(x, yy) for x in range(d) for yy in range(x, d)]
+    tables = [closed.domain_tables(spec, domain).psi for domain in law_domains(spec)]
+
+    def vanishes(psi, terms) -> bool:
+        total: dict = {}
+        for a, b, kl, mn in terms:
+            entry = psi.get(closed.psi_key(a, b, kl, mn))
+            if entry is not None:
+                total[entry[0]] = total.get(entry[0], 0) + entry[1]
+        return not any(total.values())
+
+    def groups_gram(k, m, p, q):
+        for x, yy in normal:
+            yield [(x, yy, (k, m), (p, q))] + ([(yy, x, (k, m), (p, q))] if x != yy else [])
+        for x, yy in laws.shear_pairs(d):
+            yield [(x, yy, (k, p), (m, q)), (x, yy, (k, q), (m, p)),
+                   (x, yy, (m, p), (k, q)), (x, yy, (m, q), (k, p))]
+
+    def groups_cij(k, p, m, q):
+        for x, yy in normal:
+            yield [(x, yy, (k, m), (p, q))] + ([(yy, x, (k, m), (p, q))] if x != yy else [])
+        for x, yy in laws.shear_pairs(d):
+            yield [(x, yy, (k, q), (m, p)), (yy, x, (k, q), (m, p))]
+
     stored = set(pattern.gram)
+    npairs = len(pairs(n))
     for a in range(npairs):
         for b in range(a, npairs):
-            if (a, b) not in stored and sp.sympify(
-                    law_gram_value(spec, parts, a, b)).subs(numbers) != 0:
+            if (a, b) in stored:
+                continue
+            (k, m), (p, q) = pairs(n)[a], pairs(n)[b]
+            if not all(vanishes(psi, g) for psi in tables for g in groups_gram(k, m, p, q)):
                 raise ValueError(f"{spec.name}: gram entry {(a, b)} of a law is outside the "
                                  "straight pattern")
     stored = set(pattern.cij)
     for kpmq in ((k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)
                  for q in range(n)):
-        if kpmq not in stored and sp.sympify(
-                law_cij_value(spec, parts, *kpmq)).subs(numbers) != 0:
+        if kpmq not in stored and not all(vanishes(psi, g) for psi in tables
+                                          for g in groups_cij(*kpmq)):
             raise ValueError(f"{spec.name}: cij entry {kpmq} of a law is outside the straight "
                              "pattern")

@@ -1,20 +1,24 @@
 """Element definitions as data: what an ANCF element file in `symgen/elements/` provides.
 
-An element is described once, symbolically; every derivation (gradients, invariants,
-kernels) is shared by all elements and lives elsewhere in `symgen`.
+An element is described once, symbolically: its reference domain (symgen/domains.py), its
+nodes as points of that domain, the nodal vectors every node carries, one shape function per
+nodal vector and its default Gauss orders.  Every derivation (gradients, invariants, kernels,
+the straight reference, the metadata the runtime meshes with) is shared by all elements and
+lives elsewhere in `symgen`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import sympy as sp
 
-# Local coordinates of the straight element box and its dimensions (metres).
-x, y, z = sp.symbols("x y z", real=True)
-length, height, width = sp.symbols("l h w", positive=True)
-LOCAL = (x, y, z)
+from symgen import domains
+from symgen.domains import LOCAL, Domain, x, y, z  # noqa: F401  (element files import these)
+
+# The beam box parameters, kept importable from here for the element files.
+length, height, width = domains.length, domains.height, domains.width
 
 #: Names of the nodal vectors an element may carry: the position and its local gradients.
 VECTOR_KINDS = ("r", "r_x", "r_y", "r_z")
@@ -25,46 +29,67 @@ class ElementSpec:
     """A fully parameterised ANCF element.
 
     name: registry key (e.g. ``"beam3d"``).
-    dim: spatial dimension of positions (2 or 3).
-    node_x: local x coordinate of each node (expressions in ``l``).
+    domain: the reference domain (``domains.beam(dim)``, ``domains.plate()``, ...); its
+        dimension is the element's.
+    nodes: each node as a point of the domain: ``dim`` expressions in the domain parameters
+        (e.g. ``(l / 2, 0, 0)``).
     vectors: the nodal vectors carried by every node, from ``VECTOR_KINDS``, in storage order.
-    shape_functions: one SymPy expression per nodal vector (node-major), in x, y, z, l.
+    shape_functions: one SymPy expression per nodal vector (node-major), in the local
+        coordinates and the domain parameters; s_k must be 1 for its own nodal vector and 0
+        for the others at the nodes (checked).
     quadrature: default Gauss order per local direction (length ``dim``).
     description: one line for listings.
     """
 
     name: str
-    dim: int
-    node_x: tuple[sp.Expr, ...]
+    domain: Domain
+    nodes: tuple[tuple[sp.Expr, ...], ...]
     vectors: tuple[str, ...]
     shape_functions: tuple[sp.Expr, ...]
     quadrature: tuple[int, ...]
     description: str = ""
-    box: tuple[tuple[sp.Symbol, sp.Expr, sp.Expr], ...] = field(init=False)
 
     def __post_init__(self) -> None:
-        if self.dim not in (2, 3):
-            raise ValueError(f"element {self.name!r}: dim must be 2 or 3, got {self.dim}")
+        nodes = tuple(tuple(sp.sympify(c) for c in node) for node in self.nodes)
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "shape_functions",
+                           tuple(sp.sympify(s) for s in self.shape_functions))
         unknown = [v for v in self.vectors if v not in VECTOR_KINDS[: self.dim + 1]]
         if unknown:
             raise ValueError(f"element {self.name!r}: unknown nodal vectors {unknown}")
+        if "r" not in self.vectors:
+            raise ValueError(f"element {self.name!r}: every node needs its position r")
+        if any(len(node) != self.dim for node in nodes):
+            raise ValueError(f"element {self.name!r}: every node is a point of {self.dim} "
+                             "coordinates")
         if len(self.shape_functions) != self.n_shape:
             raise ValueError(
                 f"element {self.name!r}: expected {self.n_shape} shape functions "
-                f"({len(self.node_x)} nodes x {len(self.vectors)} vectors), "
+                f"({len(nodes)} nodes x {len(self.vectors)} vectors), "
                 f"got {len(self.shape_functions)}"
             )
         if len(self.quadrature) != self.dim:
             raise ValueError(f"element {self.name!r}: quadrature needs {self.dim} orders")
-        box = [(x, sp.Integer(0), length), (y, -height / 2, height / 2)]
-        if self.dim == 3:
-            box.append((z, -width / 2, width / 2))
-        object.__setattr__(self, "box", tuple(box))
+        allowed = set(self.coordinates) | set(self.domain.parameters)
+        for s in self.shape_functions:
+            extra = s.free_symbols - allowed
+            if extra:
+                raise ValueError(f"element {self.name!r}: shape function {s} uses unknown "
+                                 f"symbols {sorted(map(str, extra))}")
+
+    @property
+    def dim(self) -> int:
+        """Spatial dimension of positions (2 or 3): the domain's."""
+        return self.domain.dim
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.nodes)
 
     @property
     def n_shape(self) -> int:
         """Number of shape functions = nodal vectors per element."""
-        return len(self.node_x) * len(self.vectors)
+        return len(self.nodes) * len(self.vectors)
 
     @property
     def ndof(self) -> int:
@@ -74,7 +99,7 @@ class ElementSpec:
     @property
     def coordinates(self) -> tuple[sp.Symbol, ...]:
         """Local coordinates the shape functions depend on (x, y[, z])."""
-        return LOCAL[: self.dim]
+        return self.domain.coordinates
 
     @cached_property
     def position_vectors(self) -> tuple[int, ...]:
@@ -82,23 +107,42 @@ class ElementSpec:
         per_node = len(self.vectors)
         return tuple(
             node * per_node + i
-            for node in range(len(self.node_x))
+            for node in range(len(self.nodes))
             for i, kind in enumerate(self.vectors)
             if kind == "r"
         )
 
     def straight_reference(self) -> list[sp.Expr]:
-        """Reference coordinates e0 of the straight element along local x from the origin.
+        """Reference coordinates e0 of the straight (flat) element: r0(x) = x.
 
-        Positions sit at (node_x, 0[, 0]); gradients are the unit vectors, so r0(x) = x.
+        Positions sit at the nodes' points; gradients are the unit vectors.
         """
         e0: list[sp.Expr] = []
-        for node_x in self.node_x:
+        for node in self.nodes:
             for kind in self.vectors:
-                vec = [sp.Integer(0)] * self.dim
                 if kind == "r":
-                    vec[0] = node_x
+                    e0.extend(node)
                 else:
+                    vec = [sp.Integer(0)] * self.dim
                     vec["xyz".index(kind[-1])] = sp.Integer(1)
-                e0.extend(vec)
+                    e0.extend(vec)
         return e0
+
+    def check_interpolation(self) -> None:
+        """Raise ValueError unless the shape functions interpolate the nodal vectors: at node
+        i, s_k = 1 for its position and 0 for the others, d s_k/d x_a = 1 for its r_a and 0
+        for every other nodal vector."""
+        for i, node in enumerate(self.nodes):
+            at = dict(zip(self.coordinates, node, strict=True))
+            for j, kind in enumerate(self.vectors):
+                row = i * len(self.vectors) + j
+                for k, s in enumerate(self.shape_functions):
+                    if kind == "r":
+                        value = s.subs(at)
+                    else:
+                        value = sp.diff(s, LOCAL["xyz".index(kind[-1])]).subs(at)
+                    expected = 1 if k == row else 0
+                    if sp.simplify(value - expected) != 0:
+                        raise ValueError(
+                            f"element {self.name!r}: shape function {k} gives {value} for "
+                            f"{kind} of node {i} (expected {expected})")

@@ -9,6 +9,7 @@ Output is byte-for-byte reproducible: no dates, sorted keys, deterministic print
 from __future__ import annotations
 
 import json
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -16,8 +17,8 @@ import jinja2
 import sympy as sp
 
 from symgen import derive, kernels, laws
-from symgen.element import ElementSpec, length
-from symgen.ir import Assign, Kernel, PointLoop, SparseProduct, kernel_operations
+from symgen.element import ElementSpec
+from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
 from symgen.printing import code
 
 BACKENDS = ("c", "numpy")
@@ -67,6 +68,9 @@ def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> 
         elif isinstance(st, SparseProduct):
             out.append({"kind": "sparse", "target": st.target, "matrix": st.matrix,
                         "source": st.source, "rows": st.rows})
+        elif isinstance(st, Loop):
+            out.append({"kind": "looped", "op": st.op, "target": st.target,
+                        "args": list(st.args), "scale": code(sp.sympify(st.scale))})
         elif isinstance(st, PointLoop):
             out.append({"kind": "loop", "table": st.table, "width": None,
                         "body": _statements(list(st.body), vector_arrays, vector_temps)})
@@ -122,9 +126,10 @@ def render_family(spec: ElementSpec, family: str, backend: str,
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     built = built if built is not None else kernels.build_family(spec, family)
+    tables = next((k.loop_tables for k in built if k.loop_tables), None)
     context = {"banner": banner(spec, family), "element": spec.name, "family": family,
                "prefix": f"{spec.name}_{family}", "lanes": LANES,
-               "kernels": [_template_kernel(k) for k in built]}
+               "kernels": [_template_kernel(k) for k in built], "loop_tables": tables}
     env = _environment()
     if backend == "c":
         return {f"{family}.c": env.get_template("c_kernels.c.j2").render(context),
@@ -132,14 +137,36 @@ def render_family(spec: ElementSpec, family: str, backend: str,
     return {f"{family}.py": env.get_template("numpy_kernels.py.j2").render(context)}
 
 
-def _linear_in_length(value: sp.Expr) -> list[float]:
-    """[a, b] with value = a * l + b (straight references are linear in the length)."""
+def _linear_in_parameters(spec: ElementSpec, value: sp.Expr) -> list[float]:
+    """[a0, a1, a2, b] with value = a0 p0 + a1 p1 + a2 p2 + b in the domain parameters p
+    (straight references and node points are linear in them)."""
     value = sp.expand(value)
-    a = value.coeff(length, 1)
-    b = value.subs(length, 0)
-    if sp.expand(a * length + b - value) != 0:
-        raise ValueError(f"straight reference entry {value} is not linear in l")
-    return [float(a), float(b)]
+    params = spec.domain.parameters
+    coeffs = [value.coeff(p, 1) for p in params]
+    constant = value.subs(dict.fromkeys(params, 0))
+    if sp.expand(sum(c * p for c, p in zip(coeffs, params, strict=True)) + constant
+                 - value) != 0 or any(c.free_symbols for c in coeffs):
+        raise ValueError(f"{spec.name}: straight reference entry {value} is not linear in "
+                         f"{', '.join(map(str, params))}")
+    return [float(c) for c in coeffs] + [float(constant)]
+
+
+def exact_orders(spec: ElementSpec) -> list[int]:
+    """Gauss orders per axis that integrate the straight invariants (int P P and the mass
+    integrand s s^T) exactly (an n-point rule is exact to degree 2n - 1)."""
+    from symgen import closed
+
+    f = closed.factored(spec)
+    if f is None:
+        return list(spec.quadrature)
+    degrees = [0] * spec.dim
+    for k in range(spec.n_shape):
+        for powers in f.phi[k]:
+            degrees = [max(d, 2 * p) for d, p in zip(degrees, powers, strict=True)]
+        for _, poly in f.grads[k]:
+            for powers in poly:
+                degrees = [max(d, 4 * p) for d, p in zip(degrees, powers, strict=True)]
+    return list(spec.domain.exact_orders(tuple(degrees)))
 
 
 def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
@@ -163,7 +190,11 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
         "vectors": list(spec.vectors),
         "position_vectors": list(spec.position_vectors),
         "quadrature": list(spec.quadrature),
-        "straight_reference": [_linear_in_length(v) for v in spec.straight_reference()],
+        "straight_reference": [_linear_in_parameters(spec, v)
+                               for v in spec.straight_reference()],
+        "domain": spec.domain.metadata,
+        "nodes": [[_linear_in_parameters(spec, c) for c in node] for node in spec.nodes],
+        "exact_orders": exact_orders(spec),
         "gradient_pattern": [list(kc) for kc in derive.gradient_pattern(spec)],
         "patterns": {
             v: {"i4": [list(x) for x in p.i4], "gram": [list(x) for x in p.gram],
@@ -171,19 +202,53 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
             for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
         },
         "cij_sizes": {v: kernels.cij_sizes(spec, v) for v in derive.VARIANTS},
+        "closed_tables": "closed.json" if kernels.closed_as_data(spec) else None,
         "laws": {
             law.name: {"description": law.description,
                        "parts": [{"name": part.name, "domain": part.domain}
                                  for part in law.parts(spec.dim)],
                        "corrections": (laws.correction_names(spec.dim)
                                        if law.default_corrections is not None else [])}
-            for law in laws.LAWS.values()
+            for law in derive.applicable_laws(spec).values()
         },
-        "law_domains": list(laws.DOMAINS),
+        "laws_not_applicable": {name: laws.not_applicable(law, spec.domain)
+                                for name, law in laws.LAWS.items()
+                                if laws.not_applicable(law, spec.domain) is not None},
+        "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
         "generator": {"version": GENERATOR_VERSION, "sympy": sp.__version__},
     }
+
+
+def closed_tables(spec: ElementSpec) -> dict:
+    """The exact closed-form integrals of the straight reference as data (looped elements;
+    ``runtime.invariants.closed_law_invariants`` evaluates them): per shape function the
+    parameter exponents of its factor, per law domain the exponents of dV and its rational
+    measure, the nonzero ``pi[a, k, l]`` and ``psi^ab_(kl)(mn)`` as [indices..., numerator,
+    denominator] (their parameter monomials follow from the exponents), and the shape-level
+    mass ``int s_k s_l dV0`` the same way."""
+    from symgen import closed
+
+    f = closed.factored(spec)
+    tables = {}
+    for domain in derive.law_domains(spec):
+        t = closed.domain_tables(spec, domain)
+        (measure_exps, measure), = t.measure.items()
+        tables[domain] = {
+            "measure": [int(measure.numerator), int(measure.denominator)],
+            "pi": [[a, k, m, int(v.numerator), int(v.denominator)]
+                   for (a, k, m), (_, v) in sorted(t.pi.items())],
+            "psi": [[a, b, *kl, *mn, int(v.numerator), int(v.denominator)]
+                    for (a, b, kl, mn), (_, v) in sorted(t.psi.items())],
+        }
+    straight = closed.straight_tables(spec)
+    mass = [[k, m, int(v.numerator), int(v.denominator)]
+            for (k, m), value in sorted(straight.mass.items()) for v in value.values()]
+    return {"name": spec.name, "parameters": [str(p) for p in spec.domain.parameters],
+            "shape_exponents": [list(e) for e in f.exps],
+            "measure_exponents": list(closed._measure(spec)), "domains": tables,
+            "mass": mass, "generator": {"version": GENERATOR_VERSION}}
 
 
 def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> list[Path]:
@@ -204,7 +269,16 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                 path = folder / name
                 path.write_text(text)
                 written.append(path)
+    if families is None and kernels.closed_as_data(spec):
+        path = folder / "closed.json"
+        path.write_text(json.dumps(closed_tables(spec), sort_keys=True, separators=(",", ":"))
+                        + "\n")
+        written.append(path)
     if families is None:
+        for law in laws.LAWS.values():
+            reason = laws.not_applicable(law, spec.domain)
+            if reason is not None:
+                print(f"{spec.name}: {reason} (not generated)", file=sys.stderr)
         path = folder / "element.json"
         path.write_text(json.dumps(element_metadata(spec, built), sort_keys=True,
                                          separators=(",", ":"))

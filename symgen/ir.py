@@ -67,6 +67,9 @@ class Kernel:
     doc: str
     arrays: list[Array]
     body: list = field(default_factory=list)
+    #: for kernels with ``Loop`` statements: n, d, np (pairs), ndof, nnz (gram pattern) and
+    #: ``tables`` {name: ints} (pair_k, pair_m, pair_index, pattern_a, pattern_b)
+    loop_tables: dict | None = None
 
     def role(self, role: str) -> list[Array]:
         """The arrays of one role, in signature order."""
@@ -146,6 +149,65 @@ def kernel_operations(kernel: Kernel, points: int | None = None) -> int:
                 total += repeat * 2 * st.nnz
             elif isinstance(st, PointLoop):
                 total += count(st.body, repeat * (points or st.default_points))
+            elif isinstance(st, Loop):
+                t = kernel.loop_tables
+                total += repeat * LOOP_OPS[st.op](t["n"], t["d"], t["np"], t["nnz"], st.args)
         return total
 
     return count(kernel.body, 1)
+
+
+# --- looped operations (large elements): tight loops over pair tables -------------------------
+#
+# For an element with n shape functions in dim d, the pairs (k, m), k <= m, of the gram form
+# are stored in row order; the family tables ``pair_k``, ``pair_m`` (npairs) and
+# ``pair_index`` (n * n: the pair of (k, m) and (m, k)) and the gram pattern tables
+# ``pattern_a``, ``pattern_b`` (its (a, b) entries) drive the loops, so the emitted code does
+# not grow with the pattern.  ``scale`` is an expression (a number, or e.g. alpha[0]).
+
+
+@dataclass(frozen=True)
+class Loop:
+    """One looped operation ``op`` on named arrays (see ``LOOP_OPS``)."""
+
+    op: str
+    target: str
+    args: tuple
+    scale: object = 1
+    variant: str = ""
+
+
+#: op: (description, operation count per element given (n, d, npairs, nnz)).
+LOOP_OPS = {
+    # target[a] = 0 for a < args[0]
+    "zero": lambda n, d, p, z, a: 0,
+    # target[a] += scale sum_c left[k d + c] right[m d + c], a = (k, m); args (left, right)
+    "pair_products": lambda n, d, p, z, a: p * (2 * d + 1),
+    # target[a] += scale sum_b D_ab source[b] (D symmetric from the pattern); args (values, source)
+    "sym_pattern": lambda n, d, p, z, a: 4 * z,
+    # target[k d + c] += scale sum_m T'(k, m) q[m d + c]; args (h, q)
+    "pair_force": lambda n, d, p, z, a: n * n * (2 * d + 1),
+    # W[a ndof + j] += scale sum_b D_ab Gamma_b,j(q); args (values, q)
+    "gamma": lambda n, d, p, z, a: 2 * z * 2 * d * 2,
+    # J[i ndof + j] += scale sum_a Gamma_a,i(q) W[a ndof + j]; args (q, W)
+    "gamma_t": lambda n, d, p, z, a: p * 2 * d * n * d * 2,
+    # J[(p d + c) ndof + q d + c] += scale T'(p, q); args (h,)
+    "kron_pair": lambda n, d, p, z, a: n * n * (d + 1),
+    # target[a] = q[s] q[t], a = (s, t), s <= t < ndof; args (q,)
+    "dof_products": lambda n, d, p, z, a: n * d * (n * d + 1) // 2,
+    # target[i] += scale sum_j (K2 + K1 kron I)_ij q[j]; args (q, k2, k1)
+    "cij_force": lambda n, d, p, z, a: 3 * (n * d) ** 2,
+    # target[i ndof + j] += scale ((K2 + K1 kron I)_ij + second[i ndof + j]); args (k2, k1,
+    # second)
+    "cij_jacobian": lambda n, d, p, z, a: 3 * (n * d) ** 2,
+    # target[0] += e^T K2 e / 4 + e^T (K1 kron I) e / 2 + u0; args (q, k2, k1, u0)
+    "cij_energy": lambda n, d, p, z, a: 3 * (n * d) ** 2,
+    # target[i ndof + j] += scale sum_r X[r ndof + i] Y[r ndof + j]; args (X, Y, rows)
+    "rows_product": lambda n, d, p, z, a: 2 * a[2] * (n * d) ** 2,
+    # target[(k d + c) ndof + p d + c] += scale G[k n + p]; args (G,)
+    "kron_full": lambda n, d, p, z, a: n * n * (d + 1),
+    # target[i] += scale source[i] for i < size; args (source, size)
+    "axpy": lambda n, d, p, z, a: 2 * a[1],
+    # target[0] += scale sum_i left[i] right[i], i < size; args (left, right, size)
+    "dot": lambda n, d, p, z, a: 2 * a[2],
+}

@@ -27,11 +27,12 @@ from __future__ import annotations
 import sympy as sp
 
 from symgen import derive, laws
-from symgen.element import ElementSpec, height, length, width
+from symgen.element import ElementSpec
 from symgen.ir import (
     Array,
     Assign,
     Kernel,
+    Loop,
     PointLoop,
     SparseProduct,
     Temporaries,
@@ -56,9 +57,55 @@ def _kernel_name(quantities) -> str:
 DAMPING_KERNELS = ("damping_force", "damping_jacobians", "damped_force_jacobians")
 
 
+#: Elements with more shape functions than this get the looped forms: gram and damping
+#: kernels as tight loops over pair tables (``Loop`` statements) instead of unrolled code,
+#: and closed-form invariants as exact data tables (``closed.json``, evaluated by the
+#: runtime) instead of unrolled closed-form kernels.
+LOOPED_ABOVE = 9
+#: ... and the gram (damping) families whose storage pattern has more entries than this are
+#: looped in any element: unrolled they are megabytes of C that take minutes to compile
+#: (beam3d's damping_general: 1 MB, 185 s).  Below, unrolled wins at run time and stays
+#: (beam3d_3node's gram_straight: 0.84 against 1.87 us per force + Jacobian; beam3d's
+#: damping_straight: 3.9 against 5.6 us per damped force + Jacobians, batch 1000).
+LOOPED_PATTERN_ABOVE = {"gram": 700, "damping": 250}
+
+
+#: Elements with at least this many coordinates keep their straight closed forms as exact
+#: data (closed.json, evaluated by the runtime with the law algebra) instead of unrolled
+#: closed-form kernels (beam3d_3node's took 15 s to compile, the plate's did not finish).
+CLOSED_AS_DATA_FROM = 27
+
+
+def closed_as_data(spec: ElementSpec) -> bool:
+    """Whether the straight closed forms of ``spec`` are emitted as data (closed.json)."""
+    return spec.n_shape > LOOPED_ABOVE or spec.ndof >= CLOSED_AS_DATA_FROM
+
+
+#: ... and the quadrature families of elements with at least this many coordinates get the
+#: looped Jacobian at each point (unrolled, beam3d_3node's quadrature_law took 200 s).
+LOOPED_QUADRATURE_FROM = 27
+
+
+def looped(spec: ElementSpec, family: str | None = None) -> bool:
+    """Whether ``spec`` (or its gram, damping or quadrature ``family``) gets the looped
+    forms."""
+    if spec.n_shape > LOOPED_ABOVE:
+        return True
+    if family in ("quadrature", "quadrature_law"):
+        return spec.ndof >= LOOPED_QUADRATURE_FROM
+    if family is None or not family.startswith(("gram_", "damping_")):
+        return False
+    method, _, variant = family.partition("_")
+    return len(derive.patterns(spec, variant).gram) > LOOPED_PATTERN_ABOVE[method]
+
+
 def families(spec: ElementSpec) -> list[str]:
     """Names of every kernel family generated for an element."""
-    return ["invariants", "invariants_general", "quadrature", "cij"] + [
+    # the general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
+    # map of the whole general pattern); otherwise curved references take the law path
+    general = ["invariants_general"] if not closed_as_data(spec) and len(
+        derive.patterns(spec, "general").gram) <= LOOPED_PATTERN_ABOVE["gram"] else []
+    return ["invariants", *general, "quadrature", "cij"] + [
         f"gram_{v}" for v in derive.VARIANTS] + ["laws", "quadrature_law"] + [
         f"damping_{v}" for v in derive.VARIANTS]
 
@@ -66,6 +113,8 @@ def families(spec: ElementSpec) -> list[str]:
 def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     """All kernels of one family."""
     if family == "invariants":
+        if closed_as_data(spec):  # closed forms as data (closed.json), for the runtime
+            return [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
         return invariant_kernels(spec)
     if family == "laws":
         return law_kernels(spec)
@@ -77,8 +126,10 @@ def build_family(spec: ElementSpec, family: str) -> list[Kernel]:
     method, _, variant = family.partition("_")
     variant = variant or "straight"
     if method == "damping":
-        return [gram_damping_kernel(spec, name, variant) for name in DAMPING_KERNELS]
-    builder = {"quadrature": quadrature_kernel, "cij": cij_kernel, "gram": gram_kernel}[method]
+        builder = looped_damping_kernel if looped(spec, family) else gram_damping_kernel
+        return [builder(spec, name, variant) for name in DAMPING_KERNELS]
+    builder = {"quadrature": quadrature_kernel, "cij": cij_kernel,
+               "gram": looped_gram_kernel if looped(spec, family) else gram_kernel}[method]
     return [builder(spec, quantities, variant) for quantities in KERNELS]
 
 
@@ -192,17 +243,20 @@ def invariant_kernels(spec: ElementSpec) -> list[Kernel]:
             _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
 
 
-def _geometry_subs(name: str) -> dict:
-    l_, h_, w_ = refs(name, 3)
-    return {length: l_, height: h_, width: w_}
+def _geometry_subs(spec: ElementSpec, name: str) -> dict:
+    return dict(zip(spec.domain.parameters, refs(name, 3), strict=True))
+
+
+def _geometry_doc(spec: ElementSpec) -> str:
+    return f"{', '.join(spec.domain.labels)} in m"
 
 
 def _shape_values_kernel(spec: ElementSpec) -> Kernel:
     arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
-              Array("geometry", 3, "shared", "length, height, width in m"),
+              Array("geometry", 3, "shared", _geometry_doc(spec)),
               Array("values", spec.n_shape, "output", "shape functions s_k")]
-    subs = {**_geometry_subs("geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
-                                                      strict=True))}
+    subs = {**_geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
     body: list = []
     emit_cse(body, [(f"values[{k}]", s.subs(subs), False)
                     for k, s in enumerate(spec.shape_functions)], Temporaries())
@@ -213,11 +267,11 @@ def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
     pattern = derive.gradient_pattern(spec)
     grads = derive.shape_gradients(spec)
     arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
-              Array("geometry", 3, "shared", "length, height, width in m"),
+              Array("geometry", 3, "shared", _geometry_doc(spec)),
               Array("gradients", len(pattern), "output",
                     "structurally nonzero ds_k/dx_alpha, in gradient-pattern order")]
-    subs = {**_geometry_subs("geometry"), **dict(zip(spec.coordinates, refs("point", spec.dim),
-                                                      strict=True))}
+    subs = {**_geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
     body: list = []
     emit_cse(body, [(f"gradients[{j}]", grads[k, c].subs(subs), False)
                     for j, (k, c) in enumerate(pattern)], Temporaries())
@@ -236,8 +290,8 @@ def _integral_arrays(spec: ElementSpec, pattern: derive.Patterns, role: str) -> 
 def _straight_integrals_kernel(spec: ElementSpec) -> Kernel:
     pattern = derive.patterns(spec, "straight")
     integrals = derive.straight_integrals(spec)
-    subs = _geometry_subs("geometry")
-    arrays = [Array("geometry", 3, "batch", "length, height, width in m"),
+    subs = _geometry_subs(spec, "geometry")
+    arrays = [Array("geometry", 3, "batch", _geometry_doc(spec)),
               *_integral_arrays(spec, pattern, "output")]
     pairs = derive.pairs(spec.n_shape)
     outputs = [(f"i4[{j}]", integrals.i4(key), False) for j, key in enumerate(pattern.i4)]
@@ -287,9 +341,13 @@ def _invariants_kernel(spec: ElementSpec, variant: str) -> Kernel:
 def law_kernels(spec: ElementSpec) -> list[Kernel]:
     """Per law its coefficients per domain (and default shear corrections), and the closed-form
     straight invariants of any law from its coefficients."""
-    built = [_law_coefficients_kernel(spec, law) for law in laws.LAWS.values()]
-    built += [_law_correction_kernel(spec, law) for law in laws.LAWS.values()
+    applicable = derive.applicable_laws(spec).values()
+    built = [_law_coefficients_kernel(spec, law) for law in applicable]
+    built += [_law_correction_kernel(spec, law) for law in applicable
               if law.default_corrections is not None]
+    if closed_as_data(spec):  # closed forms as data (closed.json), for the runtime
+        derive.check_law_patterns(spec)
+        return built
     return built + [_law_invariants_straight_kernel(spec)]
 
 
@@ -310,12 +368,12 @@ def _law_coefficients_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
     arrays, subs = _law_material(spec, law)
     names = ", ".join(laws.coefficient_names(spec.dim))
     arrays += [Array(domain, size, "output", f"law coefficients ({names}) on the {domain} (Pa)")
-               for domain in laws.DOMAINS]
+               for domain in derive.law_domains(spec)]
     coefficients = law.domain_coefficients(spec.dim)
     body: list = []
     emit_cse(body, [(f"{domain}[{i}]", sp.sympify(value).subs(subs), False)
-                    for domain in laws.DOMAINS for i, value in enumerate(coefficients[domain])],
-             Temporaries())
+                    for domain in derive.law_domains(spec)
+                    for i, value in enumerate(coefficients[domain])], Temporaries())
     return Kernel(f"law_{law.name}", f"Law coefficients per domain of {law.name}: "
                   f"{law.description}.", arrays, body)
 
@@ -339,15 +397,15 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
     npairs = len(derive.pairs(spec.n_shape))
     size = len(laws.coefficient_layout(spec.dim))
     parts = [(derive.straight_domain_integrals(spec, domain), refs(domain, size))
-             for domain in laws.DOMAINS]
+             for domain in derive.law_domains(spec)]
     density = ref("density", 0)
     values = derive.law_invariant_values(spec, pattern, parts,
                                          derive.straight_integrals(spec).mass, density)
-    subs = _geometry_subs("geometry")
+    subs = _geometry_subs(spec, "geometry")
     names = ", ".join(laws.coefficient_names(spec.dim))
-    arrays = [Array("geometry", 3, "batch", "length, height, width in m"),
+    arrays = [Array("geometry", 3, "batch", _geometry_doc(spec)),
               *[Array(domain, size, "shared", f"law coefficients ({names}) on the {domain} "
-                      "(Pa)") for domain in laws.DOMAINS],
+                      "(Pa)") for domain in derive.law_domains(spec)],
               Array("density", 1, "shared", "density rho (kg/m^3)"),
               Array("mass", npairs, "output", "shape-level mass matrix (kg), upper triangle"),
               Array("k1", npairs, "output", "shape-level K1 (N/m), upper triangle"),
@@ -416,7 +474,11 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
             bs = sp.Matrix(n, d, _materialize(point, temps, list(b * stress)))
             force = -wdet * (bs * f.T)
             _store(point, "force", list(force), accumulate=True)
-        if "jacobian" in quantities:
+        if "jacobian" in quantities and looped(spec, "quadrature"):
+            dn = sp.Matrix(d, d, lambda x_, y_: lam_ + (2 * g_ if x_ == y_ else 0))
+            _looped_point_jacobian(spec, point, b, f, stress, dn,
+                                   [g_] * len(laws.shear_pairs(d)), -wdet)
+        elif "jacobian" in quantities:
             a = sp.Matrix(n, d, _materialize(point, temps, list(b * f.T)))
             bsb = _materialize(point, temps, [(b[k, :] * stress * b[p, :].T)[0]
                                               for k, p in derive.pairs(n)])
@@ -437,8 +499,11 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
             _store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_points(spec)))
+    if looped(spec, "quadrature") and "jacobian" in quantities:
+        arrays += _point_locals(spec, damped=False)
     return Kernel(_kernel_name(quantities), f"Elastic {' and '.join(quantities)} by Gauss "
-                  "quadrature at every call (no invariants).", arrays, body)
+                  "quadrature at every call (no invariants).", arrays, body,
+                  _loop_tables(spec, "straight") if looped(spec, "quadrature") else None)
 
 
 def _default_points(spec: ElementSpec) -> int:
@@ -484,6 +549,8 @@ def cij_kernel(spec: ElementSpec, quantities, variant: str = "straight") -> Kern
                             "maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38"))
         arrays.append(Array("second", ndof * ndof, "local", "the double sum of eq. 38"))
     arrays += [_output(spec, quantity) for quantity in quantities]
+    if looped(spec):
+        return _looped_cij_kernel(spec, quantities, variant, arrays)
     temps = Temporaries()
     body: list = []
     q, _, _ = _translate(spec, body, temps, with_reference=False)
@@ -849,7 +916,13 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
     if "force" in quantities:
         bs = sp.Matrix(n, d, _materialize(point, temps, list(bmat * s_total)))
         _store(point, "force", list(-(bs * f.T)), accumulate=True)
-    if "jacobian" in quantities:
+    if "jacobian" in quantities and looped(spec, "quadrature_law"):
+        if not damped:
+            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1)
+        else:
+            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
+                                   material=name == "damped_force_jacobians", fdot=fdot)
+    elif "jacobian" in quantities:
         z = [_materialize(point, temps, row) for row in z_of(f)]
         y = [_materialize(point, temps, row) for row in _law_rows(dn, dshear, z, d)]
         geometric = _materialize(point, temps, [(bmat[k, :] * s_total * bmat[p, :].T)[0]
@@ -884,6 +957,8 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
             _store_symmetric(point, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)),
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
+    if looped(spec, "quadrature_law") and "jacobian" in quantities:
+        arrays += _point_locals(spec, damped)
     doc = {"force": "elastic force", "jacobian": "elastic Jacobian", "energy": "strain energy",
            "force_jacobian": "elastic force and Jacobian",
            "damping_force": "Kelvin-Voigt damping force",
@@ -891,7 +966,8 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
            "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
            "respect to e and e_dot"}[name]
     return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
-                  "call (volume and axis rules).", arrays, body)
+                  "call (volume and axis rules).", arrays, body,
+                  _loop_tables(spec, "straight") if looped(spec, "quadrature_law") else None)
 
 
 def _law_rows(dn, dshear, z, d: int) -> list:
@@ -906,3 +982,193 @@ def _law_rows(dn, dshear, z, d: int) -> list:
 def _default_law_points(spec: ElementSpec) -> int:
     """Volume points plus axis points of the default rule."""
     return _default_points(spec) + spec.quadrature[0]
+
+
+# --- looped forms (large elements): gram and damping as loops over pair tables ---------------
+
+
+def _loop_tables(spec: ElementSpec, variant: str) -> dict:
+    """Sizes and tables of the ``Loop`` statements (see ``symgen.ir``)."""
+    n = spec.n_shape
+    pairs = derive.pairs(n)
+    pidx = derive.pair_index(n)
+    pattern = derive.patterns(spec, variant).gram
+    return {"n": n, "d": spec.dim, "np": len(pairs), "ndof": spec.ndof, "nnz": len(pattern),
+            "tables": {"pair_k": [k for k, _ in pairs], "pair_m": [m for _, m in pairs],
+                       "pair_index": [pidx[(k, m)] for k in range(n) for m in range(n)],
+                       "pattern_a": [a for a, _ in pattern],
+                       "pattern_b": [b for _, b in pattern]}}
+
+
+def _looped_start(spec: ElementSpec, body: list, velocities: bool) -> list[Array]:
+    """Node-relative coordinates into the local arrays Q, Q0, DQ (and QD): unrolled, with
+    the exact position differences of ``_translate``."""
+    temps = Temporaries()
+    q, q0, dq = _translate(spec, body, temps, with_reference=True)
+    named = [("Q", q, "coordinates relative to the first node"),
+             ("Q0", q0, "reference coordinates relative to the first node"),
+             ("DQ", dq, "displacements relative to the first node")]
+    if velocities:
+        named.append(("QD", _velocities(spec), "velocities relative to the first node"))
+    for name, values, _ in named:
+        for i, value in enumerate(values):
+            body.append(Assign(f"{name}[{i}]", sp.sympify(value)))
+    return [Array(name, spec.ndof, "local", doc) for name, _, doc in named]
+
+
+def looped_gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
+    """``gram_kernel`` as tight loops over the pair and pattern tables (large elements):
+    g = Q0 dQ^T + dQ Q^T, h = Dm g, U = g.h, F = -T'(h) Q,
+    J = -(2 Gamma^T (Dm Gamma) + T'(h) kron I)."""
+    npairs = len(derive.pairs(spec.n_shape))
+    pattern = derive.patterns(spec, variant)
+    body: list = []
+    local = _looped_start(spec, body, velocities=False)
+    local += [Array("g", npairs, "local", "DeltaG, upper triangle"),
+              Array("h", npairs, "local", "Dm g")]
+    body += [Loop("zero", "g", (npairs,)), Loop("pair_products", "g", ("Q0", "DQ")),
+             Loop("pair_products", "g", ("DQ", "Q")), Loop("zero", "h", (npairs,)),
+             Loop("sym_pattern", "h", ("gram", "g"))]
+    if "energy" in quantities:
+        body.append(Loop("dot", "energy", ("g", "h", npairs)))
+    if "force" in quantities:
+        body.append(Loop("pair_force", "force", ("h", "Q"), -1))
+    if "jacobian" in quantities:
+        local.append(Array("W", npairs * spec.ndof, "local", "Dm Gamma"))
+        body += [Loop("zero", "W", (npairs * spec.ndof,)), Loop("gamma", "W", ("gram", "Q")),
+                 Loop("gamma_t", "jacobian", ("Q", "W"), -2),
+                 Loop("kron_pair", "jacobian", ("h",), -1)]
+    doc = {"energy": "strain energy U = g^T Dm g", "force": "elastic force F = -T' Q",
+           "jacobian": "elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I)"}
+    arrays = [*_coordinates(spec, True),
+              Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
+              *[_output(spec, quantity) for quantity in quantities], *local]
+    return Kernel(_kernel_name(quantities),
+                  "; ".join(doc[q] for q in quantities).capitalize() + " (looped).", arrays,
+                  body, _loop_tables(spec, variant))
+
+
+def looped_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
+    """``gram_damping_kernel`` as tight loops (large elements): gd = alpha (Qd Q^T + Q Qd^T),
+    h = Dm (gd [+ g]), force -T'(h) Q, d/de = -(2 Gamma^T Dm (alpha Gammadot [+ Gamma])
+    + T'(h) kron I), d/de_dot = -2 alpha Gamma^T Dm Gamma."""
+    npairs, ndof = len(derive.pairs(spec.n_shape)), spec.ndof
+    pattern = derive.patterns(spec, variant)
+    e_dot, tail = _damping_arrays(spec, name)
+    alpha = ref("alpha", 0)
+    combined = name == "damped_force_jacobians"
+    body: list = []
+    local = _looped_start(spec, body, velocities=True)
+    local += [Array("strain", npairs, "local", "alpha dG/dt (+ DeltaG), upper triangle"),
+              Array("h", npairs, "local", "Dm strain")]
+    body += [Loop("zero", "strain", (npairs,)), Loop("pair_products", "strain", ("QD", "Q"), alpha),
+             Loop("pair_products", "strain", ("Q", "QD"), alpha)]
+    if combined:
+        body += [Loop("pair_products", "strain", ("Q0", "DQ")),
+                 Loop("pair_products", "strain", ("DQ", "Q"))]
+    body += [Loop("zero", "h", (npairs,)), Loop("sym_pattern", "h", ("gram", "strain"))]
+    if name != "damping_jacobians":
+        body.append(Loop("pair_force", "force", ("h", "Q"), -1))
+    if name != "damping_force":
+        local.append(Array("W", npairs * ndof, "local", "Dm Gamma, then Dm (Gamma [+] alpha "
+                           "Gammadot)"))
+        body += [Loop("zero", "W", (npairs * ndof,)), Loop("gamma", "W", ("gram", "Q")),
+                 Loop("gamma_t", "jacobian_dot", ("Q", "W"), -2 * alpha)]
+        if combined:
+            body.append(Loop("gamma", "W", ("gram", "QD"), alpha))
+            body.append(Loop("gamma_t", "jacobian", ("Q", "W"), -2))
+        else:
+            body += [Loop("zero", "W", (npairs * ndof,)), Loop("gamma", "W", ("gram", "QD")),
+                     Loop("gamma_t", "jacobian", ("Q", "W"), -2 * alpha)]
+        body.append(Loop("kron_pair", "jacobian", ("h",), -1))
+    doc = {"damping_force": "Kelvin-Voigt damping force -T'(Dm alpha gd) Q",
+           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
+           "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
+           "respect to e and e_dot, in one pass"}[name]
+    arrays = [*_coordinates(spec, True), e_dot,
+              Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
+              *tail, *local]
+    return Kernel(name, doc + " (gram form, looped).", arrays, body,
+                  _loop_tables(spec, variant))
+
+
+def _looped_cij_kernel(spec: ElementSpec, quantities, variant: str, arrays: list) -> Kernel:
+    """``cij_kernel`` with its coordinate-level parts as loops (large elements): the products
+    p_st, K2 = k2_matrix p and the double sum of eq. 38 as sparse products, force, Jacobian
+    and energy as loops over the coordinates."""
+    ndof = spec.ndof
+    sizes = cij_sizes(spec, variant)
+    temps = Temporaries()
+    body: list = []
+    q, _, _ = _translate(spec, body, temps, with_reference=False)
+    for i, value in enumerate(q):
+        body.append(Assign(f"Q[{i}]", sp.sympify(value)))
+    body.append(Loop("dof_products", "products", ("Q",)))
+    body.append(SparseProduct("k2", "k2_matrix", "products", sizes["k2_rows"],
+                              sizes["k2_nnz"]))
+    if "energy" in quantities:
+        body.append(Loop("cij_energy", "energy", ("Q", "k2", "k1", "u0")))
+    if "force" in quantities:
+        body.append(Loop("cij_force", "force", ("Q", "k2", "k1"), -1))
+    if "jacobian" in quantities:
+        body.append(SparseProduct("second", "jacobian_matrix", "products", ndof * ndof,
+                                  sizes["jacobian_nnz"]))
+        body.append(Loop("cij_jacobian", "jacobian", ("k2", "k1", "second"), -1))
+    doc = {"energy": "strain energy by eq. 39", "force": "elastic force F = -(K2(e) + K1) e, "
+           "eqs. 25-35", "jacobian": "elastic Jacobian by eq. 38"}
+    arrays = [*arrays, Array("Q", ndof, "local", "coordinates relative to the first node")]
+    return Kernel(_kernel_name(quantities),
+                  "; ".join(doc[q] for q in quantities).capitalize() + " (looped).", arrays,
+                  body, _loop_tables(spec, "straight"))
+
+
+def _z_rows(bmat, fmat, n: int, d: int) -> list:
+    """Z_I(k, c) = d eps_I / d Q_kc (Voigt rows) with gradients ``bmat`` and the deformation
+    gradient ``fmat``."""
+    rows = [[bmat[k, a] * fmat[c, a] for k in range(n) for c in range(d)] for a in range(d)]
+    rows += [[bmat[k, a] * fmat[c, b] + bmat[k, b] * fmat[c, a] for k in range(n)
+              for c in range(d)] for a, b in laws.shear_pairs(d)]
+    return rows
+
+
+def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
+    size = laws.voigt_size(spec.dim) * spec.ndof
+    arrays = [Array("Z", size, "local", "d eps / d e per Voigt row"),
+              Array("Y", size, "local", "D Z"),
+              Array("GEO", spec.n_shape**2, "local", "b S b^T")]
+    if damped:
+        arrays.append(Array("ZD", size, "local", "d eps_dot / d e_dot per Voigt row"))
+    return arrays
+
+
+def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn, dshear,
+                           scale, material: bool = True, fdot=None) -> None:
+    """The Jacobian at one point as loops (large elements): Z and Y = D Z stored (unrolled,
+    small), then jacobian += scale (sum_I Z_I Y_I^T + (b S b^T) kron I); with ``fdot``
+    (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric [+ material]) and
+    jacobian_dot += scale alpha sum_I Z_I Y_I^T."""
+    n, d, ndof = spec.n_shape, spec.dim, spec.ndof
+    rows = laws.voigt_size(d)
+    for r, row in enumerate(_z_rows(bmat, fmat, n, d)):
+        for i, value in enumerate(row):
+            point.append(Assign(f"Z[{r * ndof + i}]", sp.sympify(value)))
+    zref = [[ref("Z", r * ndof + i) for i in range(ndof)] for r in range(rows)]
+    for r, row in enumerate(_law_rows(dn, dshear, zref, d)):
+        for i, value in enumerate(row):
+            point.append(Assign(f"Y[{r * ndof + i}]", sp.sympify(value)))
+    for k in range(n):
+        for p in range(n):
+            point.append(Assign(f"GEO[{k * n + p}]",
+                                sp.sympify((bmat[k, :] * smat * bmat[p, :].T)[0])))
+    if fdot is None:
+        point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
+    else:
+        alpha = ref("alpha", 0)
+        for r, row in enumerate(_z_rows(bmat, fdot, n, d)):
+            for i, value in enumerate(row):
+                point.append(Assign(f"ZD[{r * ndof + i}]", sp.sympify(value)))
+        point.append(Loop("rows_product", "jacobian", ("Y", "ZD", rows), scale * alpha))
+        if material:
+            point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
+        point.append(Loop("rows_product", "jacobian_dot", ("Z", "Y", rows), scale * alpha))
+    point.append(Loop("kron_full", "jacobian", ("GEO",), scale))

@@ -34,8 +34,11 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-#: Integration domains of law parts, in storage order.
-DOMAINS = ("volume", "axis")
+#: Integration domains of law parts, in storage order: subdomains of an element's reference
+#: domain (symgen/domains.py).  ``volume`` is every element's; ``axis`` (y = z = 0) is the
+#: beams'; ``midsurface`` (z = 0) is the plates'.  A law with a part on a subdomain that an
+#: element's domain lacks does not apply to that element (``not_applicable``).
+DOMAINS = ("volume", "axis", "midsurface")
 
 young, poisson = sp.symbols("E nu", positive=True)
 #: Lame parameters in terms of E and nu.
@@ -163,6 +166,17 @@ LAWS: dict[str, Law] = {
     "ecm": Law("ecm", "enhanced continuum mechanics: D0 over the volume, the Poisson part "
                "on the beam axis (no Poisson locking)", _ecm, timoshenko_correction),
 }
+
+
+def not_applicable(law: Law, domain) -> str | None:
+    """Why ``law`` does not apply to elements on ``domain`` (a ``symgen.domains.Domain``), or
+    None when it does: one of its parts integrates over a subdomain the domain lacks."""
+    for part in law.parts(domain.dim):
+        if part.domain not in domain.subdomain_names:
+            return (f"law {law.name!r} does not apply to the {domain.name} domain: its part "
+                    f"{part.name!r} integrates over the {part.domain}, which a {domain.name} "
+                    f"has not (subdomains: {', '.join(domain.subdomain_names)})")
+    return None
 
 
 def get(name: str) -> Law:

@@ -32,21 +32,34 @@ from conftest import (
 
 from runtime import Element
 from runtime import invariants as inv
-from runtime.kernels import kernel_family
+from runtime.kernels import element_kind, kernel_family
 
 SHAPES = ["straight", "curved"]
 ALPHA = 0.01  # s
 
 all_kinds = pytest.mark.parametrize("kind", KINDS)
+#: kinds ECM applies to (its Poisson part lives on the beam axis: not the plates)
+ECM_KINDS = [k for k in KINDS if "ecm" in element_kind(k).meta["laws"]]
+ecm_kinds = pytest.mark.parametrize("kind", ECM_KINDS)
+#: (law, kind) pairs that exist
+LAW_KINDS = [(law, k) for law in ("svk", "ecm") for k in KINDS
+             if law in element_kind(k).meta["laws"]]
+
+
+def default_law(kind: str) -> str:
+    """The law the damping tests use: ecm where it applies (two domains), svk otherwise."""
+    return "ecm" if kind in ECM_KINDS else "svk"
 all_methods = pytest.mark.parametrize("method", METHODS)
 all_backends = pytest.mark.parametrize("backend", BACKENDS)
 all_shapes = pytest.mark.parametrize("shape", SHAPES)
 
 
 @functools.cache
-def law_element(kind: str, law: str = "ecm", method: str = "gram", backend: str = "c",
+def law_element(kind: str, law: str | None = None, method: str = "gram", backend: str = "c",
                 shape: str = "straight", damping: float = ALPHA) -> Element:
-    """The typical element of conftest (straight, or the arc) with a law and damping."""
+    """The typical element of conftest (straight, or the arc) with a law (default: ecm
+    where it applies) and damping."""
+    law = law or default_law(kind)
     e0 = arc_reference(kind) if shape == "curved" else None
     return Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, e0=e0, method=method,
                    backend=backend, law=law, damping=damping)
@@ -100,7 +113,7 @@ def packed(dim: int, matrix: np.ndarray) -> np.ndarray:
     return np.concatenate([matrix[rows, cols], np.diag(matrix)[dim:]])
 
 
-@all_kinds
+@ecm_kinds
 def test_law_coefficients_are_the_documented_voigt_matrices(kind):
     d = dim_of(kind)
     el = law_element(kind)
@@ -152,8 +165,7 @@ def test_bad_law_parameters(changes, match):
 # --- agreement of methods and backends, every law --------------------------------------------
 
 
-@pytest.mark.parametrize("law", ["svk", "ecm"])
-@all_kinds
+@pytest.mark.parametrize("law, kind", LAW_KINDS)
 @all_methods
 @all_backends
 @all_shapes
@@ -174,7 +186,7 @@ def test_methods_and_backends_agree(law, kind, method, backend, shape):
     assert results["total_de_dot"].shape == (m, ndof, ndof)
 
 
-@all_kinds
+@ecm_kinds
 @all_shapes
 def test_ecm_and_svk_differ(kind, shape):
     ecm, svk = evaluate(kind, "ecm", "gram", "c", shape), evaluate(kind, "svk", "gram", "c",
@@ -182,7 +194,7 @@ def test_ecm_and_svk_differ(kind, shape):
     assert rel_diff(ecm["force"], svk["force"]) > 1e-3
 
 
-@all_kinds
+@ecm_kinds
 def test_closed_form_and_quadrature_invariants_of_ecm_agree(kind):
     """The straight element's closed-form ECM invariants against the quadrature (volume and
     axis rules) that curved references use, which is exact for straight ones."""
@@ -198,7 +210,7 @@ def test_closed_form_and_quadrature_invariants_of_ecm_agree(kind):
                     el.invariants["gram"]) > 1e-3
 
 
-@all_kinds
+@ecm_kinds
 @all_methods
 def test_rigidly_placed_straight_reference_uses_the_local_frame(kind, method, rng):
     """ECM is not isotropic: it acts in the element's local frame, so a rotated element gives
@@ -228,7 +240,7 @@ def central_difference(function, x: np.ndarray, step: float) -> np.ndarray:
     return (values[: x.size] - values[x.size:]) / (2 * step)
 
 
-@all_kinds
+@ecm_kinds
 @all_methods
 @all_shapes
 def test_ecm_force_is_minus_energy_gradient_and_jacobian_its_derivative(kind, method, shape,
@@ -261,13 +273,15 @@ def test_damping_jacobians_are_the_damping_force_derivatives(kind, method, shape
     at_rest = el.damping_jacobians(e, np.zeros(el.ndof))[0]
     assert np.abs(at_rest).max() <= 1e-12 * np.abs(de).max()
     force, total_de, total_de_dot = el.internal_force_and_jacobians(e, e_dot)
-    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= 1e-12
-    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= 1e-12
+    # cij's elastic force is K(e) e with terms that cancel (1e-12 for the plate), the
+    # combined kernel forms the strain first
+    tol = 1e-10 if method == "cij" else 1e-12
+    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= tol
+    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= tol
     assert rel_diff(total_de_dot, de_dot) <= 1e-14
 
 
-@pytest.mark.parametrize("law", ["svk", "ecm"])
-@all_kinds
+@pytest.mark.parametrize("law, kind", LAW_KINDS)
 @all_methods
 @all_shapes
 def test_rigid_body_velocity_gives_zero_damping_force(law, kind, method, shape, rng):
@@ -280,7 +294,7 @@ def test_rigid_body_velocity_gives_zero_damping_force(law, kind, method, shape, 
     skew -= skew.T
     q = e.reshape(-1, d)
     velocity = q @ skew.T
-    positions = [0, d + 1]
+    positions = list(element_kind(kind).position_vectors)
     velocity[positions] = (q[positions] - q[0]) @ skew.T + rng.normal(size=d)
     force = el.damping_force(e, velocity.ravel())
     scale = ALPHA * force_scale() * np.abs(skew).max() * 1e3  # alpha E A times a 1/s rate
@@ -295,7 +309,7 @@ def test_damping_scales_with_alpha_and_zero_damping_gives_zero(kind, rng):
     e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
     e_dot = rng.standard_normal(el.ndof)
     assert np.abs(undamped.damping_force(e, e_dot)).max() == 0.0
-    double = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm",
+    double = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law=default_law(kind),
                      backend="numpy", damping=2 * ALPHA)
     assert rel_diff(double.damping_force(e, e_dot), 2 * el.damping_force(e, e_dot)) <= 1e-14
 
@@ -310,25 +324,28 @@ def test_damping_batches_buffers_and_group_kernel(kind, backend):
     e, e_dot = states(kind, "straight")
     m, ndof = e.shape
     force = el.damping_force(e, e_dot)
+    # a rounding or two (the looped NumPy kernels of large elements use BLAS products, whose
+    # summation order may depend on the batch size: a few more)
+    tol = 1e-12 if backend == "numpy" else 1e-14
     de, de_dot = el.damping_jacobians(e, e_dot)
     assert force.shape == (m, ndof) and de.shape == de_dot.shape == (m, ndof, ndof)
     single = el.damping_force(e[1], e_dot[1])
-    assert single.shape == (ndof,) and rel_diff(single, force[1]) <= 1e-14
+    assert single.shape == (ndof,) and rel_diff(single, force[1]) <= tol
     one_de, one_de_dot = el.damping_jacobians(e[1], e_dot[1])
-    assert one_de.shape == (ndof, ndof) and rel_diff(one_de_dot, de_dot[1]) <= 1e-14
+    assert one_de.shape == (ndof, ndof) and rel_diff(one_de_dot, de_dot[1]) <= tol
     # one configuration against several velocities
     broadcast = el.damping_force(e[1], e_dot)
-    assert rel_diff(broadcast[0], el.damping_force(e[1], e_dot[0])) <= 1e-14
+    assert rel_diff(broadcast[0], el.damping_force(e[1], e_dot[0])) <= tol
     out = np.full((m, ndof), np.nan)
     assert np.shares_memory(el.damping_force(e, e_dot, out=out), out)
-    assert rel_diff(out, force) <= 1e-14
+    assert rel_diff(out, force) <= tol
     buffers = [np.full((m, ndof), np.nan), np.full((m, ndof, ndof), np.nan),
                np.full((m, ndof, ndof), np.nan)]
     total = el.internal_force_and_jacobians(e, e_dot, *buffers)
     assert all(np.shares_memory(a, b) for a, b in zip(total, buffers, strict=True))
     group = el.damping_group_kernel("damping_force")
     grouped = group({"e": e, "e0": np.repeat(el.e0[None, :], m, axis=0), "e_dot": e_dot})
-    assert rel_diff(grouped["force"], force) <= 1e-14
+    assert rel_diff(grouped["force"], force) <= tol
     with pytest.raises(ValueError, match="e_dot"):
         el.damping_force(e, e_dot[:2])
     with pytest.raises(ValueError, match="e_dot"):
@@ -421,7 +438,7 @@ def test_planar_ecm_cantilever_matches_euler_bernoulli():
 # --- the symbolic law algebra -------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kind", ["beam2d"])
+@pytest.mark.parametrize("kind", ["beam2d", "beam2d_3node"])
 def test_law_algebra_reproduces_the_isotropic_formulas(kind):
     """symgen's law algebra (directional integrals per domain) with the svk coefficients gives
     the existing isotropic gram, C^ij, K1 and U0 exactly (checked at exact rational values)."""
@@ -433,10 +450,11 @@ def test_law_algebra_reproduces_the_isotropic_formulas(kind):
     spec = get(kind)
     svk = laws.get("svk").domain_coefficients(spec.dim)
     parts = [(derive.straight_domain_integrals(spec, domain), svk[domain])
-             for domain in laws.DOMAINS]
+             for domain in derive.law_domains(spec)]
     i4 = derive.straight_integrals(spec)
-    numbers = {derive.length: sp.Rational(7, 5), derive.height: sp.Rational(2, 9),
-               derive.width: sp.Rational(3, 11), laws.young: sp.Rational(13, 2),
+    length, height, width = spec.domain.parameters
+    numbers = {length: sp.Rational(7, 5), height: sp.Rational(2, 9),
+               width: sp.Rational(3, 11), laws.young: sp.Rational(13, 2),
                laws.poisson: sp.Rational(2, 7)}
     isotropic = {derive.lam: laws.LAME, derive.shear: laws.SHEAR}
 
@@ -468,3 +486,12 @@ def test_invariant_report_compares_law_invariants():
     assert "law ecm" in invariant_report.report(result)
     with pytest.raises(ValueError, match="--law"):
         invariant_report.compare("beam2d", law="hooke")
+
+
+@pytest.mark.parametrize("kind", [k for k in KINDS if k not in ECM_KINDS])
+def test_law_that_does_not_apply_is_refused_with_the_reason(kind):
+    """ECM's Poisson part integrates over the beam axis, which a plate has not: Element says
+    so (and so did the generator, which left the law out of element.json)."""
+    assert "ecm" in element_kind(kind).meta["laws_not_applicable"]
+    with pytest.raises(ValueError, match="law: law 'ecm' does not apply to the plate domain"):
+        Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm", backend="numpy")

@@ -1,13 +1,14 @@
 """Shear-deformable planar ANCF beam (Omar & Shabana): 2 nodes, r, r_x, r_y per node."""
 
+from symgen import domains
 from symgen.element import ElementSpec, length, x, y
 
 xi = x / length
 
 ELEMENT = ElementSpec(
     name="beam2d",
-    dim=2,
-    node_x=(0, length),
+    domain=domains.beam(2),
+    nodes=((0, 0), (length, 0)),
     vectors=("r", "r_x", "r_y"),
     shape_functions=(
         1 - 3 * xi**2 + 2 * xi**3,

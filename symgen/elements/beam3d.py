@@ -1,13 +1,14 @@
 """Shear-deformable 3D ANCF beam (Shabana & Yakoub): 2 nodes, r, r_x, r_y, r_z per node."""
 
+from symgen import domains
 from symgen.element import ElementSpec, length, x, y, z
 
 xi = x / length
 
 ELEMENT = ElementSpec(
     name="beam3d",
-    dim=3,
-    node_x=(0, length),
+    domain=domains.beam(3),
+    nodes=((0, 0, 0), (length, 0, 0)),
     vectors=("r", "r_x", "r_y", "r_z"),
     shape_functions=(
         1 - 3 * xi**2 + 2 * xi**3,
