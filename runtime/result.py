@@ -195,7 +195,7 @@ class Simulation:
                 summary["dynamic"]["kernel_s"] if compiled else 0.0)
             summary["kernels"] = sorted(self._built | {
                 f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
-                for f in ("invariants", b.element.family, *kernel_extras(b.element))})
+                for f in b.element.loaded_families})
         return 0
 
     def _modal(self) -> None:
@@ -294,13 +294,6 @@ class Simulation:
             states = States(np.asarray(self.history["t"], float), q, v)
         return Result(self.summary, sensors, self.static_q, self.modes, states, self.model,
                       exit_code)
-
-
-def kernel_extras(element) -> tuple[str, ...]:
-    """Kernel families an element loads beyond its invariants and method: the law's and the
-    damping's."""
-    extras = ("laws",) if element.law != "svk" else ()
-    return extras + ((element.damping_family,) if element.damping > 0 else ())
 
 
 def locking_warnings(scene: Scene) -> list[str]:
