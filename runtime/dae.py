@@ -76,9 +76,7 @@ class DAESystem:
                              if loads else np.zeros((0, self.free.size)))
         self.hubs = [self._hub(node, law, axis) for node, law, axis in model.hubs]
         # initial velocities of the free coordinates (m/s; the model's initial conditions)
-        initial = getattr(model, "initial_velocities", None)
-        self.initial_velocity = (np.asarray(initial(), float)[self.free] if initial
-                                 else np.zeros(self.free.size))
+        self.initial_velocity = model.initial_velocities()[self.free]
         self.projector = self._projector()
 
     @property
@@ -89,10 +87,8 @@ class DAESystem:
     def internal_forces(self, q_full: np.ndarray, v_full: np.ndarray, jacobian: bool):
         """Elastic (plus damping) force (size,) and the free-free Jacobian data with respect
         to q and to v (CSR order of ``model.pattern``; None when not asked or undamped)."""
-        if self.damped:
-            return self.model.internal_forces_damped(q_full, v_full, jacobian)
-        force, data = self.model.internal_forces(q_full, jacobian)
-        return force, data, None
+        return self.model.internal_forces_damped(q_full, v_full if self.damped else None,
+                                                 jacobian)
 
     def dissipation_power(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray,
                           vp: np.ndarray) -> float:

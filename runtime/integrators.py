@@ -72,6 +72,13 @@ NON_FINITE = "non-finite forces (the state blew up)"
 SINGULAR = "singular iteration matrix"
 
 
+def newton_mode(settings) -> str:
+    """The Newton mode of dynamic ``settings`` (ValueError naming the option otherwise)."""
+    if settings.newton not in NEWTON_MODES:
+        raise ValueError(f"newton: expected one of {NEWTON_MODES}, got {settings.newton!r}")
+    return settings.newton
+
+
 def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
     prescribed motions), M a = F - M_fp a_p with the joints' accelerations
@@ -92,13 +99,13 @@ class Integrator:
     """Shared machinery: forces, Newton linear solves, initial accelerations, the loop."""
 
     engine = "python"
+    compile_s = 0.0          # nothing to compile (the compiled engine's first-use cost)
+    modules: tuple[str, ...] = ()   # nothing built beyond the kernels
 
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
         self.dae = DAESystem(model, q_full)
         self.settings = settings
-        self.newton = getattr(settings, "newton", None) or "full"
-        if self.newton not in NEWTON_MODES:
-            raise ValueError(f"newton: expected one of {NEWTON_MODES}, got {self.newton!r}")
+        self.newton = newton_mode(settings)
         self.counters = Counters()
         #: seconds in steps, in element kernels and in factorisations (as the compiled engine)
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}

@@ -90,6 +90,9 @@ class Model:
         self.backend = backend or scene.solver.backend
         self.timing = {"compile_s": 0.0, "preprocess_s": 0.0}
         self.kernel_seconds = 0.0  # time inside element force/Jacobian kernels (s)
+        # energy dissipated by damping since the start of the current dynamic run (J), set
+        # by the engine at each output
+        self.dissipated_energy = 0.0
         start = time.perf_counter()
         self.bodies: dict[str, BodyMesh] = {}
         self.dim = None
@@ -228,8 +231,6 @@ class Model:
         band[self._band_index] = data[self._band_slots]
         return band.reshape(self.bandwidth + 1, nf)
 
-    # --- states ------------------------------------------------------------------------
-
     # --- element quantities ------------------------------------------------------------
 
     def internal_forces(self, q: np.ndarray, jacobian: bool = True):
@@ -238,17 +239,7 @@ class Model:
         One batched kernel call per body; results scattered with precomputed maps.  The
         time spent in the kernels themselves accumulates in ``kernel_seconds``.
         """
-        force = np.zeros(self.size)
-        data = np.zeros(self.pattern.nnz) if jacobian else None
-        for body, (keep, slots) in zip(self.bodies.values(), self._jac_targets, strict=True):
-            e = np.ascontiguousarray(q[body.element_dofs])
-            kernel = body.kernel("force_jacobian" if jacobian else "force")
-            start = time.perf_counter()
-            out = kernel({"e": e, "e0": body.element_e0})
-            self.kernel_seconds += time.perf_counter() - start
-            force += np.bincount(body.element_dofs.ravel(), out["force"].ravel(), self.size)
-            if jacobian:
-                data += np.bincount(slots, out["jacobian"].ravel()[keep], self.pattern.nnz)
+        force, data, _ = self.internal_forces_damped(q, None, jacobian)
         return force, data
 
     @property
@@ -256,34 +247,35 @@ class Model:
         """Whether any body has Kelvin-Voigt damping."""
         return any(body.damped for body in self.bodies.values())
 
-    def internal_forces_damped(self, q: np.ndarray, v: np.ndarray, jacobian: bool = True):
-        """Elastic plus damping force (size,) at coordinates q and velocities v (size,) and, if
-        asked, the free-free Jacobian data with respect to q and to v (CSR order, as
-        ``internal_forces``; zero for undamped bodies).  The Jacobian pass is one kernel per
-        damped body (damped_force_jacobians); the force pass adds damping_force to the
-        elastic force."""
+    def internal_forces_damped(self, q: np.ndarray, v: np.ndarray | None,
+                               jacobian: bool = True):
+        """Elastic plus damping force (size,) at coordinates q and velocities v (size,; None:
+        elastic only) and, if asked, the free-free Jacobian data with respect to q and to v
+        (CSR order; d/dv None without v, zero for undamped bodies).  The Jacobian pass is one
+        kernel per damped body (damped_force_jacobians); the force pass adds damping_force to
+        the elastic force."""
         force = np.zeros(self.size)
         data = np.zeros(self.pattern.nnz) if jacobian else None
-        data_dot = np.zeros(self.pattern.nnz) if jacobian else None
+        data_dot = np.zeros(self.pattern.nnz) if jacobian and v is not None else None
         for body, (keep, slots) in zip(self.bodies.values(), self._jac_targets, strict=True):
             dofs = body.element_dofs
-            e = np.ascontiguousarray(q[dofs])
-            inputs = {"e": e, "e0": body.element_e0}
-            if body.damped:
+            damped = body.damped and v is not None
+            inputs = {"e": np.ascontiguousarray(q[dofs]), "e0": body.element_e0}
+            if damped:
                 inputs["e_dot"] = np.ascontiguousarray(v[dofs])
             start = time.perf_counter()
-            if jacobian and body.damped:
+            if jacobian and damped:
                 out = body.kernel("damped_force_jacobians")(inputs)
             else:
                 out = body.kernel("force_jacobian" if jacobian else "force")(inputs)
-                if body.damped:
+                if damped:
                     out = dict(out, force=out["force"]
                                + body.kernel("damping_force")(inputs)["force"])
             self.kernel_seconds += time.perf_counter() - start
             force += np.bincount(dofs.ravel(), out["force"].ravel(), self.size)
             if jacobian:
                 data += np.bincount(slots, out["jacobian"].ravel()[keep], self.pattern.nnz)
-                if body.damped:
+                if damped:
                     data_dot += np.bincount(slots, out["jacobian_dot"].ravel()[keep],
                                             self.pattern.nnz)
         return force, data, data_dot

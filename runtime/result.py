@@ -233,8 +233,8 @@ class Simulation:
         self.phase = "dynamic analysis"
         summary, names = self.summary, self.sensors.names
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
-        self.timing["compile_s"] += getattr(engine, "compile_s", 0.0)
-        self._built.update(getattr(engine, "modules", ()))
+        self.timing["compile_s"] += engine.compile_s
+        self._built.update(engine.modules)
         self.history = {name: [] for name in ["t", *names]}
         for observer in self.observers:
             observer.dynamic_start(list(names))

@@ -187,7 +187,7 @@ class DissipatedEnergy(Sensor):
     type: ClassVar[str] = "dissipated_energy"
 
     def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return float(getattr(model, "dissipated_energy", 0.0)) if t is not None else 0.0
+        return model.dissipated_energy if t is not None else 0.0
 
 
 @dataclass(frozen=True)

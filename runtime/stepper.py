@@ -20,7 +20,6 @@ import jinja2
 import numpy as np
 
 from runtime import jit
-from runtime.catalog import NEWTON_MODES
 from runtime.dae import DAESystem
 from runtime.integrators import (
     CONTRACTION,
@@ -31,6 +30,7 @@ from runtime.integrators import (
     State,
     alpha_parameters,
     initial_state,
+    newton_mode,
     newton_not_converged,
 )
 from runtime.linear import single_threaded_blas
@@ -138,13 +138,10 @@ class CompiledEngine:
             raise ValueError("engine: the compiled engine needs backend = \"c\"; use "
                              "engine = \"python\" with the numpy backend")
         self.settings = settings
-        self.newton = getattr(settings, "newton", None) or "full"
-        if self.newton not in NEWTON_MODES:
-            raise ValueError(f"newton: expected one of {NEWTON_MODES}, got {self.newton!r}")
+        self.newton = newton_mode(settings)
         self.integrator = settings.integrator
         self.dae = DAESystem(model, q_full)
         self.counters = Counters()
-        self.kernel_seconds = 0.0
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         source, cdef = render(self.dae, self.integrator)
         start = time.perf_counter()
@@ -197,8 +194,7 @@ class CompiledEngine:
         m.h = step
         m.tolerance = self.settings.tolerance * dae.scale
         m.contraction = CONTRACTION
-        m.alpha_m, m.alpha_f, m.gamma, m.beta = alpha_parameters(
-            getattr(self.settings, "rho_inf", 0.8))
+        m.alpha_m, m.alpha_f, m.gamma, m.beta = alpha_parameters(self.settings.rho_inf)
         m.max_iterations = self.settings.max_iterations
         m.modified = int(self.newton == "modified")
         m.factor_kind = 0
@@ -334,7 +330,6 @@ class CompiledEngine:
         c.steps, c.newton_iterations = s.steps, s.newton_iterations
         c.force_evaluations, c.jacobian_evaluations = s.force_evaluations, s.jacobian_evaluations
         c.factorisations = s.factorisations
-        self.kernel_seconds = s.kernel_seconds
         self.timing = {"steps_s": s.advance_seconds, "kernel_s": s.kernel_seconds,
                        "factorisation_s": s.factor_seconds}
 
