@@ -17,7 +17,7 @@ from runtime.laws import (
     SpinUp,
     Table,
 )
-from runtime.loads import Gravity, PointForce, PointMoment
+from runtime.loads import Gravity, LineForce, PointForce, PointMoment
 from runtime.result import Result, run_scene
 from runtime.scene import (
     Arc,
@@ -27,6 +27,7 @@ from runtime.scene import (
     Modal,
     NodeRef,
     Output,
+    Rectangle,
     Scene,
     Solver,
     Spin,
@@ -48,8 +49,8 @@ from runtime.sensors import (
 __all__ = [
     "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
     "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
-    "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment",
-    "Position", "PotentialEnergy", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine",
+    "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
+    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine",
     "Solver", "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy",
     "Weld", "load_scene", "run_scene",
 ]

@@ -126,8 +126,7 @@ def modal_shapes(model: Model, q: np.ndarray, modes: int) -> ModalResult:
         omega, vectors = _modal(model, q, modes, vectors=True)
     shapes = np.zeros((omega.size, model.size))
     shapes[:, model.free] = vectors.T
-    positions = np.concatenate([model.node_dofs(node, "r")
-                                for node in range(model.size // model.per_node)])
+    positions = model.position_dofs().ravel()
     for shape in shapes:
         largest = shape[positions][np.argmax(np.abs(shape[positions]))]
         if largest != 0:

@@ -16,13 +16,24 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from runtime.laws import Law, SceneError, _show
-from runtime.schema import Context, NodeRef, Record, key, law_key, node_key, registry, unit_axis
+from runtime.schema import (
+    Context,
+    EdgeRef,
+    NodeRef,
+    Record,
+    edge_key,
+    key,
+    law_key,
+    node_key,
+    registry,
+    unit_axis,
+)
 
 if TYPE_CHECKING:
     from runtime.model import Model
 
-__all__ = ["CONSTRAINTS", "Clamp", "Constraint", "Hub", "Joint", "NodeConstraint", "Pin",
-           "Revolute", "Spherical", "Weld"]
+__all__ = ["CONSTRAINTS", "Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
+           "Pin", "Revolute", "Spherical", "Weld"]
 
 # weld coefficients below this (relative to 1: the reference frames are unit) are the
 # round-off of cosines of right angles, written as exact zeros
@@ -61,29 +72,54 @@ class NodeConstraint(Constraint):
     node: NodeRef | str = key(node_key)
 
     def held(self, dim: int, per_node: int) -> int:
-        """Number of coordinates it holds (a node has ``per_node``, its position ``dim``)."""
+        """Number of coordinates it holds per node (a node has ``per_node``, its position
+        ``dim``)."""
         return per_node if self.holds_gradients else dim
+
+    def targets(self) -> list[NodeRef]:
+        """The nodes it holds."""
+        return [self.node]
 
 
 @dataclass(frozen=True)
-class Clamp(NodeConstraint):
-    """Holds every coordinate of the node (position and gradients)."""
+class HeldNodes(NodeConstraint):
+    """A constraint on one ``node`` or on every node of an ``edge`` of a rectangle body
+    (``"BODY:x=0"``: exactly one of the two)."""
+
+    node: NodeRef | str | None = key(node_key, None)
+    edge: EdgeRef | str | None = key(edge_key, None)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        given = [name for name in ("node", "edge") if name in data]
+        if len(given) != 1:
+            raise SceneError(f"{path}: expected either node = \"BODY:INDEX\" or edge = "
+                             f"\"BODY:x=I\" (a grid line of a rectangle body), got "
+                             f"{' and '.join(given) if given else 'neither'}")
+        return super().parse(data, path, context)
+
+    def targets(self) -> list[NodeRef]:
+        return [self.node] if self.edge is None else self.edge.refs()
+
+    def apply(self, model: Model, built: Built) -> None:
+        vector = None if self.holds_gradients else "r"
+        for node in self.targets():
+            built.fixed[model.node_dofs(model.node_index(node), vector)] = True
+
+
+@dataclass(frozen=True)
+class Clamp(HeldNodes):
+    """Holds every coordinate of the node(s) (position and gradients)."""
 
     type: ClassVar[str] = "clamp"
 
-    def apply(self, model: Model, built: Built) -> None:
-        built.fixed[model.node_dofs(model.node_index(self.node))] = True
-
 
 @dataclass(frozen=True)
-class Pin(NodeConstraint):
-    """Holds the position of the node; its gradients (the section) turn freely."""
+class Pin(HeldNodes):
+    """Holds the position of the node(s); the gradients (the section) turn freely."""
 
     type: ClassVar[str] = "pin"
     holds_gradients: ClassVar[bool] = False
-
-    def apply(self, model: Model, built: Built) -> None:
-        built.fixed[model.node_dofs(model.node_index(self.node), "r")] = True
 
 
 def _axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -178,8 +214,8 @@ class Weld(Joint):
     def apply(self, model: Model, built: Built) -> None:
         super().apply(model, built)
         dim = model.dim
-        gradients = [name for name in model.vectors if name != "r"]
         a, b = (model.node_index(n) for n in self.nodes)
+        gradients = [name for name in model.node_vectors(a) if name != "r"]
 
         def coordinates(node: int) -> np.ndarray:   # (gradients, dim) global indices
             return np.array([model.node_dofs(node, name) for name in gradients])

@@ -4,6 +4,7 @@ points and nodal vectors come from element.json."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,6 +125,23 @@ class Mesh:
         per_node = kind.per_node
         return (self.connectivity[:, :, None] * per_node
                 + np.arange(per_node)[None, None, :]).reshape(len(self.connectivity), -1)
+
+
+def grid_shape(kind: ElementKind, counts) -> tuple[int, ...]:
+    """Node points along each meshed axis of a structured mesh of ``counts`` elements (one
+    count per meshed axis): ``c (k - 1) + 1`` for k node points per element along the axis
+    (tensor node layouts: 2-node beams m + 1, 3-node beams 2 m + 1, 4-node plates
+    (nx + 1, ny + 1))."""
+    fractions = node_fractions(kind)[:, mesh_axes(kind)]
+    per_axis = [len(np.unique(fractions[:, a])) for a in range(fractions.shape[1])]
+    return tuple(int(c) * (k - 1) + 1 for c, k in zip(np.atleast_1d(counts), per_axis,
+                                                       strict=True))
+
+
+def node_count(kind: ElementKind, counts) -> int:
+    """Number of nodes of a structured mesh of ``counts`` elements (see ``grid_shape``),
+    computed without building the mesh."""
+    return math.prod(grid_shape(kind, counts))
 
 
 def structured_mesh(kind: ElementKind, counts) -> Mesh:

@@ -13,11 +13,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from runtime import geometry, invariants
+from runtime.kernels import kernel_family
 from runtime.laws import Constant, Law
 from runtime.schema import (
     Context,
+    EdgeRef,
     NodeRef,
     Record,
+    edge_key,
     key,
     law_key,
     node_key,
@@ -29,7 +33,11 @@ from runtime.schema import (
 if TYPE_CHECKING:
     from runtime.model import Model
 
-__all__ = ["LOADS", "Gravity", "Load", "NodeLoad", "PointForce", "PointMoment"]
+__all__ = ["LOADS", "Gravity", "LineForce", "Load", "NodeLoad", "PointForce", "PointMoment"]
+
+#: Gauss points along an element side for line loads (exact for the side's shape functions
+#: times its length element up to degree 15)
+EDGE_GAUSS_ORDER = 8
 
 
 @dataclass(frozen=True)
@@ -44,6 +52,10 @@ class Load(Record):
         """Generalised force (size,) in N (per coordinate) at a time-law value of 1."""
         raise NotImplementedError
 
+    def targets(self) -> list[NodeRef]:
+        """The nodes it acts on (none for a field such as gravity)."""
+        return []
+
 
 @dataclass(frozen=True)
 class NodeLoad(Load):
@@ -53,6 +65,9 @@ class NodeLoad(Load):
     on_gradients: ClassVar[bool] = False
     noun: ClassVar[str] = "force"
     node: NodeRef | str = key(node_key)
+
+    def targets(self) -> list[NodeRef]:
+        return [self.node]
 
 
 def _vector_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -131,4 +146,48 @@ class Gravity(Load):
         return model.mass @ model.rigid_field(translation=self.acceleration)
 
 
-LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity)
+@dataclass(frozen=True)
+class LineForce(Load):
+    """A uniform force per unit length ``force_per_length`` (dim,) in N/m along the ``edge``
+    of a rectangle body (``"BODY:x=-1"``: its last grid column), fixed in direction: the
+    consistent generalised force int S^T f ds over the element sides on that grid line
+    (Gauss rule along each side, ds from the reference).  Its resultant is f times the edge
+    length (a tip line load on a plate strip: P = f b)."""
+
+    type: ClassVar[str] = "line_force"
+    on_gradients: ClassVar[bool] = False
+    noun: ClassVar[str] = "line force"
+    edge: EdgeRef | str = key(edge_key)
+    force_per_length: tuple[float, ...] = key(_vector_key)
+
+    def targets(self) -> list[NodeRef]:
+        return self.edge.refs()
+
+    def nominal(self, model: Model) -> np.ndarray:
+        body = model.bodies[self.edge.body]
+        kind, element = body.kind, body.element
+        axis = "xy".index(self.edge.axis)     # the side lies at fixed local x (or y) ...
+        along = 1 - axis                        # ... and runs along local y (or x)
+        size = element.geometry[along]
+        family = kernel_family(kind.name, "invariants", element.backend)
+        t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
+        fractions = geometry.node_fractions(kind)
+        on_edge = np.isin(body.mesh.connectivity, self.edge.nodes)
+        out = np.zeros(model.size)
+        for e in np.flatnonzero(on_edge.sum(axis=1) > 1):
+            points = np.zeros((t.size, kind.dim))   # mid-surface (z = 0) of the side
+            points[:, axis] = fractions[np.flatnonzero(on_edge[e])[0], axis] * \
+                element.geometry[axis]
+            points[:, along] = (t + 1) / 2 * size
+            data = {"point": points, "geometry": np.asarray(element.geometry, float)}
+            values = family("shape_values", data)["values"]                  # (p, n)
+            grads = invariants.full_gradients(kind, invariants.shape_gradient_table(
+                kind, family, element.geometry, points))                     # (p, n, dim)
+            q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
+            ds = np.linalg.norm(grads[:, :, along] @ q0, axis=1) * w * size / 2
+            out[body.element_dofs[e]] += np.outer(values.T @ ds,
+                                                  self.force_per_length).ravel()
+        return out
+
+
+LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce)

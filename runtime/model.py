@@ -1,12 +1,14 @@
 """A scene turned into a model: meshed bodies, global coordinates, assembly, constraints.
 
-Coordinates are node-major over the whole model: node ``i`` of a body owns ``per_node``
-consecutive coordinates (its nodal vectors r, r_x, r_y[, r_z], each a dim-vector); element
-``j`` of a body uses nodes ``j`` and ``j + 1``.  Coordinates are split into *free* ones
-(unknowns), *fixed* ones (clamp, pin) and *prescribed* ones (driven by a hub rotation);
-joints between bodies are linear constraints ``A q = 0`` with Lagrange multipliers.
-Element quantities are evaluated for a whole body in one batched kernel call and scattered
-with precomputed index maps.
+Each body is meshed by connectivity (``runtime.geometry.structured_mesh``: a line of beam
+elements, interior nodes included for 3-node beams; a grid of plate elements); its nodes
+are numbered along x, then y, and the bodies one after the other.  Coordinates are
+node-major over the whole model: a node owns ``per_node`` consecutive coordinates (its
+nodal vectors, e.g. r, r_x, r_y, r_z or r, r_y, r_z, each a dim-vector), the number of
+its body's kind.  Coordinates are split into *free* ones (unknowns), *fixed* ones (clamp,
+pin) and *prescribed* ones (driven by a hub rotation); joints between bodies are linear
+constraints ``A q = 0`` with Lagrange multipliers.  Element quantities are evaluated for a
+whole body in one batched kernel call and scattered with precomputed index maps.
 """
 
 from __future__ import annotations
@@ -21,19 +23,20 @@ import scipy.sparse
 from runtime import geometry
 from runtime.constraints import Built
 from runtime.element import Element
-from runtime.kernels import element_kind
+from runtime.kernels import ElementKind, element_kind
 from runtime.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
-from runtime.scene import NodeRef, Scene
+from runtime.scene import Body, NodeRef, Scene
 
 
 @dataclass
 class BodyMesh:
-    """One body: its element group, reference coordinates and index maps."""
+    """One body: its element group, mesh, reference coordinates and index maps."""
 
     name: str
     element: Element
+    mesh: geometry.Mesh
     first_node: int          # global index of the body's node 0
-    nodes: int
+    first_coordinate: int    # global index of the body's first coordinate
     reference: np.ndarray    # (nodes * per_node,) reference coordinates of the body
     element_dofs: np.ndarray  # (elements, ndof) global coordinate indices
     element_e0: np.ndarray   # (elements, ndof) reference coordinates of every element
@@ -41,8 +44,23 @@ class BodyMesh:
     _kernels: dict = field(default_factory=dict, repr=False)
 
     @property
+    def kind(self) -> ElementKind:
+        """The element kind of the body."""
+        return self.element.kind
+
+    @property
     def elements(self) -> int:
         return self.element_dofs.shape[0]
+
+    @property
+    def nodes(self) -> int:
+        """Number of nodes of the body."""
+        return len(self.mesh.points)
+
+    @property
+    def coordinates(self) -> slice:
+        """The body's slice of the global coordinates."""
+        return slice(self.first_coordinate, self.first_coordinate + self.reference.size)
 
     def kernel(self, name: str):
         """The group kernel ``name`` of this body's elements (bound once, then reused): an
@@ -59,26 +77,36 @@ class BodyMesh:
         return self.element.damping > 0
 
 
-def _mesh_body(body, element_factory) -> tuple[np.ndarray, Element, np.ndarray]:
-    """(element references (m, ndof), Element of the first element, node references)."""
-    kind = element_kind(body.element)
+def element_references(body: Body, kind: ElementKind) -> np.ndarray:
+    """Reference coordinates (elements, ndof) of every element of ``body``, in the element
+    order of ``structured_mesh`` (along x, then y): segments of its line, arc or grid."""
     m = body.elements
+    if body.rectangle is not None:
+        rectangle = body.rectangle
+        (a, b), (nx, ny) = rectangle.size, rectangle.grid
+        side_x, side_y = np.array([a / nx, 0.0, 0.0]), np.array([0.0, b / ny, 0.0])
+        corner = np.asarray(rectangle.corner, float)
+        return np.array([geometry.rectangle_reference(kind, corner + i * side_x + j * side_y,
+                                                      side_x, side_y)
+                         for j in range(ny) for i in range(nx)])
     if body.arc is not None:
         arc = body.arc
         step = np.radians(arc.angle_deg) / m
         start = np.radians(arc.start_angle_deg)
-        e0s = np.array([geometry.arc_reference(kind, arc.center, arc.radius, start + j * step,
-                                               step) for j in range(m)])
-        length = arc.radius * abs(step)
-    else:
-        start, end = np.asarray(body.start, float), np.asarray(body.end, float)
-        points = [start + (end - start) * j / m for j in range(m + 1)]
-        e0s = np.array([geometry.straight_reference(kind, points[j], points[j + 1])
-                        for j in range(m)])
-        length = float(np.linalg.norm(end - start)) / m
-    per_node = kind.ndof // 2
-    nodes = np.concatenate([e0s[:, :per_node].ravel(), e0s[-1, per_node:]])
-    return e0s, element_factory(kind.name, length, e0s[0]), nodes
+        return np.array([geometry.arc_reference(kind, arc.center, arc.radius, start + j * step,
+                                                step) for j in range(m)])
+    start, end = np.asarray(body.start, float), np.asarray(body.end, float)
+    points = [start + (end - start) * j / m for j in range(m + 1)]
+    return np.array([geometry.straight_reference(kind, points[j], points[j + 1])
+                     for j in range(m)])
+
+
+def node_references(kind: ElementKind, mesh: geometry.Mesh, e0s: np.ndarray) -> np.ndarray:
+    """Reference coordinates (nodes * per_node,) of the mesh's nodes from its elements'
+    references (elements, ndof) (a node shared by elements takes the last one's value)."""
+    nodes = np.zeros((len(mesh.points), kind.per_node))
+    nodes[mesh.connectivity.ravel()] = e0s.reshape(-1, kind.per_node)
+    return nodes.ravel()
 
 
 class Model:
@@ -95,35 +123,28 @@ class Model:
         self.dissipated_energy = 0.0
         start = time.perf_counter()
         self.bodies: dict[str, BodyMesh] = {}
-        self.dim = None
-        offset_nodes = 0
+        self.dim = scene.dim
+        nodes = coordinates = 0
         for body in scene.bodies:
             material = scene.materials[body.material]
-
-            def make(kind, length, e0, body=body, material=material):
-                return Element(kind, length, body.height, body.width, material.E, material.nu,
-                               material.rho, e0=e0, method=self.method, backend=self.backend,
-                               quadrature=body.quadrature, law=material.law,
-                               shear_correction=material.shear_correction,
-                               damping=material.damping)
-
-            e0s, element, nodes = _mesh_body(body, make)
-            kind = element.kind
-            if self.dim is None:
-                self.dim = kind.dim
-            elif kind.dim != self.dim:
-                raise ValueError(f"body {body.name!r}: all bodies must have the same dimension")
-            per_node = kind.ndof // 2
-            dofs = (offset_nodes * per_node + np.arange(body.elements)[:, None] * per_node
-                    + np.arange(kind.ndof)[None, :])
-            self.bodies[body.name] = BodyMesh(body.name, element, offset_nodes, body.elements + 1,
-                                              nodes, dofs, np.ascontiguousarray(e0s))
+            kind = element_kind(body.element)
+            e0s = element_references(body, kind)
+            element = Element(kind.name, *body.geometry, material.E, material.nu,
+                              material.rho, e0=e0s[0], method=self.method,
+                              backend=self.backend, quadrature=body.quadrature,
+                              law=material.law, shear_correction=material.shear_correction,
+                              damping=material.damping)
+            mesh = geometry.structured_mesh(kind, body.counts)
+            self.bodies[body.name] = BodyMesh(
+                body.name, element, mesh, nodes, coordinates,
+                node_references(kind, mesh, e0s), coordinates + mesh.dofs(kind),
+                np.ascontiguousarray(e0s))
             self.timing["compile_s"] += element.timing["compile_s"]
-            offset_nodes += body.elements + 1
-        first = next(iter(self.bodies.values())).element.kind
-        self.per_node = first.ndof // 2
-        self.vectors = first.meta["vectors"]
-        self.size = offset_nodes * self.per_node
+            nodes += len(mesh.points)
+            coordinates += len(mesh.points) * kind.per_node
+        self.size = coordinates
+        self.n_nodes = nodes
+        self._first_nodes = np.array([b.first_node for b in self.bodies.values()])
         self.reference = np.concatenate([b.reference for b in self.bodies.values()])
         self._build_mass()
         self._build_constraints()
@@ -138,13 +159,38 @@ class Model:
         index = ref.index if ref.index >= 0 else body.nodes + ref.index
         return body.first_node + index
 
+    def body_of(self, node: int) -> BodyMesh:
+        """The body that a global node belongs to."""
+        return list(self.bodies.values())[int(np.searchsorted(self._first_nodes, node,
+                                                              side="right")) - 1]
+
+    def node_vectors(self, node: int) -> tuple[str, ...]:
+        """Names of the nodal vectors of a global node (``("r", "r_x", ...)``)."""
+        return self.body_of(node).kind.vectors
+
     def node_dofs(self, node: int, vector: str | None = None) -> np.ndarray:
         """Coordinates of a node (all, or one nodal vector such as "r")."""
-        start = node * self.per_node
+        body = self.body_of(node)
+        per_node = body.kind.per_node
+        start = body.first_coordinate + (node - body.first_node) * per_node
         if vector is None:
-            return np.arange(start, start + self.per_node)
-        k = self.vectors.index(vector)
+            return np.arange(start, start + per_node)
+        k = body.kind.vectors.index(vector)
         return np.arange(start + k * self.dim, start + (k + 1) * self.dim)
+
+    def position_dofs(self) -> np.ndarray:
+        """Coordinates of the positions r of every node, (nodes, dim), in node order."""
+        return np.concatenate([
+            body.first_coordinate + (np.arange(body.nodes)[:, None] * body.kind.per_node
+                                     + body.kind.vectors.index("r") * self.dim
+                                     + np.arange(self.dim)[None, :])
+            for body in self.bodies.values()])
+
+    def coordinate_names(self) -> list[str]:
+        """A name per coordinate: nodal vector and component (``"r_x.y"``), (size,)."""
+        return [f"{vector}.{'xyz'[c]}" for body in self.bodies.values()
+                for _ in range(body.nodes) for vector in body.kind.vectors
+                for c in range(self.dim)]
 
     # --- mass, constraints, index maps -------------------------------------------------
 
@@ -327,9 +373,7 @@ class Model:
         """Kinetic energy 1/2 v^T M v (J) of one body or of the whole model."""
         if body is not None:
             mask = np.zeros(self.size)
-            mesh = self.bodies[body]
-            mask[mesh.first_node * self.per_node:(mesh.first_node + mesh.nodes)
-                 * self.per_node] = 1.0
+            mask[self.bodies[body].coordinates] = 1.0
             v = v * mask
         return 0.5 * float(v @ (self.mass @ v))
 
@@ -364,11 +408,25 @@ class Model:
     # --- frames and rigid motions --------------------------------------------------------
 
     def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
-        """Orthonormal frame (dim, dim) of a node: its gradient vectors, orthonormalised with
-        r_x kept as the first axis (exact for a rigidly rotated node such as a hub)."""
-        gradients = np.column_stack([q[self.node_dofs(node, name)]
-                                     for name in self.vectors if name != "r"])
-        basis, upper = np.linalg.qr(gradients)
+        """Orthonormal frame (dim, dim) of a node: its gradient vectors r_x, r_y(, r_z),
+        orthonormalised with r_x kept as the first axis (exact for a rigidly rotated node
+        such as a hub).  A gradient the node does not carry (r_x of a 3-node beam) is
+        completed from the others: r_x = r_y x r_z in 3D, r_y turned by -90 degrees in 2D."""
+        carried = {name[-1]: q[self.node_dofs(node, name)] for name in
+                   self.node_vectors(node) if name != "r"}
+        axes = "xyz"[:self.dim]
+        missing = [a for a in axes if a not in carried]
+        if len(missing) > 1:
+            raise ValueError(f"node {node} carries {len(carried)} gradients; a frame needs at "
+                             f"least {self.dim - 1}")
+        if missing and self.dim == 3:
+            i = axes.index(missing[0])
+            carried[missing[0]] = np.cross(carried[axes[(i + 1) % 3]], carried[axes[(i + 2) % 3]])
+        elif missing:
+            other = carried["y" if missing[0] == "x" else "x"]
+            sign = 1.0 if missing[0] == "x" else -1.0
+            carried[missing[0]] = sign * np.array([other[1], -other[0]])
+        basis, upper = np.linalg.qr(np.column_stack([carried[a] for a in axes]))
         return basis * np.sign(np.diag(upper))
 
     def rigid_field(self, translation: Sequence[float] | None = None,
@@ -379,21 +437,21 @@ class Model:
         (dim,) and ``rotation`` (a number about z in 2D, (3,) in 3D) about the point
         ``about`` (dim,; default the origin): positions u + w x (r - about), gradients w x r_k;
         zero outside ``body`` if given.  In velocities: m/s from m/s and rad/s."""
-        nodes = self.reference.reshape(-1, len(self.vectors), self.dim)
-        field = np.zeros_like(nodes)
-        k = self.vectors.index("r")
-        if translation is not None:
-            field[:, k] += np.asarray(translation, float)
-        if rotation is not None:
-            arms = nodes.copy()
-            arms[:, k] -= np.zeros(self.dim) if about is None else np.asarray(about, float)
-            field += _cross(rotation, arms)
-        if body is not None:
-            mesh = self.bodies[body]
-            keep = np.zeros(len(nodes), bool)
-            keep[mesh.first_node:mesh.first_node + mesh.nodes] = True
-            field[~keep] = 0.0
-        return field.ravel()
+        field = np.zeros(self.size)
+        for name, mesh in self.bodies.items():
+            if body is not None and name != body:
+                continue
+            nodes = mesh.reference.reshape(mesh.nodes, len(mesh.kind.vectors), self.dim)
+            part = np.zeros_like(nodes)
+            k = mesh.kind.vectors.index("r")
+            if translation is not None:
+                part[:, k] += np.asarray(translation, float)
+            if rotation is not None:
+                arms = nodes.copy()
+                arms[:, k] -= np.zeros(self.dim) if about is None else np.asarray(about, float)
+                part += _cross(rotation, arms)
+            field[mesh.coordinates] = part.ravel()
+        return field
 
     def initial_velocities(self) -> np.ndarray:
         """Velocities (size,) at t = 0 (m/s, per coordinate) from the bodies'
@@ -423,8 +481,7 @@ class Model:
         """
         rotations = 1 if self.dim == 2 else 3
         per_body = self.dim + rotations
-        positions = self.reference.reshape(-1, len(self.vectors), self.dim)[
-            :, self.vectors.index("r")]
+        positions = self.reference[self.position_dofs()]
         columns, norms = [], []
         for name, mesh in self.bodies.items():
             centre = positions[mesh.first_node:mesh.first_node + mesh.nodes].mean(axis=0)

@@ -50,10 +50,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from runtime import geometry
 from runtime.catalog import ENGINES, NEWTON_MODES
-from runtime.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint
+from runtime.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint, Weld
 from runtime.element import METHODS
-from runtime.kernels import BACKENDS, element_kind, known_kinds
+from runtime.kernels import BACKENDS, element_kind, generated_kinds
 from runtime.laws import SceneError, _show
 from runtime.loads import LOADS, Load, NodeLoad
 from runtime.schema import (
@@ -83,6 +84,7 @@ __all__ = [
     "Modal",
     "NodeRef",
     "Output",
+    "Rectangle",
     "Scene",
     "SceneError",
     "Solver",
@@ -182,28 +184,47 @@ class Spin:
 
 
 @dataclass(frozen=True)
-class Body:
-    """A mesh of ``elements`` elements of kind ``element`` (``elements + 1`` nodes).
+class Rectangle:
+    """A flat rectangle in the plane z = corner[2]: ``corner`` (3,) in m, ``size`` (a, b) in m
+    along +x and +y, meshed by ``grid`` (nx, ny) elements of size a / nx by b / ny."""
 
-    material: the name of a material of the scene; height, width: section (m; TOML
-    ``section = {height, width}``); either ``start``/``end`` (dim,) in m (straight) or
-    ``arc``; quadrature: Gauss orders (dim,) or None for the kind's default.  Initial
-    conditions (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s,
-    a uniform translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
+    corner: tuple[float, ...]
+    size: tuple[float, float]
+    grid: tuple[int, int]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``rectangle = {...}``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Body:
+    """A mesh of elements of kind ``element`` sharing nodes (numbered by the kind's node layout:
+    ``n_nodes`` of them, see ``runtime.geometry.structured_mesh``).
+
+    Beam kinds (a line of ``elements`` elements): section ``height`` and ``width`` (m; TOML
+    ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or
+    ``arc``.  Plate kinds: ``rectangle`` (its grid sets ``elements``) and ``thickness`` (m;
+    TOML ``section = {thickness}``).  material: the name of a material of the scene;
+    quadrature: Gauss orders (dim,) or None for the kind's default.  Initial conditions
+    (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s, a uniform
+    translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
     """
 
     name: str
     element: str
     material: str
-    height: float
-    width: float
-    elements: int
+    height: float | None = None
+    width: float | None = None
+    elements: int | None = None
     start: tuple[float, ...] | None = None
     end: tuple[float, ...] | None = None
     arc: Arc | None = None
     quadrature: tuple[int, ...] | None = None
     initial_velocity: tuple[float, ...] | None = None
     initial_angular_velocity: Spin | None = None
+    rectangle: Rectangle | None = None
+    thickness: float | None = None
 
     @property
     def dim(self) -> int:
@@ -211,16 +232,48 @@ class Body:
         return element_kind(self.element).dim
 
     @property
+    def counts(self) -> tuple[int, ...]:
+        """Elements along each meshed axis: (elements,) for a line, the grid for a rectangle."""
+        return tuple(self.rectangle.grid) if self.rectangle is not None else (self.elements,)
+
+    @property
+    def grid_shape(self) -> tuple[int, ...]:
+        """Node points along each meshed axis: (nodes,) for a line, (columns along x, rows
+        along y) for a rectangle."""
+        return geometry.grid_shape(element_kind(self.element), self.counts)
+
+    @property
     def n_nodes(self) -> int:
-        """Number of nodes, ``elements + 1``."""
-        return self.elements + 1
+        """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
+        (nx + 1)(ny + 1) for 4-node plates."""
+        return math.prod(self.grid_shape)
+
+    @property
+    def geometry(self) -> tuple[float, float, float]:
+        """The element's (length, height, width) as ``runtime.Element`` takes them: the
+        element's sides a, b and the thickness for a plate."""
+        if self.rectangle is not None:
+            (a, b), (nx, ny) = self.rectangle.size, self.rectangle.grid
+            return a / nx, b / ny, self.thickness
+        if self.arc is not None:
+            length = self.arc.radius * math.radians(abs(self.arc.angle_deg)) / self.elements
+        else:
+            length = math.dist(self.start, self.end) / self.elements
+        return length, self.height, self.width
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[[body]]``."""
+        section = ({"thickness": self.thickness} if self.rectangle is not None
+                   else {"height": self.height, "width": self.width})
         head = {"name": self.name, "element": self.element, "material": self.material,
-                "section": {"height": self.height, "width": self.width},
-                "elements": self.elements}
-        return {**plain(head), **table(self, skip=(*head, "height", "width"))}
+                "section": {k: v for k, v in section.items() if v is not None}}
+        # a rectangle's grid sets its elements (written only when they disagree: an error)
+        grid = getattr(self.rectangle, "grid", None)
+        if self.rectangle is None or (self.elements is not None
+                                      and (grid is None or self.elements != math.prod(grid))):
+            head["elements"] = self.elements
+        return {**plain(head),
+                **table(self, skip=(*head, "height", "width", "thickness", "elements"))}
 
 
 @dataclass(frozen=True)
@@ -468,48 +521,24 @@ def _material(name: str, data: Any) -> Material:
 
 def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
     path = f"body[{i}]"
-    keys(data, path, ("name", "element", "material", "section", "elements"),
-         ("start", "end", "arc", "quadrature", "initial_velocity", "initial_angular_velocity"))
+    keys(data, path, ("name", "element", "material", "section"),
+         ("elements", "start", "end", "arc", "rectangle", "quadrature", "initial_velocity",
+          "initial_angular_velocity"))
     name = _name(data["name"], f"{path}.name", "a body name")
     if ":" in name:
         raise SceneError(f'{path}.name: expected a name without ":", got {_show(name)}')
-    kinds = tuple(known_kinds())
-    kind = choice(data["element"], f"{path}.element", kinds, "element kind")
-    dim = element_kind(kind).dim
+    kind = choice(data["element"], f"{path}.element", tuple(generated_kinds()), "element kind")
+    meta = element_kind(kind)
+    dim = meta.dim
     why = f"{kind} is {dim}D"
     material = string(data["material"], f"{path}.material")
     if material not in materials:
         defined = ", ".join(materials) or "none"
         raise SceneError(f"{path}.material: material {_show(material)} is not defined; "
                          f"defined materials: {defined}")
-    section = keys(data["section"], f"{path}.section", ("height", "width"), (),
-                   "a table {height = H, width = W}")
-    height = number(section["height"], f"{path}.section.height", positive=True)
-    width = number(section["width"], f"{path}.section.width", positive=True)
-    elements = _count(data["elements"], f"{path}.elements")
-
-    straight = "start" in data or "end" in data
-    if straight and "arc" in data:
-        raise SceneError(f"{path}: expected either start and end or arc, got both")
-    start = end = None
-    arc = None
-    if straight:
-        for key in ("start", "end"):
-            if key not in data:
-                raise SceneError(f"{path}.{key}: missing required key; expected a point in m "
-                                 "(a straight body needs start and end)")
-        start = vector(data["start"], f"{path}.start", dim, why)
-        end = vector(data["end"], f"{path}.end", dim, why)
-        if start == end:
-            raise SceneError(f"{path}.end: expected a point different from start, got "
-                             f"{_show(data['end'])}")
-        if not math.isfinite(sum((b - a) * (b - a) for a, b in zip(start, end, strict=True))):
-            raise SceneError(f"{path}.end: expected a body of finite length, got start = "
-                             f"{_show(data['start'])} and end = {_show(data['end'])}")
-    elif "arc" in data:
-        arc = _arc(data["arc"], f"{path}.arc", dim, why)
-    else:
-        raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
+    plate = len(geometry.mesh_axes(meta)) == 2
+    shape = _plate_shape if plate else _line_shape
+    height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
 
     quadrature = None
     if "quadrature" in data:
@@ -533,7 +562,81 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                                     "in rad/s"),
                     vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
     return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
-                velocity, spin)
+                velocity, spin, rectangle, thickness)
+
+
+def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Section, element count and placement of a line body (beam kinds)."""
+    why = f"{kind} is {dim}D"
+    if "rectangle" in data:
+        raise SceneError(f"{path}.rectangle: {kind} is a beam element; a beam body is a line "
+                         "(start and end) or an arc; rectangles are for plate elements")
+    if "elements" not in data:
+        raise SceneError(f"{path}.elements: missing required key; expected the number of "
+                         f"elements along the body")
+    section = keys(data["section"], f"{path}.section", ("height", "width"), (),
+                   "a table {height = H, width = W}")
+    height = number(section["height"], f"{path}.section.height", positive=True)
+    width = number(section["width"], f"{path}.section.width", positive=True)
+    elements = _count(data["elements"], f"{path}.elements")
+    straight = "start" in data or "end" in data
+    if straight and "arc" in data:
+        raise SceneError(f"{path}: expected either start and end or arc, got both")
+    start = end = None
+    arc = None
+    if straight:
+        for key in ("start", "end"):
+            if key not in data:
+                raise SceneError(f"{path}.{key}: missing required key; expected a point in m "
+                                 "(a straight body needs start and end)")
+        start = vector(data["start"], f"{path}.start", dim, why)
+        end = vector(data["end"], f"{path}.end", dim, why)
+        if start == end:
+            raise SceneError(f"{path}.end: expected a point different from start, got "
+                             f"{_show(data['end'])}")
+        if not math.isfinite(sum((b - a) * (b - a) for a, b in zip(start, end, strict=True))):
+            raise SceneError(f"{path}.end: expected a body of finite length, got start = "
+                             f"{_show(data['start'])} and end = {_show(data['end'])}")
+    elif "arc" in data:
+        arc = _arc(data["arc"], f"{path}.arc", dim, why)
+    else:
+        raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
+    return height, width, None, elements, start, end, arc, None
+
+
+def _plate_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Section, element count and placement of a rectangle body (plate kinds)."""
+    for key in ("start", "end", "arc"):
+        if key in data:
+            raise SceneError(f"{path}.{key}: {kind} is a plate element; a plate body is a "
+                             f"rectangle = {{corner = [x, y, z], size = [a, b], grid = "
+                             f"[nx, ny]}}")
+    if "elements" in data:
+        raise SceneError(f"{path}.elements: the rectangle's grid sets the elements of a plate "
+                         f"body; remove elements")
+    if "rectangle" not in data:
+        raise SceneError(f"{path}.rectangle: missing required key; expected {{corner = "
+                         f"[x, y, z], size = [a, b], grid = [nx, ny]}} ({kind} is a plate "
+                         f"element)")
+    section = keys(data["section"], f"{path}.section", ("thickness",), (),
+                   "a table {thickness = T}")
+    thickness = number(section["thickness"], f"{path}.section.thickness", positive=True)
+    rpath = f"{path}.rectangle"
+    r = keys(data["rectangle"], rpath, ("corner", "size", "grid"), (),
+             "a table {corner = [x, y, z], size = [a, b], grid = [nx, ny]}")
+    corner = vector(r["corner"], f"{rpath}.corner", dim, f"{kind} is {dim}D")
+    size = vector(r["size"], f"{rpath}.size", 2, "the sides a along x and b along y, in m")
+    extent = size[0] + size[1] + max(map(abs, corner))
+    if min(size) <= 0 or not math.isfinite(extent * extent):
+        raise SceneError(f"{rpath}.size: expected two positive finite sides in m, got "
+                         f"{_show(r['size'])}")
+    grid = r["grid"]
+    if not isinstance(grid, list) or len(grid) != 2:
+        raise SceneError(f"{rpath}.grid: expected [nx, ny], two positive integers (elements "
+                         f"along x and y), got {_show(grid)}")
+    grid = tuple(_count(n, f"{rpath}.grid[{k}]") for k, n in enumerate(grid))
+    return (None, None, thickness, grid[0] * grid[1], None, None, None,
+            Rectangle(corner, size, grid))
 
 
 def _arc(data: Any, path: str, dim: int, why: str) -> Arc:
@@ -660,20 +763,28 @@ def _output(data: Any) -> Output:
 # --------------------------------------------------------------------------- scene checks
 
 def _node_position(body: Body, index: int) -> tuple[float, ...]:
-    """Reference position (m) of node ``index`` (0 .. elements) of a body, as the model
-    meshes it."""
+    """Reference position (m) of node ``index`` of a body, as the model meshes it (nodes
+    evenly spaced along a line or arc, on the grid of a rectangle)."""
+    shape = body.grid_shape
+    if body.rectangle is not None:
+        r = body.rectangle
+        i, j = index % shape[0], index // shape[0]
+        x, y = (i / (shape[0] - 1)) * r.size[0], (j / (shape[1] - 1)) * r.size[1]
+        return (r.corner[0] + x, r.corner[1] + y, r.corner[2])
+    f = index / (shape[0] - 1)
     if body.arc is None:
-        f = index / body.elements
         return tuple(a + (b - a) * f for a, b in zip(body.start, body.end, strict=True))
     arc = body.arc
-    step = math.radians(arc.angle_deg) / body.elements
-    theta = math.radians(arc.start_angle_deg) + index * step
+    theta = math.radians(arc.start_angle_deg) + f * math.radians(arc.angle_deg)
     x, y = arc.center[0], arc.center[1]
     return (x + arc.radius * math.cos(theta), y + arc.radius * math.sin(theta), *arc.center[2:])
 
 
 def _extent(body: Body) -> float:
     """Largest coordinate magnitude of a body (m): the length scale of its positions."""
+    if body.rectangle is not None:
+        r = body.rectangle
+        return max(abs(x) for x in r.corner) + r.size[0] + r.size[1]
     if body.arc is None:
         return max(abs(x) for x in (*body.start, *body.end))
     return max(abs(x) for x in body.arc.center) + body.arc.radius
@@ -685,15 +796,17 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
     for i, c in enumerate(constraints):
         if not isinstance(c, NodeConstraint):
             continue
-        j = holds.setdefault(c.node, i)
-        if j == i:
-            continue
-        first = constraints[j]
-        why = CONFLICTS.get(frozenset({first.type, c.type}),
-                            "the same constraint twice" if first.type == c.type else
-                            "a node has at most one of them")
-        raise SceneError(f"constraint[{i}].node: constraint[{j}] ({first.type}) and "
-                         f"constraint[{i}] ({c.type}) on node {c.node}: {why}")
+        for node in c.targets():
+            j = holds.setdefault(node, i)
+            if j == i:
+                continue
+            first = constraints[j]
+            why = CONFLICTS.get(frozenset({first.type, c.type}),
+                                "the same constraint twice" if first.type == c.type else
+                                "a node has at most one of them")
+            where = "node" if getattr(c, "edge", None) is None else "edge"
+            raise SceneError(f"constraint[{i}].{where}: constraint[{j}] ({first.type}) and "
+                             f"constraint[{i}] ({c.type}) on node {node}: {why}")
 
     by_name = {b.name: b for b in bodies}
     scale = max(_extent(b) for b in bodies)
@@ -715,6 +828,8 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
             continue
         a, b = c.nodes
         path = f"constraint[{i}].nodes"
+        if isinstance(c, Weld):
+            _check_weld(path, by_name[a.body], by_name[b.body])
         j = joined.setdefault(frozenset(c.nodes), i)
         if j != i:
             raise SceneError(f"{path}: the same joint as constraint[{j}] (nodes {a} and {b}); "
@@ -743,17 +858,35 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
         ties[rb] = [*ties.get(rb, []), *ties.pop(ra, []), i]
 
 
+def _check_weld(path: str, a: Body, b: Body) -> None:
+    """A weld shares the deformation gradient of two nodes: both must carry every gradient
+    (r_x, r_y[, r_z]) to define it."""
+    for body in (a, b):
+        kind = element_kind(body.element)
+        if len(kind.vectors) != kind.dim + 1:
+            frame = ", ".join(f"r_{a}" for a in "xyz"[:kind.dim])
+            raise SceneError(f"{path}: a weld ties the full frames ({frame}) of its nodes; "
+                             f"{body.element} nodes of body {_show(body.name)} carry "
+                             f"{', '.join(kind.vectors)}; expected nodes of an element with "
+                             f"every gradient, or a spherical joint")
+
+
 def _check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...]) -> None:
-    """A load on a node must act on coordinates that the node's constraint leaves free."""
-    held = {c.node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)}
+    """A load must act on coordinates that its nodes' constraints leave free (on one node of
+    an edge at least)."""
+    held = {node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)
+            for node in c.targets()}
     for i, load in enumerate(loads):
-        if not isinstance(load, NodeLoad) or load.node not in held:
+        targets = load.targets()
+        blocked = [held[node] for node in targets if node in held and not (
+            load.on_gradients and not constraints[held[node]].holds_gradients)]
+        if not targets or len(blocked) < len(targets):
             continue
-        j = held[load.node]
-        if load.on_gradients and not constraints[j].holds_gradients:
-            continue
+        j = blocked[0]
         what, can = ("section", "turn") if load.on_gradients else ("position", "move")
-        raise SceneError(f"load[{i}].node: the {what} of {load.node} is held by "
+        where = "node" if isinstance(load, NodeLoad) else "edge"
+        nodes = f"{targets[0]}" if len(targets) == 1 else f"every node of {load.edge}"
+        raise SceneError(f"load[{i}].{where}: the {what} of {nodes} is held by "
                          f"constraint[{j}] ({constraints[j].type}): a {load.noun} there does "
                          f"nothing; expected a node whose {what} can {can}")
 
@@ -772,6 +905,11 @@ def _model_bytes(bodies: tuple[Body, ...]) -> int:
         b.elements * element_kind(b.element).ndof ** 2 for b in bodies)
 
 
+def _coordinates(bodies: tuple[Body, ...]) -> int:
+    """Number of coordinates of the model of the bodies (nodes times coordinates per node)."""
+    return sum(b.n_nodes * element_kind(b.element).per_node for b in bodies)
+
+
 def _check_model_size(bodies: tuple[Body, ...]) -> None:
     """Refuse a mesh whose model cannot fit the memory of this machine (``LIMITS``)."""
     memory = LIMITS["memory_bytes"]
@@ -779,7 +917,7 @@ def _check_model_size(bodies: tuple[Body, ...]) -> None:
     ndof = {b.name: element_kind(b.element).ndof for b in bodies}
     entries = [b.elements * ndof[b.name] ** 2 for b in bodies]
     elements = sum(b.elements for b in bodies)
-    coordinates = sum(b.n_nodes for b in bodies) * (ndof[bodies[0].name] // 2)
+    coordinates = _coordinates(bodies)
     model_bytes = _model_bytes(bodies)
     if model_bytes > memory:
         i = max(range(len(bodies)), key=entries.__getitem__)
@@ -799,14 +937,15 @@ def _check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
     the mesh itself passed ``_check_model_size``."""
     memory = LIMITS["memory_bytes"]
     elements = sum(b.elements for b in bodies)
-    per_node = element_kind(bodies[0].element).ndof // 2
     dim = bodies[0].dim
-    coordinates = sum(b.n_nodes for b in bodies) * per_node
+    per_node = {b.name: element_kind(b.element).per_node for b in bodies}
+    coordinates = _coordinates(bodies)
     model_bytes = _model_bytes(bodies)
-    held = sum(c.held(dim, per_node) for c in constraints if isinstance(c, NodeConstraint))
+    held = sum(c.held(dim, per_node[node.body]) for c in constraints
+               if isinstance(c, NodeConstraint) for node in c.targets())
     free = coordinates - held
     joints = [c for c in constraints if isinstance(c, Joint)]
-    dofs = free - sum(c.rows(dim, per_node) for c in joints)
+    dofs = free - sum(c.rows(dim, per_node[c.nodes[0].body]) for c in joints)
     if dofs <= 0:
         raise SceneError(f"constraint: the constraints hold all {coordinates} coordinates of "
                          f"the model; expected at least one free coordinate")

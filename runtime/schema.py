@@ -60,14 +60,15 @@ NODE_INDEX = re.compile(r"0|-?[1-9][0-9]*")
 
 @dataclass(frozen=True)
 class NodeRef:
-    """Node ``index`` of body ``body`` (in a validated scene: 0 .. elements; as input, negative
-    indices count from the end).  ``str`` gives ``"BODY:INDEX"`` with that index; ``written``
-    keeps a negative index as the scene wrote it (not compared), so that the scene's TOML
-    (``spelled``) still names the last node after its body is remeshed."""
+    """Node ``index`` of body ``body`` (in a validated scene: 0 .. nodes - 1; as input,
+    negative indices count from the end, and a rectangle body's nodes may be named by grid
+    index ``"BODY:I,J"``).  ``str`` gives ``"BODY:INDEX"`` with that index; ``written`` keeps
+    the index as the scene wrote it when it differs (not compared), so that the scene's TOML
+    (``spelled``) still names the last node (or grid point) after its body is remeshed."""
 
     body: str
     index: int
-    written: int | None = dataclasses.field(default=None, compare=False, repr=False)
+    written: str | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def __str__(self) -> str:
         return f"{self.body}:{self.index}"
@@ -75,6 +76,31 @@ class NodeRef:
     def spelled(self) -> str:
         """``"BODY:INDEX"`` as the scene wrote it."""
         return f"{self.body}:{self.index if self.written is None else self.written}"
+
+
+@dataclass(frozen=True)
+class EdgeRef:
+    """The grid line ``axis = line`` of a rectangle body (``"BODY:x=0"``: the nodes of grid
+    column 0, the edge at the rectangle's corner; ``"BODY:y=-1"``: the last grid row), with
+    ``line`` non-negative in a validated scene; ``nodes`` are the body's node indices on it
+    (from x = 0 to the end along the other axis; not compared); ``written`` as for NodeRef."""
+
+    body: str
+    axis: str
+    line: int
+    nodes: tuple[int, ...] = dataclasses.field(default=(), compare=False, repr=False)
+    written: str | None = dataclasses.field(default=None, compare=False, repr=False)
+
+    def __str__(self) -> str:
+        return f"{self.body}:{self.axis}={self.line}"
+
+    def spelled(self) -> str:
+        """``"BODY:AXIS=LINE"`` as the scene wrote it."""
+        return f"{self.body}:{self.axis}={self.line if self.written is None else self.written}"
+
+    def refs(self) -> list[NodeRef]:
+        """The nodes on the edge, as node references."""
+        return [NodeRef(self.body, i) for i in self.nodes]
 
 
 # --------------------------------------------------------------------------- checkers
@@ -146,31 +172,77 @@ def rotation_vector(value: Any, path: str, dim: int, what: str) -> float | tuple
 
 
 class Nodes:
-    """Resolves ``"BODY:INDEX"`` against the bodies of a scene."""
+    """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies) and
+    edges ``"BODY:x=I"`` / ``"BODY:y=J"`` against the bodies of a scene."""
 
     def __init__(self, bodies: tuple[Body, ...]) -> None:
         self.bodies = {b.name: b for b in bodies}
 
-    def __call__(self, value: Any, path: str) -> NodeRef:
+    def _body(self, value: Any, path: str, form: str) -> tuple[Body, str]:
         if not isinstance(value, str) or value.count(":") != 1:
-            raise SceneError(f'{path}: expected a node reference "BODY:INDEX", got '
-                             f"{_show(value)}")
-        name, index_text = value.split(":")
+            raise SceneError(f"{path}: expected {form}, got {_show(value)}")
+        name, rest = value.split(":")
         if name not in self.bodies:
             raise SceneError(f"{path}: unknown body {_show(name)} in {_show(value)}; bodies: "
                              f"{', '.join(self.bodies)}")
-        if not NODE_INDEX.fullmatch(index_text):
-            raise SceneError(f'{path}: expected an integer node index after ":" (ASCII digits '
-                             f'and an optional leading "-"; no "+", blanks, "_" or leading '
-                             f'zeros, "-0" neither: 0 is the first node, -1 the last), got '
-                             f"{_show(value)}")
-        n = self.bodies[name].n_nodes
-        index = int(index_text) if len(index_text) <= 20 else None
-        if index is None or not -n <= index < n:
-            shown = index_text if index is not None else f"{index_text[:20]}..."
-            raise SceneError(f"{path}: node index {shown} out of range for body {_show(name)} "
-                             f"with {n} nodes (0..{n - 1} or -{n}..-1)")
-        return NodeRef(name, index % n, index if index < 0 else None)
+        return self.bodies[name], rest
+
+    def __call__(self, value: Any, path: str) -> NodeRef:
+        body, text = self._body(value, path, 'a node reference "BODY:INDEX"')
+        shape = body.grid_shape
+        if "," in text and len(shape) == 2:
+            parts = text.split(",")
+            if len(parts) != 2:
+                raise SceneError(f'{path}: expected a grid index "BODY:I,J" (two integers), '
+                                 f"got {_show(value)}")
+            i, j = (_index(part, n, path, value, f"grid index {axis}",
+                           f"body {_show(body.name)} with {n} node {what}")
+                    for part, n, axis, what in zip(parts, shape, "IJ", ("columns", "rows"),
+                                                   strict=True))
+            index = j * shape[0] + i
+            return NodeRef(body.name, index, None if text == str(index) else text)
+        n = body.n_nodes
+        index = _index(text, n, path, value, "node index",
+                       f"body {_show(body.name)} with {n} nodes", grid=len(shape) == 2)
+        return NodeRef(body.name, index, None if text == str(index) else text)
+
+    def edge(self, value: Any, path: str) -> EdgeRef:
+        """An edge (a grid line) ``"BODY:x=I"`` or ``"BODY:y=J"`` of a rectangle body."""
+        form = 'an edge "BODY:x=I" or "BODY:y=J" (a grid line of a rectangle body)'
+        body, text = self._body(value, path, form)
+        shape = body.grid_shape
+        if len(shape) != 2:
+            raise SceneError(f"{path}: body {_show(body.name)} is a line of {body.element} "
+                             f"elements; edges are grid lines of rectangle bodies (use node "
+                             f'"{body.name}:INDEX"), got {_show(value)}')
+        if text[:2] not in ("x=", "y="):
+            raise SceneError(f"{path}: expected {form}, got {_show(value)}")
+        axis = text[0]
+        a = "xy".index(axis)
+        n = shape[a]
+        line = _index(text[2:], n, path, value, f"grid line {axis}",
+                      f"body {_show(body.name)} with {n} node {('columns', 'rows')[a]}")
+        nx, ny = shape
+        nodes = (tuple(j * nx + line for j in range(ny)) if axis == "x"
+                 else tuple(line * nx + i for i in range(nx)))
+        return EdgeRef(body.name, axis, line, nodes, None if text[2:] == str(line) else text[2:])
+
+
+def _index(text: str, n: int, path: str, value: str, noun: str, owner: str,
+           grid: bool = False) -> int:
+    """A ``noun`` ("node index") in -n .. n - 1 of ``owner`` ('body "b" with 11 nodes'),
+    written as ASCII digits (NODE_INDEX), made non-negative."""
+    if not NODE_INDEX.fullmatch(text):
+        also = ' or a grid index "I,J"' if grid else ""
+        raise SceneError(f'{path}: expected an integer {noun} after ":" (ASCII digits and an '
+                         f'optional leading "-"; no "+", blanks, "_" or leading zeros, "-0" '
+                         f'neither: 0 is the first, -1 the last){also}, got {_show(value)}')
+    index = int(text) if len(text) <= 20 else None
+    if index is None or not -n <= index < n:
+        shown = text if index is not None else f"{text[:20]}..."
+        raise SceneError(f"{path}: {noun} {shown} out of range for {owner} (0..{n - 1} or "
+                         f"-{n}..-1)")
+    return index % n
 
 
 @dataclass(frozen=True)
@@ -195,7 +267,7 @@ def plain(value: Any) -> Any:
     is wrong)."""
     if hasattr(value, "to_dict"):
         return value.to_dict()
-    if isinstance(value, NodeRef):
+    if isinstance(value, NodeRef | EdgeRef):
         return value.spelled()
     if isinstance(value, dict):
         return {k: plain(v) for k, v in value.items()}
@@ -244,8 +316,13 @@ def key(parse: Parse, default: Any = dataclasses.MISSING, only_3d: str = "",
 
 
 def node_key(value: Any, path: str, context: Context) -> NodeRef:
-    """A node reference "BODY:INDEX"."""
+    """A node reference "BODY:INDEX" (or "BODY:I,J" on a rectangle body)."""
     return context.node(value, path)
+
+
+def edge_key(value: Any, path: str, context: Context) -> EdgeRef:
+    """An edge "BODY:x=I" / "BODY:y=J" of a rectangle body."""
+    return context.node.edge(value, path)
 
 
 def law_key(value: Any, path: str, context: Context) -> Law:

@@ -442,8 +442,7 @@ def test_random_scenes_round_trip_through_toml(tmp_path):
     assert expected | {"arc", "initial_angular_velocity", "quadrature"} <= kinds
 
 
-@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever",
-                                  "l_frame", "spinning_beam"])
+@pytest.mark.parametrize("name", scenes.names())
 def test_shipped_scenes_round_trip(name):
     scene = load_scene(scenes.path(name))
     text = scene.to_toml()

@@ -101,8 +101,7 @@ def _compare(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
     return python[1], python[0], python[2]
 
 
-@pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "pendulum", "arc_cantilever",
-                                  "spinning_beam", "l_frame"])
+@pytest.mark.parametrize("name", scenes.names())
 def test_engines_agree_on_the_shipped_scenes(name):
     # The whole run: thousands of steps of schemes that do not damp (trapezoidal), in which
     # round-off differences of the two engines (other summation orders, SIMD) grow - in the

@@ -40,7 +40,7 @@ def test_initial_velocities_are_the_rigid_field_of_each_body():
     model = Model(load_scene(scenes.path("spinning_beam")))
     velocity = model.initial_velocities()
     omega, shift = np.array([2.0, 3.0, 6.0]), np.array([1.0, 0.0, 0.0])
-    for node in range(model.size // model.per_node):
+    for node in range(model.n_nodes):
         r = model.reference[model.node_dofs(node, "r")]
         assert np.allclose(velocity[model.node_dofs(node, "r")], shift + np.cross(omega, r))
         for name in ("r_x", "r_y", "r_z"):

@@ -20,7 +20,7 @@ def _node_rotation_work(model: Model, node: int, force: np.ndarray,
     """Q . dq for the small rotation ``turn`` (rad; a number in 2D) of the node's section
     vectors in the reference (dq = turn x r_k on every gradient)."""
     work = 0.0
-    for name in model.vectors[1:]:
+    for name in model.node_vectors(node)[1:]:
         dofs = model.node_dofs(node, name)
         gradient = model.reference[dofs]
         change = (turn * np.array([-gradient[1], gradient[0]]) if model.dim == 2

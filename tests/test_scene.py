@@ -42,6 +42,7 @@ from runtime.laws import (
     Table,
     parse_law,
 )
+from runtime.kernels import generated_kinds
 from runtime.scene import parse_scene
 
 # --------------------------------------------------------------------------- laws
@@ -462,7 +463,8 @@ BAD = [
     ("3d", _set(*BODY, "material", "wood"),
      'body[0].material: material "wood" is not defined; defined materials: steel'),
     ("3d", _set(*BODY, "element", "beam9d"),
-     'body[0].element: unknown element kind "beam9d"; expected one of beam2d, beam3d'),
+     'body[0].element: unknown element kind "beam9d"; expected one of '
+     + ", ".join(generated_kinds())),
     ("3d", _set(*BODY, "start", [0.0, 0.0]), "body[0].start: expected a list of 3 numbers"),
     ("3d", _set(*BODY, "end", [5.0, 0.0, "0"]), "body[0].end: expected a list of 3 numbers"),
     ("2d", _set(*BODY, "end", [8.0, 0.0, 0.0]), "body[0].end: expected a list of 2 numbers"),

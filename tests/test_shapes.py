@@ -51,7 +51,7 @@ def read_pvd(path) -> list[tuple[float, str]]:
 
 def nodal_vectors(model: Model, q: np.ndarray) -> np.ndarray:
     """(nodes, 3) positions r of every node of ``q`` (z = 0 in 2D)."""
-    nodes = model.size // model.per_node
+    nodes = model.n_nodes
     result = np.zeros((nodes, 3))
     for n in range(nodes):
         result[n, :model.dim] = q[model.node_dofs(n, "r")]

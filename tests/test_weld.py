@@ -31,8 +31,9 @@ from runtime.scene import parse_scene
 
 def _rigid(model: Model, rotation: np.ndarray, shift: np.ndarray) -> np.ndarray:
     """Coordinates of the reference turned by ``rotation`` and moved by ``shift``."""
-    nodes = model.reference.reshape(-1, len(model.vectors), model.dim) @ rotation.T
-    nodes[:, model.vectors.index("r")] += shift
+    vectors = model.node_vectors(0)     # every node of these scenes carries the same vectors
+    nodes = model.reference.reshape(-1, len(vectors), model.dim) @ rotation.T
+    nodes[:, vectors.index("r")] += shift
     return nodes.ravel()
 
 
@@ -47,7 +48,7 @@ def _frame(directions) -> Model:
 def test_weld_rows_hold_under_any_rigid_motion():
     # bodies in general directions (reference frames not aligned with the axes)
     model = _frame([(1.0, 0.3, 0.2), (-0.2, 0.8, 0.5), (0.1, -0.3, 0.9)])
-    per_node = len(model.vectors) * 3
+    per_node = len(model.node_vectors(0)) * 3
     assert model.joints.shape[0] == 2 * per_node   # position and 3 gradients per weld
     assert np.abs(model.joints @ model.reference).max() < 1e-14
     rng = np.random.default_rng(1)

@@ -324,14 +324,14 @@ def integrator_case(integrator: str, step: float, rho_inf: float = 0.8, t_end: f
     record = {"first": 0.0, "where": "", "new_step": True, "max_iterations": 0, "last": 0,
               "t": 0.0, "drift": 0.0, "final": 0.0, "t_drift": 0.0}
     check = runner.converged
-    coordinate = [f"{vector}.{'xyz'[c]}" for vector in model.vectors for c in range(model.dim)]
+    coordinate = model.coordinate_names()
 
     def converged(increment: np.ndarray) -> bool:
         if record["new_step"] and increment.size:
             index = int(np.argmax(np.abs(increment)))
             if abs(increment[index]) > record["first"]:
                 record["first"] = float(abs(increment[index]))
-                record["where"] = coordinate[model.free[index] % model.per_node]
+                record["where"] = coordinate[model.free[index]]
             record["new_step"] = False
         return check(increment)
 
