@@ -50,7 +50,7 @@ __all__ = [
     "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
     "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
-    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine",
-    "Solver", "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy",
+    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
+    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy",
     "Weld", "load_scene", "run_scene",
 ]

@@ -26,10 +26,10 @@ from runtime import (
     Spherical,
     Static,
     Weld,
+    geometry,
     load_scene,
     run_scene,
 )
-from runtime import geometry
 from runtime.kernels import element_kind, generated_kinds
 from runtime.model import Model
 from runtime.scene import parse_scene

@@ -31,6 +31,7 @@ from runtime import (
     StrainEnergy,
     load_scene,
 )
+from runtime.kernels import generated_kinds
 from runtime.laws import (
     Constant,
     ConstantRate,
@@ -42,7 +43,6 @@ from runtime.laws import (
     Table,
     parse_law,
 )
-from runtime.kernels import generated_kinds
 from runtime.scene import parse_scene
 
 # --------------------------------------------------------------------------- laws
