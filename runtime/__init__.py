@@ -51,6 +51,6 @@ __all__ = [
     "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
     "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
-    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy",
-    "Weld", "load_scene", "run_scene",
+    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static",
+    "StrainEnergy", "Table", "TotalEnergy", "Weld", "load_scene", "run_scene",
 ]
