@@ -30,6 +30,7 @@ from runtime import (
     Hub,
     KineticEnergy,
     LinearRamp,
+    LineForce,
     Material,
     Modal,
     NodeRef,
@@ -39,6 +40,7 @@ from runtime import (
     PointMoment,
     Position,
     PotentialEnergy,
+    Rectangle,
     Revolute,
     Scene,
     SceneError,
@@ -52,9 +54,11 @@ from runtime import (
     Table,
     TotalEnergy,
     Weld,
+    geometry,
     load_scene,
 )
 from runtime.constraints import CONSTRAINTS
+from runtime.kernels import element_kind, generated_kinds
 from runtime.loads import LOADS
 from runtime.scene import parse_scene
 from runtime.sensors import SENSORS
@@ -217,7 +221,7 @@ def test_unknown_types_are_errors_listing_the_registry():
     data["load"][0]["type"] = "moment"
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
-                       'point_force, point_moment, gravity')
+                       'point_force, point_moment, gravity, line_force')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -227,7 +231,7 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld"]
-    assert list(LOADS) == ["point_force", "point_moment", "gravity"]
+    assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation"]
@@ -307,7 +311,8 @@ def _rotation(rng: random.Random, dim: int):
 def random_scene(rng: random.Random) -> Scene:
     """A random valid scene using every kind of body, constraint, load, sensor and table."""
     dim = rng.choice([2, 3])
-    element = "beam2d" if dim == 2 else "beam3d"
+    line_kinds = [k for k in generated_kinds() if element_kind(k).dim == dim
+                  and len(geometry.mesh_axes(element_kind(k))) == 1]
     materials = []
     for name in rng.sample(MATERIAL_NAMES, rng.randint(1, 3)):
         law = rng.choice(["svk", "ecm"])
@@ -320,7 +325,8 @@ def random_scene(rng: random.Random) -> Scene:
     bodies = []
     for name in rng.sample(NAMES, rng.randint(1, 3)):
         elements = rng.randint(1, 4)
-        common = dict(name=name, element=element, material=rng.choice(materials).name,
+        common = dict(name=name, element=rng.choice(line_kinds),
+                      material=rng.choice(materials).name,
                       height=_number(rng, 0.01, 0.2), width=_number(rng, 0.01, 0.2),
                       elements=elements)
         if rng.random() < 0.3:
@@ -345,6 +351,15 @@ def random_scene(rng: random.Random) -> Scene:
             body = dataclasses.replace(body, initial_angular_velocity=Spin(
                 _rotation(rng, dim), _vector(rng, dim)))
         bodies.append(body)
+    plate_kinds = [k for k in generated_kinds() if len(geometry.mesh_axes(element_kind(k))) == 2]
+    plate = None
+    if dim == 3 and rng.random() < 0.4:   # a plate apart from the chain
+        grid = (rng.randint(1, 3), rng.randint(1, 3))
+        plate = Body("sheet", rng.choice(plate_kinds), rng.choice(materials).name,
+                     rectangle=Rectangle(tuple(np.add(_vector(rng, 3, 2.0), (0, 0, 10.0))),
+                                         (_number(rng, 0.1, 2), _number(rng, 0.1, 2)), grid),
+                     thickness=_number(rng, 0.001, 0.05))
+        bodies.append(plate)
 
     constraints, held = [], {}
     first = f"{bodies[0].name}:0"
@@ -356,16 +371,29 @@ def random_scene(rng: random.Random) -> Scene:
         constraints.append(kind(first))
     if kind is not None:
         held[(bodies[0].name, 0)] = kind
-    joints = [Spherical, Weld] + ([Revolute] if dim == 2 else [])
-    for a, b in zip(bodies, bodies[1:], strict=False):
+    chain = [b for b in bodies if b is not plate]
+    for a, b in zip(chain, chain[1:], strict=False):
+        full = all(len(element_kind(x.element).vectors) == dim + 1 for x in (a, b))
+        joints = [Spherical] + ([Weld] if full else []) + ([Revolute] if dim == 2 else [])
         constraints.append(rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0))))
-    for body in bodies:           # pins on interior nodes
-        for index in range(1, body.elements):
+    if plate is not None:
+        edge = rng.choice(["x=0", "x=-1", "y=0", "y=-1"])
+        constraints.append(rng.choice([Clamp, Pin])(edge=f"sheet:{edge}"))
+        columns, rows = plate.grid_shape
+        axis, line = edge.split("=")
+        line = int(line) % (columns if axis == "x" else rows)
+        for node in ([j * columns + line for j in range(rows)] if axis == "x"
+                     else [line * columns + i for i in range(columns)]):
+            held[("sheet", node)] = type(constraints[-1])
+        other = {"x=0": "x=-1", "x=-1": "x=0", "y=0": "y=-1", "y=-1": "y=0"}[edge]
+        loads_on_plate = [LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3))]
+    for body in chain:            # pins on interior nodes
+        for index in range(1, body.n_nodes - 1):
             if rng.random() < 0.2:
                 constraints.append(Pin(NodeRef(body.name, index)))
                 held[(body.name, index)] = Pin
 
-    loads = []
+    loads = loads_on_plate if plate is not None else []
     for _ in range(rng.randint(0, 3)):
         body = rng.choice(bodies)
         index = rng.randrange(body.n_nodes)
@@ -384,6 +412,9 @@ def random_scene(rng: random.Random) -> Scene:
     for i in range(rng.randint(0, 6)):
         body = rng.choice(bodies)
         node = NodeRef(body.name, rng.randrange(body.n_nodes))
+        if body is plate and rng.random() < 0.5:       # by grid index, as written
+            columns, rows = body.grid_shape
+            node = f"sheet:{rng.randrange(-columns, columns)},{rng.randrange(rows)}"
         name = rng.choice(["s", "tip.x", "U-", "_v"]) + str(i)
         components = ("x", "y", "norm") if dim == 2 else ("x", "y", "z", "norm")
         options = [
@@ -435,11 +466,13 @@ def test_random_scenes_round_trip_through_toml(tmp_path):
             assert load_scene(path) == scene
         kinds.update(type(x).__name__ for x in (*scene.constraints, *scene.loads,
                                                  *scene.sensors))
-        kinds.update(k for k in ("arc", "initial_angular_velocity", "quadrature")
+        kinds.update(k for k in ("arc", "initial_angular_velocity", "quadrature", "rectangle")
                      if any(getattr(b, k) is not None for b in scene.bodies))
-    # every class of every registry was exercised
+        kinds.update(b.element for b in scene.bodies)
+    # every class of every registry and every element kind was exercised
     expected = {cls.__name__ for r in (CONSTRAINTS, LOADS, SENSORS) for cls in r.values()}
-    assert expected | {"arc", "initial_angular_velocity", "quadrature"} <= kinds
+    assert expected | {"arc", "initial_angular_velocity", "quadrature", "rectangle",
+                       *generated_kinds()} <= kinds
 
 
 @pytest.mark.parametrize("name", scenes.names())
