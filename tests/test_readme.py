@@ -36,12 +36,16 @@ def test_readme_has_the_python_examples():
 def test_readme_python_example_runs_verbatim(index, tmp_path):
     code = BLOCKS[index]
     out = _run(code, tmp_path)
-    if "run_scene(scene)" in code:   # the paper cantilever built in code
+    if "Paper cantilever" in code:   # the paper cantilever built in code
         lines = out.splitlines()
         status, tip = lines[0].split()
         assert status == "ok" and float(tip) == pytest.approx(-0.01134, rel=2e-3)
         assert float(lines[1]) == pytest.approx(16.27, rel=2e-3)   # paper: 16.28 rad/s
         assert (tmp_path / "tip_y.png").read_bytes()[:4] == b"\x89PNG"
+    if "plate3d" in code:            # the plate strip against beam theory
+        tip, theory = map(float, out.split())
+        assert tip == pytest.approx(-0.001897, rel=1e-3)
+        assert tip == pytest.approx(theory, rel=0.005)
     if "VtkSeries" in code:          # a ParaView series that meshio reads back
         folder = tmp_path / "cantilever_vtk"
         pvd = (folder / "dynamic.pvd").read_text()
