@@ -34,20 +34,6 @@ def generated_kinds() -> list[str]:
     return sorted(p.parent.name for p in generated_dir().glob("*/element.json"))
 
 
-def known_kinds() -> list[str]:
-    """Element kinds a scene can mesh, sorted: the 2-node line elements, since the scene
-    model meshes a body as a chain of elements sharing end nodes.  Kinds with more nodes
-    (beam2d_3node, beam3d_3node) or a plate domain (plate3d) are generated and usable through
-    ``runtime.Element`` and ``runtime.geometry.structured_mesh``; scenes get them when the
-    model meshes by connectivity (docs/new-element.md)."""
-    out = []
-    for name in generated_kinds():
-        meta = _load_kind(name).meta
-        if len(meta["nodes"]) == 2 and meta["domain"]["name"] == "beam":
-            out.append(name)
-    return out
-
-
 @dataclass(frozen=True)
 class ElementKind:
     """Metadata of one generated element kind (see ``symgen.emit.element_metadata``)."""
