@@ -26,6 +26,28 @@ def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray
     return np.array(e0, dtype=float)
 
 
+def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
+    """Orthonormal frame (dim, dim) from a node's gradient vectors {"r_x": (dim,), ...}:
+    orthonormalised with r_x kept as the first axis.  A missing gradient (r_x of a 3-node
+    beam) is completed from the others: r_x = r_y x r_z in 3D, r_y turned by -90 degrees in
+    2D (so the frame stays right-handed)."""
+    axes = "xyz"[:dim]
+    columns = {name[-1]: np.asarray(value, float) for name, value in gradients.items()}
+    missing = [a for a in axes if a not in columns]
+    if len(missing) > 1:
+        raise ValueError(f"frame: a node with gradients {sorted(gradients)} has too few to "
+                         f"define a frame in {dim}D")
+    if missing and dim == 3:
+        i = axes.index(missing[0])
+        columns[missing[0]] = np.cross(columns[axes[(i + 1) % 3]], columns[axes[(i + 2) % 3]])
+    elif missing:
+        other = columns["y" if missing[0] == "x" else "x"]
+        sign = 1.0 if missing[0] == "x" else -1.0
+        columns[missing[0]] = sign * np.array([other[1], -other[0]])
+    basis, upper = np.linalg.qr(np.column_stack([columns[a] for a in axes]))
+    return basis * np.sign(np.diag(upper))
+
+
 def node_fractions(kind: ElementKind) -> np.ndarray:
     """Local node coordinates (n_nodes, dim) as fractions of the domain parameters along the
     meshed axes (x for beams; x and y for plates): 0, 1/2, 1 for a 3-node beam."""

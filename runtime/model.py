@@ -408,26 +408,11 @@ class Model:
     # --- frames and rigid motions --------------------------------------------------------
 
     def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
-        """Orthonormal frame (dim, dim) of a node: its gradient vectors r_x, r_y(, r_z),
-        orthonormalised with r_x kept as the first axis (exact for a rigidly rotated node
-        such as a hub).  A gradient the node does not carry (r_x of a 3-node beam) is
-        completed from the others: r_x = r_y x r_z in 3D, r_y turned by -90 degrees in 2D."""
-        carried = {name[-1]: q[self.node_dofs(node, name)] for name in
-                   self.node_vectors(node) if name != "r"}
-        axes = "xyz"[:self.dim]
-        missing = [a for a in axes if a not in carried]
-        if len(missing) > 1:
-            raise ValueError(f"node {node} carries {len(carried)} gradients; a frame needs at "
-                             f"least {self.dim - 1}")
-        if missing and self.dim == 3:
-            i = axes.index(missing[0])
-            carried[missing[0]] = np.cross(carried[axes[(i + 1) % 3]], carried[axes[(i + 2) % 3]])
-        elif missing:
-            other = carried["y" if missing[0] == "x" else "x"]
-            sign = 1.0 if missing[0] == "x" else -1.0
-            carried[missing[0]] = sign * np.array([other[1], -other[0]])
-        basis, upper = np.linalg.qr(np.column_stack([carried[a] for a in axes]))
-        return basis * np.sign(np.diag(upper))
+        """Orthonormal frame (dim, dim) of a node at coordinates q: its gradient vectors
+        (``geometry.gradient_frame``: r_x kept as the first axis, a gradient the node does not
+        carry completed from the others; exact for a rigidly rotated node such as a hub)."""
+        return geometry.gradient_frame({name: q[self.node_dofs(node, name)] for name in
+                                        self.node_vectors(node) if name != "r"}, self.dim)
 
     def rigid_field(self, translation: Sequence[float] | None = None,
                     rotation: float | Sequence[float] | None = None,

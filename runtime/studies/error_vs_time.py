@@ -181,7 +181,8 @@ def cantilever(scene: Scene, label: str, measure: str) -> Cantilever:
     body = scene.bodies[0]
     if body.start is None or body.end is None:
         raise fail(f"body {body.name!r} is not straight")
-    ends = (0, body.elements)
+    last = body.n_nodes - 1
+    ends = (0, last)
     clamps = [c for c in scene.constraints if c.type == "clamp"]
     if len(scene.constraints) != 1 or not clamps or clamps[0].node.index not in ends:
         raise fail("expected exactly one constraint, a clamp at an end node")
@@ -189,15 +190,16 @@ def cantilever(scene: Scene, label: str, measure: str) -> Cantilever:
     if len(scene.loads) != 1 or not forces:
         raise fail("expected exactly one load, a point_force")
     clamp, force = clamps[0].node, forces[0]
-    if force.node.index != body.elements - clamp.index:
+    if force.node.index != last - clamp.index:
         raise fail(f"the point force acts on {force.node}, not on the free end")
-    from runtime.geometry import straight_reference
+    from runtime.geometry import gradient_frame, straight_reference
     from runtime.kernels import element_kind
 
     kind = element_kind(body.element)
     dim = kind.dim
-    e0 = straight_reference(kind, body.start, body.end)
-    frame = np.column_stack([e0[dim * (1 + a): dim * (2 + a)] for a in range(dim)])
+    e0 = straight_reference(kind, body.start, body.end).reshape(-1, len(kind.vectors), dim)[0]
+    frame = gradient_frame({name: e0[k] for k, name in enumerate(kind.vectors)
+                            if name != "r"}, dim)
     material = scene.material_of(body)
     E, rho = material.E, material.rho
     h, w = body.height, body.width
