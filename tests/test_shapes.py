@@ -1,6 +1,7 @@
-"""Shapes (runtime.shapes): centre lines sampled from the shape functions, VTU files read
-back by meshio, the PVD collections, mode shapes, the GIF and the static snapshot, through
-``ancf run --vtk --gif`` too."""
+"""Shapes (runtime.shapes): centre lines and plate mid-surfaces sampled from the shape
+functions of every generated kind, VTU files read back by meshio, the PVD collections, mode
+shapes, the GIF and the static snapshot (beams and plates), through ``ancf run --vtk --gif``
+too."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from runtime.model import Model
 from runtime.result import run_scene
 from runtime.run import run
 from runtime.scene import parse_scene, toml_text
-from runtime.shapes import PER_ELEMENT, CentreLine, Frames, VtkSeries
+from runtime.shapes import PER_ELEMENT, Frames, Shape, VtkSeries
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SENSORS = [{"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -63,9 +64,11 @@ def nodal_vectors(model: Model, q: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("element", ["beam2d", "beam3d"])
 def test_centre_line_is_the_hermite_interpolation_of_the_nodes(element):
     model = Model(parse_scene(small(element)))
-    line = CentreLine(model)
+    line = Shape(model)
     assert line.points == 2 * PER_ELEMENT + 1
-    assert line.segments.tolist() == [[k, k + 1] for k in range(2 * PER_ELEMENT)]
+    assert [(name, cells.tolist()) for name, cells in line.cells] == [
+        ("line", [[k, k + 1] for k in range(2 * PER_ELEMENT)])]
+    assert line.outline.tolist() == list(range(line.points))
     assert line.node_points.tolist() == [0, PER_ELEMENT, 2 * PER_ELEMENT]
     # the reference: points equally spaced along the straight beam
     reference = line.sample(model.reference)
@@ -90,11 +93,15 @@ def test_several_bodies_are_separate_polylines():
                  [{"type": "clamp", "node": "a:0"}, {"type": "revolute",
                                                      "nodes": ["a:-1", "b:0"]}],
                  solver={"backend": "numpy"}).to_dict()
-    line = CentreLine(Model(parse_scene(data)))
+    line = Shape(Model(parse_scene(data)))
     first = 2 * PER_ELEMENT + 1
     assert line.points == first + 3 * PER_ELEMENT + 1
-    assert [first - 1, first] not in line.segments.tolist()   # no cell across bodies
-    assert len(line.segments) == line.points - 2
+    [(name, segments)] = line.cells
+    assert name == "line"
+    assert [first - 1, first] not in segments.tolist()   # no cell across bodies
+    assert len(segments) == line.points - 2
+    # drawn as two polylines, not joined
+    assert line.outline.tolist() == [*range(first), -1, *range(first, line.points)]
 
 
 # --------------------------------------------------------------------------- VTU and PVD
@@ -261,7 +268,7 @@ def test_frames_stay_few_evenly_spaced_with_the_latest(monkeypatch):
 
     monkeypatch.setattr(shapes, "MAX_FRAMES", 3)
     frames = Frames()
-    frames.line = SimpleNamespace(sample=lambda q: q)
+    frames.shape = SimpleNamespace(sample=lambda q: q)
     for n in range(50):
         frames.sample(float(n), np.full((2, 3), n), None, {})
         assert len(frames.frames) <= 6 and frames.times[-1] == n
