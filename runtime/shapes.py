@@ -75,8 +75,8 @@ class Shape:
             kind = body.kind
             axes = geometry.mesh_axes(kind)
             if len(axes) not in CELL_TYPES:
-                raise ValueError(f"shape: cannot draw {kind.name}, a mesh over {len(axes)} "
-                                 f"axes (drawn: {', '.join(map(str, CELL_TYPES))})")
+                raise ValueError(f"shape: cannot draw {kind.name}, meshed over {len(axes)} "
+                                 f"axes (meshes over 1 or 2 axes are drawn)")
             fractions = _sample_fractions(kind, axes, per_element)
             local = _grid(fractions)                                # (samples, axes)
             values = _shape_values(body, axes, local)
@@ -154,8 +154,8 @@ def _grid_loop(fractions: list[np.ndarray]) -> np.ndarray:
 
 
 def _polylines(lines: np.ndarray) -> list[np.ndarray]:
-    """Polylines (elements, k) of point indices, chained where one ends at the next's start
-    (the elements of a beam body make one line)."""
+    """The element polylines ``lines`` (elements, k) of point indices as a list, chained
+    where one ends at the next's start (the elements of a beam body make one line)."""
     out = [lines[0]]
     for line in lines[1:]:
         if out[-1][-1] == line[0]:
