@@ -225,7 +225,7 @@ class _Job:
         attempted.  A failure is a warning, as for the plots."""
         drawn = []
         if simulation.static_q is not None:
-            line = shapes.CentreLine(simulation.model)
+            line = shapes.Shape(simulation.model)
             drawn.append((output.SHAPE_FILE, lambda path: shapes.write_snapshot(
                 path, line, simulation.model.reference, simulation.static_q, scene.title,
                 plane=plane)))

@@ -1,19 +1,25 @@
-"""Deformed shapes of a model: the beams' centre lines, ParaView files, an animation.
+"""Deformed shapes of a model: beams' centre lines, plates' mid-surfaces, ParaView files, an
+animation.
 
-The centre line of an element is ``r(x) = S(x) e`` at local points ``(x, 0[, 0])``, with the
-shape functions ``S`` of the element kind (the generated ``shape_values`` kernel of its
-invariants family); ``CentreLine`` samples it a few points per element, so displacements,
-velocities and mode shapes (all linear in the coordinates) are sampled the same way.
+An element's position field is ``r(p) = S(p) e`` at local points ``p`` of its reference
+domain, with the shape functions ``S`` of the element kind (the generated ``shape_values``
+kernel of its invariants family).  :class:`Shape` samples it on a small grid per element over
+the axes the kind's mesh tiles (``geometry.mesh_axes``), at the middle of the other axes: the
+centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate.  The grid
+holds the element's nodes, so every model node is a sample point.  Displacements, velocities
+and mode shapes (all linear in the coordinates) are sampled the same way.
 
 Writers (all atomic, a write error is :class:`runtime.output.OutputError`):
 
-* :func:`write_vtu` - one VTU file (meshio): the centre lines as line cells, point data
-  ``displacement`` (m) and ``velocity`` (m/s), or any vectors given;
+* :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates,
+  point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given;
 * :func:`write_pvd` - a ParaView collection of VTU files with their times;
 * :class:`VtkSeries` - a run observer writing ``vtk/dynamic_NNNNNN.vtu`` at every output time
   and ``vtk/dynamic.pvd``, plus ``vtk/static.vtu`` and ``vtk/mode_K.vtu`` / ``vtk/modes.pvd``;
 * :class:`Frames` (a run observer) and :func:`write_animation` - a GIF of the deformed shape
   projected on a plane; :func:`write_snapshot` - a PNG of one state against the reference.
+  Both draw the element edges (:attr:`Shape.outline`): a beam's centre line, the wireframe
+  of a plate's elements.
 """
 
 from __future__ import annotations
@@ -24,73 +30,182 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from runtime import output
-from runtime.kernels import kernel_family
-from runtime.model import Model
+from runtime import geometry, output
+from runtime.kernels import ElementKind, kernel_family
+from runtime.model import BodyMesh, Model
 from runtime.progress import Bar
 from runtime.result import Modes, Observer
 
-__all__ = ["PLANES", "CentreLine", "Frames", "VtkSeries", "magnification", "write_animation",
+__all__ = ["PLANES", "Frames", "Shape", "VtkSeries", "magnification", "write_animation",
            "write_pvd", "write_snapshot", "write_vtu"]
 
-#: sample points per element along each centre line
+#: sample intervals per element along each meshed axis (more where nodes fall between them)
 PER_ELEMENT = 4
 #: projections of the animation and snapshot: plane name -> (horizontal, vertical) axes
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 #: frames of an animation at most (output times are subsampled evenly beyond)
 MAX_FRAMES = 100
+#: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2)
+CELL_TYPES = {1: "line", 2: "quad"}
+#: sample points are matched on a grid of 2**-20 element units (as geometry.structured_mesh)
+_KEY = 2**20
 
 
-class CentreLine:
-    """The centre lines of every body of ``model``, ``per_element`` segments per element.
+class Shape:
+    """The sampled shape of every body of ``model``: a grid of at least ``per_element``
+    intervals per element along each meshed axis, refined to hold the element's nodes
+    (a 3-node beam with ``per_element`` 3 samples x / l = 0, 1/3, 1/2, 2/3, 1).
 
-    ``points``: number of sample points (bodies one after the other, each from its node 0);
-    ``segments``: (points - bodies, 2) point indices of the line cells; ``node_points``:
-    index of the sample point at each model node (node-major order of the model).
+    ``points``: number of sample points (bodies one after the other; within a body a point
+    shared by elements is one point, numbered along x, then y); ``cells``: ``[(type,
+    (cells, corners) point indices)]`` per VTK cell type (``CELL_TYPES``), as meshio takes
+    them; ``node_points`` (nodes,): the sample point at each model node, in node order;
+    ``outline`` (k,): point indices of the element edges as polylines separated by -1 (a
+    beam body's centre line is one polyline, each plate element a closed loop).
     """
 
     def __init__(self, model: Model, per_element: int = PER_ELEMENT) -> None:
-        self.model, self.dim = model, model.dim
-        self._bodies = []   # (element dofs (m, ndof), shape values (s + 1, n_shape))
-        segments, node_points, first = [], [], 0
+        self.dim = model.dim
+        # per body: element dofs (m, ndof), shape values (samples, n_shape), sample points
+        # (m, samples)
+        self._bodies = []
+        cells: dict[str, list[np.ndarray]] = {}
+        outline, node_points, first = [], [], 0
         for body in model.bodies.values():
-            element = body.element
-            length = element.geometry[0]
-            points = np.zeros((per_element + 1, element.kind.dim))
-            points[:, 0] = np.linspace(0.0, length, per_element + 1)
-            family = kernel_family(element.kind.name, "invariants", element.backend)
-            values = family("shape_values", {"point": points,
-                                             "geometry": np.asarray(element.geometry)})["values"]
-            self._bodies.append((body.element_dofs, values))
-            count = body.elements * per_element + 1
-            index = first + np.arange(count - 1)
-            segments.append(np.column_stack([index, index + 1]))
-            node_points.append(first + per_element * np.arange(body.nodes))
+            kind = body.kind
+            axes = geometry.mesh_axes(kind)
+            if len(axes) not in CELL_TYPES:
+                raise ValueError(f"shape: cannot draw {kind.name}, meshed over {len(axes)} "
+                                 f"axes (meshes over 1 or 2 axes are drawn)")
+            fractions = _sample_fractions(kind, axes, per_element)
+            local = _grid(fractions)                                # (samples, axes)
+            values = _shape_values(body, axes, local)
+            count, points, nodes = _sample_points(body, axes, local)
+            self._bodies.append((body.element_dofs, values, first + points))
+            corners = _grid_cells(fractions)                        # (cells, corners)
+            cells.setdefault(CELL_TYPES[len(axes)], []).append(
+                (first + points[:, corners]).reshape(-1, corners.shape[1]))
+            outline += _polylines(first + points[:, _grid_loop(fractions)])
+            node_points.append(first + nodes)
             first += count
         self.points = first
-        self.segments = np.concatenate(segments)
+        self.cells = [(name, np.concatenate(blocks)) for name, blocks in cells.items()]
         self.node_points = np.concatenate(node_points)
+        self.outline = np.concatenate([np.append(line, -1) for line in outline])[:-1]
 
     def sample(self, q: np.ndarray) -> np.ndarray:
-        """(points, 3) centre-line vectors of coordinates ``q`` (size,): positions for
-        positions, velocities for velocities (z = 0 in 2D)."""
-        lines = []
-        for dofs, values in self._bodies:
-            e = q[dofs].reshape(dofs.shape[0], values.shape[1], self.dim)
-            samples = np.einsum("pk,mkd->mpd", values, e)       # (elements, s + 1, dim)
-            lines += [samples[:, :-1].reshape(-1, self.dim), samples[-1, -1:]]
+        """(points, 3) sampled vectors of coordinates ``q`` (size,): positions (m) for
+        positions, velocities (m/s) for velocities (z = 0 in 2D)."""
         result = np.zeros((self.points, 3))
-        result[:, :self.dim] = np.concatenate(lines)
+        for dofs, values, points in self._bodies:
+            e = q[dofs].reshape(dofs.shape[0], values.shape[1], self.dim)
+            samples = np.einsum("pk,mkd->mpd", values, e)       # (elements, samples, dim)
+            result[points.ravel(), :self.dim] = samples.reshape(-1, self.dim)
         return result
 
+    def projected(self, vectors: np.ndarray, plane: str) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal and vertical coordinates (k,) of the outline of ``vectors`` (points, 3)
+        on ``plane`` (a key of ``PLANES``), NaN between polylines (matplotlib breaks lines
+        there)."""
+        i, j = _check_plane(plane)
+        drawn = vectors[self.outline][:, [i, j]]
+        drawn[self.outline < 0] = np.nan
+        return drawn[:, 0], drawn[:, 1]
 
-def write_vtu(path: str | Path, line: CentreLine, q: np.ndarray,
+
+def _sample_fractions(kind: ElementKind, axes: list[int], per_element: int) -> list[np.ndarray]:
+    """Sample fractions of the element along each meshed axis: ``per_element`` equal
+    intervals of [0, 1] and the nodes' fractions."""
+    nodes = geometry.node_fractions(kind)[:, axes]
+    even = np.linspace(0.0, 1.0, per_element + 1)
+    return [np.unique(np.round(np.concatenate([even, nodes[:, a]]) * _KEY)) / _KEY
+            for a in range(len(axes))]
+
+
+def _grid(fractions: list[np.ndarray]) -> np.ndarray:
+    """(samples, axes) points of the tensor grid of ``fractions`` per axis, x fastest."""
+    mesh = np.meshgrid(*fractions[::-1], indexing="ij")
+    return np.stack(mesh[::-1], axis=-1).reshape(-1, len(fractions))
+
+
+def _indices(fractions: list[np.ndarray]) -> np.ndarray:
+    """Sample index of each grid point of ``_grid(fractions)``, shaped (ny, nx) or (nx,)."""
+    shape = tuple(len(f) for f in fractions[::-1])
+    return np.arange(int(np.prod(shape))).reshape(shape)
+
+
+def _grid_cells(fractions: list[np.ndarray]) -> np.ndarray:
+    """Local cells (cells, corners) of the sample grid: segments along a line, quads
+    (counter-clockwise in the local x-y plane) over a surface."""
+    index = _indices(fractions)
+    if index.ndim == 1:
+        return np.column_stack([index[:-1], index[1:]])
+    return np.stack([index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]],
+                    axis=-1).reshape(-1, 4)
+
+
+def _grid_loop(fractions: list[np.ndarray]) -> np.ndarray:
+    """Local sample indices along the element's edges: the line itself; a surface's
+    boundary as a closed loop (y = 0, x = 1, y = 1, x = 0)."""
+    index = _indices(fractions)
+    if index.ndim == 1:
+        return index
+    return np.concatenate([index[0, :-1], index[:-1, -1], index[-1, :0:-1], index[::-1, 0]])
+
+
+def _polylines(lines: np.ndarray) -> list[np.ndarray]:
+    """The element polylines ``lines`` (elements, k) of point indices as a list, chained
+    where one ends at the next's start (the elements of a beam body make one line)."""
+    out = [lines[0]]
+    for line in lines[1:]:
+        if out[-1][-1] == line[0]:
+            out[-1] = np.concatenate([out[-1], line[1:]])
+        else:
+            out.append(line)
+    return out
+
+
+def _shape_values(body: BodyMesh, axes: list[int], local: np.ndarray) -> np.ndarray:
+    """Shape function values (samples, n_shape) at the sample fractions ``local`` (samples,
+    axes) of the meshed axes, at the middle of the other axes (a beam's centre line, a
+    plate's mid-surface)."""
+    element = body.element
+    domain = element.kind.meta["domain"]
+    points = np.zeros((len(local), element.kind.dim))
+    for a, axis in enumerate(domain["axes"]):
+        scale = element.geometry[domain["parameters"].index(axis["scale"])]
+        low, high = (scale * n / d for n, d in (axis["low"], axis["high"]))
+        points[:, a] = (low + local[:, axes.index(a)] * (high - low) if a in axes
+                        else (low + high) / 2)
+    family = kernel_family(element.kind.name, "invariants", element.backend)
+    return family("shape_values", {"point": points,
+                                   "geometry": np.asarray(element.geometry)})["values"]
+
+
+def _sample_points(body: BodyMesh, axes: list[int],
+                   local: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """Where the samples of ``body`` go: the number of its distinct sample points (numbered
+    along x, then y), the point of each element sample (elements, samples) and the point of
+    each node (nodes,)."""
+    mesh = body.mesh
+    corner = mesh.points[mesh.connectivity[:, 0]] - geometry.node_fractions(body.kind)[0, axes]
+    samples = np.round((corner[:, None, :] + local[None, :, :]) * _KEY).astype(np.int64)
+    keys, inverse = np.unique(samples.reshape(-1, len(axes))[:, ::-1], axis=0,
+                              return_inverse=True)
+    where = {tuple(key): i for i, key in enumerate(keys)}
+    nodes = np.round(mesh.points[:, ::-1] * _KEY).astype(np.int64)
+    return (len(keys), inverse.reshape(samples.shape[:2]),
+            np.array([where[tuple(key)] for key in nodes]))
+
+
+def write_vtu(path: str | Path, shape: Shape, q: np.ndarray,
               vectors: dict[str, np.ndarray]) -> Path:
-    """The centre lines at coordinates ``q`` into the VTU file ``path``, with point data
-    ``{name: (points, 3)}`` (e.g. displacement in m, velocity in m/s)."""
+    """The shape at coordinates ``q`` (size,) into the VTU file ``path`` (points in m, the
+    cells of ``shape``), with point data ``{name: (points, 3)}`` (e.g. displacement in m,
+    velocity in m/s)."""
     import meshio
 
-    mesh = meshio.Mesh(line.sample(q), [("line", line.segments)], point_data=vectors)
+    mesh = meshio.Mesh(shape.sample(q), shape.cells, point_data=vectors)
     path = Path(path)
     with output.atomic_path(path) as tmp:
         meshio.write(tmp, mesh, file_format="vtu")
@@ -128,9 +243,9 @@ class VtkSeries(Observer):
         self._entries: list[tuple[float, str]] = []
 
     def begin(self, model: Model) -> None:
-        self.line = CentreLine(model)
+        self.shape = Shape(model)
         self.reference = model.reference
-        self.zero = np.zeros((self.line.points, 3))
+        self.zero = np.zeros((self.shape.points, 3))
         try:
             self.folder.mkdir(exist_ok=True)
         except OSError as error:
@@ -138,14 +253,14 @@ class VtkSeries(Observer):
                                      f"({error.strerror or error})") from None
 
     def _write(self, name: str, q: np.ndarray, vectors: dict[str, np.ndarray]) -> None:
-        write_vtu(self.folder / name, self.line, q, vectors)
+        write_vtu(self.folder / name, self.shape, q, vectors)
 
     def _collection(self, name: str, entries: list[tuple[float, str]]) -> None:
         write_pvd(self.folder / name, entries)
         self.files.append(f"{self.folder.name}/{name}")
 
     def static(self, q: np.ndarray) -> None:
-        self._write("static.vtu", q, {"displacement": self.line.sample(q - self.reference),
+        self._write("static.vtu", q, {"displacement": self.shape.sample(q - self.reference),
                                       "velocity": self.zero})
         self.files.append(f"{self.folder.name}/static.vtu")
 
@@ -153,14 +268,14 @@ class VtkSeries(Observer):
         entries = []
         for k, shape in enumerate(modes.shapes, start=1):
             name = f"mode_{k}.vtu"
-            self._write(name, modes.about, {"mode": self.line.sample(shape)})
+            self._write(name, modes.about, {"mode": self.shape.sample(shape)})
             entries.append((float(k), name))
         self._collection("modes.pvd", entries)
 
     def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
         name = f"dynamic_{len(self._entries):06d}.vtu"
-        self._write(name, q, {"displacement": self.line.sample(q - self.reference),
-                              "velocity": self.line.sample(v)})
+        self._write(name, q, {"displacement": self.shape.sample(q - self.reference),
+                              "velocity": self.shape.sample(v)})
         self._entries.append((t, name))
 
     def dynamic_end(self) -> None:
@@ -169,8 +284,9 @@ class VtkSeries(Observer):
 
 
 class Frames(Observer):
-    """Keeps the centre line (points, 3) at the output times of the dynamic analysis, for
-    :func:`write_animation`: ``times``, ``frames`` and the ``reference`` line.  Memory stays
+    """Keeps the sampled shape (points, 3) at the output times of the dynamic analysis, for
+    :func:`write_animation`: ``shape`` (a :class:`Shape`), ``times``, ``frames`` and the
+    ``reference`` samples.  Memory stays
     bounded: beyond ``2 * MAX_FRAMES`` frames every other one is dropped (evenly spaced
     output times are kept, and always the latest)."""
 
@@ -182,14 +298,14 @@ class Frames(Observer):
         self._count = 0
 
     def begin(self, model: Model) -> None:
-        self.line = CentreLine(model)
-        self.reference = self.line.sample(model.reference)
+        self.shape = Shape(model)
+        self.reference = self.shape.sample(model.reference)
 
     def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
         if self._outputs and self._outputs[-1] % self._stride:  # the latest, not on stride
             self._drop(len(self._outputs) - 1)
         self.times.append(t)
-        self.frames.append(self.line.sample(q))
+        self.frames.append(self.shape.sample(q))
         self._outputs.append(self._count)
         self._count += 1
         if len(self.frames) > 2 * MAX_FRAMES:
@@ -215,8 +331,9 @@ def magnification(reference: np.ndarray, states: Sequence[np.ndarray]) -> float:
     return float(max(m * power for m in (1, 2, 5) if m * power <= wanted))
 
 
-def _axes(fig, plane: str, reference: np.ndarray, shown: Sequence[np.ndarray]):
-    """An axes of ``fig`` for ``plane`` with limits holding every line, equal scales."""
+def _axes(fig, shape: Shape, plane: str, reference: np.ndarray, shown: Sequence[np.ndarray]):
+    """An axes of ``fig`` for ``plane`` with limits holding every sample (points, 3) of
+    ``reference`` and ``shown``, equal scales, the outline of ``reference`` dashed."""
     i, j = PLANES[plane]
     everything = np.concatenate([reference, *shown])
     low, high = everything.min(axis=0), everything.max(axis=0)
@@ -228,7 +345,7 @@ def _axes(fig, plane: str, reference: np.ndarray, shown: Sequence[np.ndarray]):
     ax.set_xlabel(f"{plane[0]} (m)")
     ax.set_ylabel(f"{plane[1]} (m)")
     ax.grid(True, alpha=0.3)
-    ax.plot(reference[:, i], reference[:, j], "--", color="0.6", lw=1, label="reference")
+    ax.plot(*shape.projected(reference, plane), "--", color="0.6", lw=1, label="reference")
     return ax
 
 
@@ -244,22 +361,22 @@ def _check_plane(plane: str) -> tuple[int, int]:
     return PLANES[plane]
 
 
-def write_snapshot(path: str | Path, line: CentreLine, reference: np.ndarray, q: np.ndarray,
+def write_snapshot(path: str | Path, shape: Shape, reference: np.ndarray, q: np.ndarray,
                    title: str, what: str = "static state", plane: str = "xy") -> Path:
-    """PNG of the centre line at ``q`` over the reference ``reference`` (coordinates, size,)
-    projected on ``plane``, titled ``title`` and ``what``; displacements magnified as
-    :func:`magnification` says."""
+    """PNG of the outline of ``shape`` (centre lines, plate element edges) at ``q`` over the
+    reference ``reference`` (both coordinates, (size,)) projected on ``plane``, titled
+    ``title`` and ``what``; displacements magnified as :func:`magnification` says."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    i, j = _check_plane(plane)
-    base = line.sample(reference)
-    scale = magnification(base, [line.sample(q)])
-    shown = base + scale * (line.sample(q) - base)
+    _check_plane(plane)
+    base, state = shape.sample(reference), shape.sample(q)
+    scale = magnification(base, [state])
+    shown = base + scale * (state - base)
     fig = Figure(figsize=(6.4, 4.0), layout="constrained")
     FigureCanvasAgg(fig)
-    ax = _axes(fig, plane, base, [shown])
-    ax.plot(shown[:, i], shown[:, j], lw=2, color="C0", label="deformed")
+    ax = _axes(fig, shape, plane, base, [shown])
+    ax.plot(*shape.projected(shown, plane), lw=2, color="C0", label="deformed")
     ax.set_title(_heading(title, what, scale), fontsize=9)
     ax.legend(fontsize=8)
     path = Path(path)
@@ -270,14 +387,15 @@ def write_snapshot(path: str | Path, line: CentreLine, reference: np.ndarray, q:
 
 def write_animation(path: str | Path, frames: Frames, title: str, plane: str = "xy",
                     fps: int = 10) -> Path:
-    """GIF of the centre lines of ``frames`` projected on ``plane`` (at most ``MAX_FRAMES``
+    """GIF of the outlines of ``frames`` (centre lines, plate element edges) projected on
+    ``plane`` (at most ``MAX_FRAMES``
     frames, evenly chosen, the last included), with the reference dashed and the time in
     the title; displacements magnified as :func:`magnification` says."""
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    i, j = _check_plane(plane)
+    _check_plane(plane)
     if not frames.frames:
         raise ValueError("animation: no output time to draw")
     count = len(frames.frames)
@@ -287,8 +405,9 @@ def write_animation(path: str | Path, frames: Frames, title: str, plane: str = "
     shown = [base + scale * (frames.frames[k] - base) for k in chosen]
     fig = Figure(figsize=(6.4, 4.0))
     FigureCanvasAgg(fig)
-    ax = _axes(fig, plane, base, shown)
-    (curve,) = ax.plot(shown[0][:, i], shown[0][:, j], lw=2, color="C0")
+    shape = frames.shape
+    ax = _axes(fig, shape, plane, base, shown)
+    (curve,) = ax.plot(*shape.projected(shown[0], plane), lw=2, color="C0")
     ax.set_title(_heading(title, "dynamic analysis", scale), fontsize=9)
     clock = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
     fig.set_layout_engine("constrained")
@@ -296,7 +415,7 @@ def write_animation(path: str | Path, frames: Frames, title: str, plane: str = "
     fig.set_layout_engine("none")
 
     def draw(n: int):
-        curve.set_data(shown[n][:, i], shown[n][:, j])
+        curve.set_data(*shape.projected(shown[n], plane))
         clock.set_text(f"t = {frames.times[chosen[n]]:.4g} s")
         return curve, clock
 

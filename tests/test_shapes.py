@@ -1,6 +1,7 @@
-"""Shapes (runtime.shapes): centre lines sampled from the shape functions, VTU files read
-back by meshio, the PVD collections, mode shapes, the GIF and the static snapshot, through
-``ancf run --vtk --gif`` too."""
+"""Shapes (runtime.shapes): centre lines and plate mid-surfaces sampled from the shape
+functions of every generated kind, VTU files read back by meshio, the PVD collections, mode
+shapes, the GIF and the static snapshot (beams and plates), through ``ancf run --vtk --gif``
+too."""
 
 from __future__ import annotations
 
@@ -13,14 +14,16 @@ import meshio
 import numpy as np
 import pytest
 from scenes_small import body, cantilever, scene
+from scipy.spatial.transform import Rotation
 
-from runtime import output, shapes
+from runtime import Body, Clamp, LinearRamp, LineForce, Rectangle, geometry, output, shapes
 from runtime.cli import main
+from runtime.kernels import element_kind, generated_kinds
 from runtime.model import Model
 from runtime.result import run_scene
 from runtime.run import run
 from runtime.scene import parse_scene, toml_text
-from runtime.shapes import PER_ELEMENT, CentreLine, Frames, VtkSeries
+from runtime.shapes import PER_ELEMENT, Frames, Shape, VtkSeries
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SENSORS = [{"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -63,9 +66,11 @@ def nodal_vectors(model: Model, q: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("element", ["beam2d", "beam3d"])
 def test_centre_line_is_the_hermite_interpolation_of_the_nodes(element):
     model = Model(parse_scene(small(element)))
-    line = CentreLine(model)
+    line = Shape(model)
     assert line.points == 2 * PER_ELEMENT + 1
-    assert line.segments.tolist() == [[k, k + 1] for k in range(2 * PER_ELEMENT)]
+    assert [(name, cells.tolist()) for name, cells in line.cells] == [
+        ("line", [[k, k + 1] for k in range(2 * PER_ELEMENT)])]
+    assert line.outline.tolist() == list(range(line.points))
     assert line.node_points.tolist() == [0, PER_ELEMENT, 2 * PER_ELEMENT]
     # the reference: points equally spaced along the straight beam
     reference = line.sample(model.reference)
@@ -90,11 +95,167 @@ def test_several_bodies_are_separate_polylines():
                  [{"type": "clamp", "node": "a:0"}, {"type": "revolute",
                                                      "nodes": ["a:-1", "b:0"]}],
                  solver={"backend": "numpy"}).to_dict()
-    line = CentreLine(Model(parse_scene(data)))
+    line = Shape(Model(parse_scene(data)))
     first = 2 * PER_ELEMENT + 1
     assert line.points == first + 3 * PER_ELEMENT + 1
-    assert [first - 1, first] not in line.segments.tolist()   # no cell across bodies
-    assert len(line.segments) == line.points - 2
+    [(name, segments)] = line.cells
+    assert name == "line"
+    assert [first - 1, first] not in segments.tolist()   # no cell across bodies
+    assert len(segments) == line.points - 2
+    # drawn as two polylines, not joined
+    assert line.outline.tolist() == [*range(first), -1, *range(first, line.points)]
+
+
+# --------------------------------------------------------------------------- every kind
+
+KINDS = generated_kinds()
+PLATE_KINDS = [k for k in KINDS if geometry.mesh_axes(element_kind(k)) == [0, 1]]
+CORNER, SIZE = (0.1, -0.2, 0.3), (1.0, 0.4)     # a plate body's rectangle (m)
+
+
+def kind_body(kind: str, name: str = "body") -> Body:
+    """A small body of ``kind``: 2 elements along a slanted line from the origin (0.8, 0.6
+    [, 0]) (m) for a line kind, a 2 x 3 grid over the rectangle CORNER, SIZE for a plate."""
+    info = element_kind(kind)
+    if geometry.mesh_axes(info) == [0]:
+        return Body(name, kind, "m", 0.02, 0.01, 2, (0.0,) * info.dim,
+                    (0.8, 0.6) + (0.0,) * (info.dim - 2))
+    return Body(name, kind, "m", rectangle=Rectangle(CORNER, SIZE, (2, 3)), thickness=0.01)
+
+
+def kind_model(*bodies: Body) -> Model:
+    return Model(scene(list(bodies), solver={"backend": "numpy"}))
+
+
+def rotation(dim: int) -> np.ndarray:
+    """A rotation matrix (dim, dim) about no particular axis."""
+    if dim == 2:
+        return np.array([[np.cos(1.1), -np.sin(1.1)], [np.sin(1.1), np.cos(1.1)]])
+    return Rotation.from_rotvec([0.3, -1.1, 0.7]).as_matrix()
+
+
+@pytest.mark.parametrize("per_element", [3, PER_ELEMENT])
+@pytest.mark.parametrize("kind", KINDS)
+def test_samples_at_the_nodes_are_the_nodal_positions(kind, per_element):
+    model = kind_model(kind_body(kind))
+    shape = Shape(model, per_element)
+    assert len(set(shape.node_points.tolist())) == model.n_nodes
+    q = model.reference + np.random.default_rng(2).normal(0.0, 0.1, model.size)
+    sampled = shape.sample(q)
+    assert sampled[shape.node_points, :model.dim] == pytest.approx(
+        q[model.position_dofs()], rel=1e-13, abs=1e-15)
+    assert not sampled[:, model.dim:].any()
+    # every sample point belongs to a cell of the kind's type (line or quad) and the outline
+    axes = geometry.mesh_axes(element_kind(kind))
+    [(name, cells)] = shape.cells
+    assert name == shapes.CELL_TYPES[len(axes)] and cells.shape[1] == 2 ** len(axes)
+    assert set(cells.ravel().tolist()) == set(range(shape.points))
+    assert set(shape.outline.tolist()) - {-1} <= set(range(shape.points))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_reference_samples_evenly_span_the_line_or_rectangle(kind):
+    body = kind_body(kind)
+    model = kind_model(body)
+    shape = Shape(model)
+    reference = shape.sample(model.reference)
+    name, cells = shape.cells[0]
+    if body.rectangle is None:      # 2 elements, PER_ELEMENT intervals each, along the line
+        t = np.linspace(0.0, 1.0, 2 * PER_ELEMENT + 1)
+        assert reference == pytest.approx(np.outer(t, [0.8, 0.6, 0.0]), abs=1e-14)
+        assert len(cells) == 2 * PER_ELEMENT
+        assert shape.outline.tolist() == list(range(shape.points))
+        return
+    # the mid-surface of a flat plate: in its plane, an even grid over the rectangle
+    x = CORNER[0] + np.linspace(0.0, SIZE[0], 2 * PER_ELEMENT + 1)
+    y = CORNER[1] + np.linspace(0.0, SIZE[1], 3 * PER_ELEMENT + 1)
+    grid = np.column_stack([np.tile(x, len(y)), np.repeat(y, len(x)),
+                            np.full(len(x) * len(y), CORNER[2])])
+    assert reference == pytest.approx(grid, abs=1e-14)
+    # quads counter-clockwise seen from +z, tiling the rectangle
+    corners = reference[cells]
+    first, second = corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]
+    diagonals = first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]    # twice the area
+    assert (diagonals > 0).all()
+    assert 0.5 * diagonals.sum() == pytest.approx(SIZE[0] * SIZE[1], rel=1e-12)
+    assert len(cells) == 6 * PER_ELEMENT**2
+    # the outline: one closed loop of 4 PER_ELEMENT edges per element
+    loops = np.split(shape.outline, np.flatnonzero(shape.outline < 0))
+    loops = [loop[loop >= 0] for loop in loops]
+    assert len(loops) == 6
+    assert all(len(loop) == 4 * PER_ELEMENT + 1 and loop[0] == loop[-1] for loop in loops)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_rigid_motion_moves_the_samples_rigidly(kind):
+    model = kind_model(kind_body(kind))
+    dim = model.dim
+    turn, shift = rotation(dim), np.arange(1.0, dim + 1.0)
+    body = model.bodies["body"]
+    nodes = body.reference.reshape(body.nodes, -1, dim) @ turn.T
+    nodes[:, body.kind.vectors.index("r")] += shift
+    shape = Shape(model)
+    moved, reference = shape.sample(nodes.ravel()), shape.sample(model.reference)
+    assert moved[:, :dim] == pytest.approx(reference[:, :dim] @ turn.T + shift, abs=1e-13)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_vtu_of_every_kind_reads_back_with_its_cells(kind, tmp_path):
+    model = kind_model(kind_body(kind))
+    shape = Shape(model)
+    q = model.reference + np.random.default_rng(3).normal(0.0, 0.01, model.size)
+    displacement = shape.sample(q - model.reference)
+    shapes.write_vtu(tmp_path / "a.vtu", shape, q, {"displacement": displacement})
+    mesh = meshio.read(tmp_path / "a.vtu")
+    axes = len(geometry.mesh_axes(element_kind(kind)))
+    elements = model.bodies["body"].elements
+    assert [(c.type, len(c.data)) for c in mesh.cells] == [
+        (shapes.CELL_TYPES[axes], elements * PER_ELEMENT**axes)]
+    assert mesh.points == pytest.approx(shape.sample(q), abs=1e-15)
+    nodes = mesh.point_data["displacement"][shape.node_points, :model.dim]
+    assert nodes == pytest.approx((q - model.reference)[model.position_dofs()], abs=1e-15)
+
+
+@pytest.mark.skipif(not PLATE_KINDS, reason="no plate kind generated")
+def test_beams_and_plates_in_one_model_are_line_and_quad_cells(tmp_path):
+    beam = next(k for k in KINDS if element_kind(k).dim == 3 and k not in PLATE_KINDS)
+    model = kind_model(kind_body(beam, "beam"), kind_body(PLATE_KINDS[0], "plate"))
+    shape = Shape(model)
+    beam_points = 2 * PER_ELEMENT + 1
+    shapes.write_vtu(tmp_path / "a.vtu", shape, model.reference, {})
+    mesh = meshio.read(tmp_path / "a.vtu")
+    assert [(c.type, len(c.data)) for c in mesh.cells] == [
+        ("line", 2 * PER_ELEMENT), ("quad", 6 * PER_ELEMENT**2)]
+    assert mesh.cells[0].data.max() < beam_points <= mesh.cells[1].data.min()
+    assert shape.outline.tolist()[:beam_points + 1] == [*range(beam_points), -1]
+
+
+@pytest.mark.skipif(not PLATE_KINDS, reason="no plate kind generated")
+def test_ancf_run_draws_a_plate_scene(tmp_path):
+    kind = PLATE_KINDS[0]
+    plate = Body("plate", kind, "m", rectangle=Rectangle((0.0, 0.0, 0.0), (1.0, 0.2), (2, 1)),
+                 thickness=0.01)
+    data = scene([plate], [Clamp(edge="plate:x=0")],
+                 [LineForce(edge="plate:x=-1", force_per_length=(0.0, 0.0, -50.0),
+                            time_law=LinearRamp(0.01))],
+                 static={}, dynamic={"t_end": 0.02, "step": 5e-3},
+                 solver={"backend": "numpy", "engine": "python"})
+    out = tmp_path / "out"
+    summary, code = run(data, out, quiet=True, plots=False, vtk=True, animation=True,
+                        plane="xz")
+    assert code == 0 and summary["warnings"] == []
+    assert (out / output.SHAPE_FILE).read_bytes()[:8] == PNG_SIGNATURE
+    from PIL import Image
+
+    with Image.open(out / output.ANIMATION_FILE) as image:
+        assert image.format == "GIF" and image.n_frames == 5
+    static = meshio.read(out / "vtk" / "static.vtu")
+    assert [(c.type, len(c.data)) for c in static.cells] == [("quad", 2 * PER_ELEMENT**2)]
+    # the free edge went down; the drawing is the element-edge wireframe in the x-z plane
+    assert static.point_data["displacement"][:, 2].min() < 0
+    shape = Shape(Model(data))
+    x, z = shape.projected(static.points, "xz")
+    assert np.isnan(x).sum() == 1 and z[~np.isnan(z)].min() < 0
 
 
 # --------------------------------------------------------------------------- VTU and PVD
@@ -261,7 +422,7 @@ def test_frames_stay_few_evenly_spaced_with_the_latest(monkeypatch):
 
     monkeypatch.setattr(shapes, "MAX_FRAMES", 3)
     frames = Frames()
-    frames.line = SimpleNamespace(sample=lambda q: q)
+    frames.shape = SimpleNamespace(sample=lambda q: q)
     for n in range(50):
         frames.sample(float(n), np.full((2, 3), n), None, {})
         assert len(frames.frames) <= 6 and frames.times[-1] == n
