@@ -232,7 +232,7 @@ def parser() -> argparse.ArgumentParser:
     from runtime.catalog import ENGINES
     from runtime.element import METHODS
     from runtime.kernels import BACKENDS
-    from runtime.shapes import PLANES
+    from runtime.shapes import AUTO_PLANE, PLANES
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)
@@ -267,8 +267,9 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--gif", action="store_true",
                      help="also write shape_animation.gif and shape_static.png (default: the "
                           "scene's [output])")
-    run.add_argument("--plane", choices=list(PLANES), default="xy",
-                     help="projection of the animation and snapshot (default xy)")
+    run.add_argument("--plane", choices=[AUTO_PLANE, *PLANES], default=AUTO_PLANE,
+                     help="projection of the animation and snapshot (default auto: the "
+                          "model's longest axis across, the direction it moves most along up)")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability

@@ -59,7 +59,7 @@ class _Stop(Exception):
 def run(scene_path, out_dir: str | Path, method: str | None = None,
         backend: str | None = None, quiet: bool = False, plots: bool = True,
         engine: str | None = None, vtk: bool | None = None, animation: bool | None = None,
-        plane: str = "xy") -> tuple[dict, int]:
+        plane: str = "auto") -> tuple[dict, int]:
     """Run every analysis of a scene (a TOML path or a parsed Scene) into the folder
     ``out_dir``; returns (summary, exit code) - see :class:`ExitCode`.
 
@@ -75,8 +75,9 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
     with status "interrupted" and raises :class:`RunInterrupted`.
 
     vtk, animation: write ``vtk/`` (static.vtu, mode_K.vtu, dynamic.pvd) and the snapshot
-    ``shape_static.png`` / animation ``shape_animation.gif`` projected on ``plane`` (xy, xz,
-    yz); None: as the scene's ``[output]`` table says.  quiet: no progress on stderr.
+    ``shape_static.png`` / animation ``shape_animation.gif`` projected on ``plane`` (xy,
+    xz, yz, or auto: ``shapes.view_plane``); None: as the scene's ``[output]`` table says.
+    quiet: no progress on stderr.
     """
     job = _Job(scene_path, Path(out_dir))
     try:
@@ -162,9 +163,9 @@ class _Job:
             raise _Stop(ExitCode.INVALID, invalid)
         if self.folder_error is not None:
             raise _Stop(ExitCode.ENVIRONMENT, self.folder_error)
-        if plane not in shapes.PLANES:
-            raise _Stop(ExitCode.INVALID, f"plane: expected one of {', '.join(shapes.PLANES)}, "
-                                          f"got {plane!r}")
+        if plane not in (shapes.AUTO_PLANE, *shapes.PLANES):
+            raise _Stop(ExitCode.INVALID, f"plane: expected {shapes.AUTO_PLANE} or one of "
+                                          f"{', '.join(shapes.PLANES)}, got {plane!r}")
         vtk = requested(scene, "vtk") if vtk is None else vtk
         animation = requested(scene, "animation") if animation is None else animation
         observers: list[Observer] = [_CsvWriter(self)]

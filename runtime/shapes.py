@@ -107,7 +107,7 @@ class Shape:
         """Horizontal and vertical coordinates (k,) of the outline of ``vectors`` (points, 3)
         on ``plane`` (a key of ``PLANES``), NaN between polylines (matplotlib breaks lines
         there)."""
-        i, j = _check_plane(plane)
+        i, j = PLANES[plane]
         drawn = vectors[self.outline][:, [i, j]]
         drawn[self.outline < 0] = np.nan
         return drawn[:, 0], drawn[:, 1]
@@ -331,6 +331,25 @@ def magnification(reference: np.ndarray, states: Sequence[np.ndarray]) -> float:
     return float(max(m * power for m in (1, 2, 5) if m * power <= wanted))
 
 
+#: the plane argument that lets :func:`view_plane` choose from the shapes drawn
+AUTO_PLANE = "auto"
+
+
+def view_plane(reference: np.ndarray, states: Sequence[np.ndarray]) -> str:
+    """The projection that shows ``states`` (each (points, 3)) best against ``reference``:
+    the axis of the model's largest extent across, and of the remaining axes the one the
+    samples move most along (the larger extent without motion), as a key of ``PLANES``
+    (a cantilever in x bending along y: "xy"; a plate in x-y bending along z: "xz")."""
+    extent = np.ptp(reference, axis=0)
+    across = int(np.argmax(extent))
+    motion = np.max([np.abs(s - reference).max(axis=0) for s in states], axis=0) \
+        if len(states) else np.zeros(3)
+    others = [a for a in range(3) if a != across]
+    up = max(others, key=lambda a: (motion[a] > 0, motion[a], extent[a], -a))
+    pair = tuple(sorted((across, up)))
+    return next(name for name, axes in PLANES.items() if axes == pair)
+
+
 def _axes(fig, shape: Shape, plane: str, reference: np.ndarray, shown: Sequence[np.ndarray]):
     """An axes of ``fig`` for ``plane`` with limits holding every sample (points, 3) of
     ``reference`` and ``shown``, equal scales, the outline of ``reference`` dashed."""
@@ -355,22 +374,27 @@ def _heading(title: str, what: str, scale: float) -> str:
     return f"{short}\n{what}" + (f", displacements x{scale:g}" if scale != 1 else "")
 
 
-def _check_plane(plane: str) -> tuple[int, int]:
+def _check_plane(plane: str, reference: np.ndarray, states: Sequence[np.ndarray]) -> str:
+    """``plane``, or the one :func:`view_plane` chooses for ``AUTO_PLANE``."""
+    if plane == AUTO_PLANE:
+        return view_plane(reference, states)
     if plane not in PLANES:
-        raise ValueError(f"plane: expected one of {', '.join(PLANES)}, got {plane!r}")
-    return PLANES[plane]
+        raise ValueError(f"plane: expected {AUTO_PLANE} or one of {', '.join(PLANES)}, got "
+                         f"{plane!r}")
+    return plane
 
 
 def write_snapshot(path: str | Path, shape: Shape, reference: np.ndarray, q: np.ndarray,
-                   title: str, what: str = "static state", plane: str = "xy") -> Path:
+                   title: str, what: str = "static state", plane: str = AUTO_PLANE) -> Path:
     """PNG of the outline of ``shape`` (centre lines, plate element edges) at ``q`` over the
-    reference ``reference`` (both coordinates, (size,)) projected on ``plane``, titled
-    ``title`` and ``what``; displacements magnified as :func:`magnification` says."""
+    reference ``reference`` (both coordinates, (size,)) projected on ``plane`` (a key of
+    ``PLANES``, or ``AUTO_PLANE``: :func:`view_plane`), titled ``title`` and ``what``;
+    displacements magnified as :func:`magnification` says."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    _check_plane(plane)
     base, state = shape.sample(reference), shape.sample(q)
+    plane = _check_plane(plane, base, [state])
     scale = magnification(base, [state])
     shown = base + scale * (state - base)
     fig = Figure(figsize=(6.4, 4.0), layout="constrained")
@@ -385,19 +409,19 @@ def write_snapshot(path: str | Path, shape: Shape, reference: np.ndarray, q: np.
     return path
 
 
-def write_animation(path: str | Path, frames: Frames, title: str, plane: str = "xy",
+def write_animation(path: str | Path, frames: Frames, title: str, plane: str = AUTO_PLANE,
                     fps: int = 10) -> Path:
     """GIF of the outlines of ``frames`` (centre lines, plate element edges) projected on
-    ``plane`` (at most ``MAX_FRAMES``
-    frames, evenly chosen, the last included), with the reference dashed and the time in
-    the title; displacements magnified as :func:`magnification` says."""
+    ``plane`` (as for :func:`write_snapshot`; at most ``MAX_FRAMES`` frames, evenly chosen,
+    the last included), with the reference dashed and the time in the title; displacements
+    magnified as :func:`magnification` says."""
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    _check_plane(plane)
     if not frames.frames:
         raise ValueError("animation: no output time to draw")
+    plane = _check_plane(plane, frames.reference, frames.frames)
     count = len(frames.frames)
     chosen = np.unique(np.linspace(0, count - 1, min(count, MAX_FRAMES)).round().astype(int))
     base = frames.reference

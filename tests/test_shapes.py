@@ -436,9 +436,22 @@ def test_frames_stay_few_evenly_spaced_with_the_latest(monkeypatch):
 def test_a_bad_plane_is_an_invalid_option(tmp_path):
     summary, code = run(parse_scene(small(analyses=("static",))), tmp_path / "out",
                         quiet=True, animation=True, plane="xw")
-    assert code == 2 and summary["message"] == "plane: expected one of xy, xz, yz, got 'xw'"
+    assert code == 2 and summary["message"] == ("plane: expected auto or one of xy, xz, yz, "
+                                                 "got 'xw'")
 
 
 def test_reserved_names_are_not_sensor_plots():
     assert output.plot_file_name("shape_static") != output.SHAPE_FILE
     assert output.plot_file_name("energies") != output.ENERGIES_FILE
+
+
+@pytest.mark.parametrize("extent, motion, plane", [
+    ((5.0, 0.1, 0.1), (0.0, -0.3, 0.0), "xy"),     # a cantilever along x bending along y
+    ((1.0, 0.1, 0.0), (0.0, 0.0, -0.01), "xz"),    # a plate strip in x-y bending along z
+    ((0.1, 0.1, 2.0), (0.0, 0.02, 0.0), "yz"),     # a vertical beam swinging along y
+    ((1.0, 0.5, 0.0), (0.0, 0.0, 0.0), "xy"),      # no motion: the two largest extents
+])
+def test_the_automatic_plane_shows_the_longest_axis_and_the_motion(extent, motion, plane):
+    reference = np.array([np.zeros(3), extent])
+    moved = reference + np.array(motion)
+    assert shapes.view_plane(reference, [moved]) == plane
