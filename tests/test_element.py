@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import functools
 
-import independent
 import numpy as np
 import pytest
+import sympy as sp
 from conftest import (
     BACKENDS,
     E_MODULUS,
@@ -252,12 +252,25 @@ def test_combined_force_and_jacobian_kernel(kind, method, backend, shape):
 # --- the independent mpmath reference --------------------------------------------------------
 
 
+@all_kinds
+def test_element_file_has_the_literature_shape_functions(kind):
+    """The reference integrates shape functions typed from the literature; the element file
+    must define the same polynomials (a kind without them is not independently checked)."""
+    assert kind in reference.LITERATURE, (
+        f"{kind}: type its shape functions from the literature into "
+        "runtime/studies/highprecision.py LITERATURE (docs/new-element.md section 4)")
+    literature = reference.shape_functions(kind, "literature")
+    own = reference.shape_functions(kind, "element")
+    assert len(literature) == len(own) == element_kind(kind).n_shape
+    for k, (expected, actual) in enumerate(zip(literature, own, strict=True)):
+        assert sp.expand(expected - actual) == 0, (k, expected, actual)
+
+
 def mp_reference(kind: str, e: np.ndarray, e0: np.ndarray) -> tuple[float, np.ndarray]:
-    """50-digit (U, force): runtime/studies/highprecision.py for the 2-node beams, the
-    shape functions written out from the literature in tests/independent.py otherwise."""
-    if kind in ("beam2d", "beam3d"):
-        return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU)
-    return independent.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU)
+    """50-digit (U, force) from the literature's shape functions
+    (runtime/studies/highprecision.py)."""
+    return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU,
+                                      source="literature")
 
 
 
