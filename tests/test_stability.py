@@ -12,6 +12,7 @@ from dataclasses import fields
 
 import pytest
 
+from runtime.kernels import generated_kinds
 from runtime.studies import stability
 from runtime.sweep import SchedulerError
 
@@ -40,7 +41,8 @@ def test_rows_have_the_fields(quick_rows):
 def test_default_method_passes_the_kernel_accuracy_rows(quick_rows):
     rows = [r for r in quick_rows if r.group == "kernel_accuracy"]
     assert {r.method for r in rows} == {"gram"}
-    assert len(rows) == 8   # 2 scenarios x 2 kinds x (force, energy)
+    assert len(rows) == 2 * len(generated_kinds()) * 2   # scenarios x kinds x (force, energy)
+    assert {r.case.split()[1] for r in rows} == set(generated_kinds())
     for row in rows:
         assert row.tolerance == 1e-6
         assert row.passed and row.measured <= 1e-6, row
