@@ -49,6 +49,35 @@ def position_mask(kind: str) -> np.ndarray:
     return mask.ravel()
 
 
+def across_rows(kind: str) -> list[int]:
+    """Rows of the (n, dim) nodal-vector matrix holding the gradient across the element, one
+    per node: along the first local axis on which every node sits at the same coordinate and
+    that the nodes carry a gradient for (r_y for beams, whose nodes vary along x only; r_z for
+    plates)."""
+    info = element_kind(kind)
+    points = info.node_points(LENGTH, HEIGHT, WIDTH)
+    axis = next(a for a in range(info.dim)
+                if np.ptp(points[:, a]) == 0 and f"r_{'xyz'[a]}" in info.vectors)
+    column = info.vectors.index(f"r_{'xyz'[axis]}")
+    return [node * len(info.vectors) + column for node in range(info.n_nodes)]
+
+
+def inverted_reference(kind: str) -> np.ndarray:
+    """Straight reference with the gradient across the element (across_rows) of every node
+    flipped: a mirror image, det J0 < 0."""
+    q = straight_reference(kind).reshape(-1, dim_of(kind)).copy()
+    q[across_rows(kind)] *= -1
+    return q.ravel()
+
+
+def degenerate_reference(kind: str) -> np.ndarray:
+    """Straight reference with the gradient across the element (across_rows) = 0 at every
+    node: det J0 = 0."""
+    q = straight_reference(kind).reshape(-1, dim_of(kind)).copy()
+    q[across_rows(kind)] = 0.0
+    return q.ravel()
+
+
 def _nodal_reference(kind: str, position, frame) -> np.ndarray:
     """e0 from the node points of the kind: ``position(p)`` and ``frame(p)`` (columns
     dr0/dx, dr0/dy[, dr0/dz]) at each node's local point p."""
@@ -163,23 +192,3 @@ def rng(request) -> np.random.Generator:
     seed = zlib.crc32(request.node.nodeid.encode())
     return np.random.default_rng(seed)
 
-
-#: Kinds tests/test_element_boundary.py was written for: it hard-codes 2-node layouts (an
-#: overflow scale per kind, the "r_y = 0" degenerate e0 at the 2-node positions, node
-#: coordinates exact in float32).  Its other kinds are skipped with that reason until it is
-#: generalised (OVERFLOW_SCALE for every kind, the degenerate e0 from the kind's vectors, a
-#: float32 case with exactly representable sides).
-BOUNDARY_KINDS = ("beam2d", "beam3d")
-
-
-def pytest_collection_modifyitems(config, items):
-    skip = pytest.mark.skip(reason="test_element_boundary.py hard-codes the 2-node beams' "
-                            "layout (see BOUNDARY_KINDS in tests/conftest.py)")
-    for item in items:
-        if item.path.name != "test_element_boundary.py" or not hasattr(item, "callspec"):
-            continue
-        values = []
-        for value in item.callspec.params.values():
-            values += list(value) if isinstance(value, tuple) else [value]
-        if any(isinstance(v, str) and v in KINDS and v not in BOUNDARY_KINDS for v in values):
-            item.add_marker(skip)

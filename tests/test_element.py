@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import functools
 
-import independent
 import numpy as np
 import pytest
+import sympy as sp
 from conftest import (
     BACKENDS,
     E_MODULUS,
@@ -24,10 +24,12 @@ from conftest import (
     RHO,
     WIDTH,
     arc_reference,
+    degenerate_reference,
     dim_of,
     element,
     energy_scale,
     force_scale,
+    inverted_reference,
     lame,
     position_mask,
     position_rows,
@@ -250,12 +252,25 @@ def test_combined_force_and_jacobian_kernel(kind, method, backend, shape):
 # --- the independent mpmath reference --------------------------------------------------------
 
 
+@all_kinds
+def test_element_file_has_the_literature_shape_functions(kind):
+    """The reference integrates shape functions typed from the literature; the element file
+    must define the same polynomials (a kind without them is not independently checked)."""
+    assert kind in reference.LITERATURE, (
+        f"{kind}: type its shape functions from the literature into "
+        "runtime/studies/highprecision.py LITERATURE (docs/new-element.md section 4)")
+    literature = reference.shape_functions(kind, "literature")
+    own = reference.shape_functions(kind, "element")
+    assert len(literature) == len(own) == element_kind(kind).n_shape
+    for k, (expected, actual) in enumerate(zip(literature, own, strict=True)):
+        assert sp.expand(expected - actual) == 0, (k, expected, actual)
+
+
 def mp_reference(kind: str, e: np.ndarray, e0: np.ndarray) -> tuple[float, np.ndarray]:
-    """50-digit (U, force): runtime/studies/highprecision.py for the 2-node beams, the
-    shape functions written out from the literature in tests/independent.py otherwise."""
-    if kind in ("beam2d", "beam3d"):
-        return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU)
-    return independent.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU)
+    """50-digit (U, force) from the literature's shape functions
+    (runtime/studies/highprecision.py)."""
+    return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU,
+                                      source="literature")
 
 
 
@@ -534,7 +549,7 @@ def test_bad_parameters(kind, changes, match):
 def test_unknown_kind_lists_known_kinds():
     with pytest.raises(ValueError, match="kind") as info:
         Element("plate9", **GOOD)
-    assert "beam2d" in str(info.value) and "beam3d" in str(info.value)
+    assert all(kind in str(info.value) for kind in KINDS)
 
 
 @all_kinds
@@ -553,34 +568,6 @@ def test_bad_coordinates(kind, method, backend):
             call(nan)
         with pytest.raises(ValueError, match="e: .*NaN"):
             call(np.stack([el.e0, nan]))
-
-
-def r_y_rows(kind: str) -> list[int]:
-    """Rows of the (n, dim) nodal-vector matrix holding the gradient across the element, one
-    per node: r_y for beams (their positions vary along x only), r_z for plates."""
-    info = element_kind(kind)
-    per_node = len(info.vectors)
-    across = "r_z" if info.meta["domain"]["name"] == "plate" else "r_y"
-    return [node * per_node + info.vectors.index(across) for node in range(info.n_nodes)]
-
-
-def inverted_reference(kind: str) -> np.ndarray:
-    """Straight reference with r_y (plates: r_z) of every node flipped: a mirror image,
-    det J0 < 0."""
-    d = dim_of(kind)
-    q = straight_reference(kind).reshape(-1, d).copy()
-    q[r_y_rows(kind)] *= -1
-    return q.ravel()
-
-
-def degenerate_reference(kind: str) -> np.ndarray:
-    """Straight reference with r_y (plates: r_z) = 0 at every node: det J0 = 0."""
-    d = dim_of(kind)
-    q = straight_reference(kind).reshape(-1, d).copy()
-    q[r_y_rows(kind)] = 0.0
-    return q.ravel()
-
-
 
 
 @all_kinds

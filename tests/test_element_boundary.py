@@ -2,8 +2,8 @@
 
 Every bad call raises ValueError naming the argument and what was expected (type problems
 included: one class for callers to catch), identically for the C and NumPy backends and for
-both beam kinds; no kernel reads or writes past a buffer, reinterprets bytes, writes into a
-read-only array, leaves an ``out`` unfilled or returns a silent NaN.
+every generated element kind; no kernel reads or writes past a buffer, reinterprets bytes,
+writes into a read-only array, leaves an ``out`` unfilled or returns a silent NaN.
 
 The corpora are rows ``(description, call, expected message fragment)``: ``call`` receives a
 ``Setup`` (the element under test and valid inputs) and makes one call; the fragment may use
@@ -26,13 +26,13 @@ from conftest import (
     NU,
     RHO,
     WIDTH,
+    degenerate_reference,
     dim_of,
     element,
-    straight_reference,
 )
 
 from runtime import Element
-from runtime.kernels import kernel_family
+from runtime.kernels import element_kind, kernel_family
 
 GOOD = dict(length=LENGTH, height=HEIGHT, width=WIDTH, E=E_MODULUS, nu=NU, rho=RHO)
 
@@ -284,7 +284,14 @@ POSITIVE = ": expected a positive finite number between 1e-30 and 1e+30, got "
 NU_RANGE = "nu: expected Poisson's ratio in (-1, 0.5), got "
 ORDERS = "quadrature: expected {dim} Gauss orders between 1 and 64"
 E0_REAL = "e0: expected real numbers (float or integer), shape ({ndof},) for {kind}, got "
-OVERFLOW_SCALE = {"beam2d": 1e150, "beam3d": 1e100}  # e0 scaled: the invariants overflow
+
+
+def overflow_scale(dim: int) -> float:
+    """A factor s on e0 that overflows the invariants: det J0 grows as s**dim, so U0 (about
+    E V s**dim) and the mass pass float64's maximum.  s**dim = 1e-4 times that maximum keeps
+    s**dim itself (det J0, the reference check) finite while E V (~1e9 here) overflows U0."""
+    return float((np.finfo(float).max * 1e-4) ** (1 / dim))
+
 
 CONSTRUCTOR_CASES = [
     ("length as a string", lambda s: s.make(length="1"), "length" + POSITIVE + "'1'"),
@@ -346,10 +353,9 @@ CONSTRUCTOR_CASES = [
     ("e0 strings", lambda s: s.make(e0=[str(x) for x in s.el.e0]), E0_REAL + "<U"),
     ("e0 a string", lambda s: s.make(e0="abc"), E0_REAL + "<U3 values"),
     ("e0 with None", lambda s: s.make(e0=[None] * s.ndof), E0_REAL + "object values"),
-    ("e0 degenerate (r_y = 0)", lambda s: s.make(e0=np.where(
-        np.arange(s.ndof) % (s.ndof // 2) // s.dim == 2, 0.0, s.el.e0)),
+    ("e0 degenerate (r_y = 0; plates r_z)", lambda s: s.make(e0=degenerate_reference(s.kind)),
      "e0: the reference mapping is degenerate or inverted"),
-    ("e0 overflowing the invariants", lambda s: s.make(e0=s.el.e0 * OVERFLOW_SCALE[s.kind]),
+    ("e0 overflowing the invariants", lambda s: s.make(e0=s.el.e0 * overflow_scale(s.dim)),
      "length, height, width, E, nu, rho, e0: the invariants overflow float64"),
 ]
 
@@ -449,12 +455,13 @@ def test_empty_batch_gives_empty_results(setup):
 
 
 def test_numpy_scalars_are_accepted(setup):
-    """NumPy scalars (and exact integers) give the element plain Python numbers give."""
-    el = Element(np.str_(setup.kind), np.float64(LENGTH), np.float64(HEIGHT),
-                 np.float64(WIDTH), np.int64(E_MODULUS), np.float32(0.25), np.float64(RHO),
-                 e0=straight_reference(setup.kind).astype(np.float32), method=np.str_("gram"),
+    """NumPy scalars (and exact integers) give the element plain Python numbers give; e0 in
+    float32 too (sides exact in float32, so are the node positions of the straight e0)."""
+    sides = (1.0, 0.125, 0.0625)
+    e0 = element_kind(setup.kind).straight_reference(*sides).astype(np.float32)
+    el = Element(np.str_(setup.kind), *map(np.float64, sides), np.int64(E_MODULUS),
+                 np.float32(0.25), np.float64(RHO), e0=e0, method=np.str_("gram"),
                  backend=np.str_(setup.backend), quadrature=np.array(setup.el.quadrature))
-    plain = Element(setup.kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, 0.25, RHO,
-                    backend=setup.backend)
+    plain = Element(setup.kind, *sides, E_MODULUS, 0.25, RHO, backend=setup.backend)
     np.testing.assert_array_equal(el.elastic_force(setup.batch), plain.elastic_force(setup.batch))
     np.testing.assert_array_equal(el.mass_matrix(), plain.mass_matrix())

@@ -36,7 +36,7 @@ def test_exact_integration_over_the_declared_domain(domain):
         assert domain.integrate(1, name) == a * b * c  # extents of the fixed axes included
 
 
-@pytest.mark.parametrize("kind", ["beam3d_3node", "plate3d"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_closed_forms_equal_direct_symbolic_integration(kind):
     """A sample of int P_kl P_mn (the isotropic i4) and int s_k s_l from the exact tables
     against SymPy integrating the products of the shape-function gradients directly."""

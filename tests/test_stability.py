@@ -12,6 +12,7 @@ from dataclasses import fields
 
 import pytest
 
+from runtime.kernels import generated_kinds
 from runtime.studies import stability
 from runtime.sweep import SchedulerError
 
@@ -40,10 +41,21 @@ def test_rows_have_the_fields(quick_rows):
 def test_default_method_passes_the_kernel_accuracy_rows(quick_rows):
     rows = [r for r in quick_rows if r.group == "kernel_accuracy"]
     assert {r.method for r in rows} == {"gram"}
-    assert len(rows) == 8   # 2 scenarios x 2 kinds x (force, energy)
+    assert len(rows) == 2 * len(generated_kinds()) * 2   # scenarios x kinds x (force, energy)
+    assert {r.case.split()[1] for r in rows} == set(generated_kinds())
     for row in rows:
         assert row.tolerance == 1e-6
         assert row.passed and row.measured <= 1e-6, row
+
+
+def test_cij_rows_state_their_cause_only_when_the_estimate_explains_them():
+    """At a strain of 1e-9 the cij energy fails for every kind; beam2d's error is within a
+    few times eps U0/U, the plate's is over 1e3 times it: reported as unexplained."""
+    rows = {r["case"]: r for r in stability.kernel_accuracy_case(
+        "strain_1e-9", "cij", ("beam2d", "plate3d"))}
+    beam, plate = rows["strain_1e-9 beam2d energy"], rows["strain_1e-9 plate3d energy"]
+    assert beam["passed"] is False and beam["cause"].startswith("cij energy by eq. 39")
+    assert plate["passed"] is False and plate["cause"].startswith("unexplained: ")
 
 
 def test_analytic_newton_converges_quadratically(quick_rows):

@@ -1,32 +1,130 @@
 """High-precision reference: direct Gauss quadrature of the St. Venant-Kirchhoff energy in mpmath.
 
-Shares no code with the generated kernels: shape functions are written out here from
-DESIGN.md section 3, and every operation runs in 50-digit arithmetic.
+Shares no code with the generator or the kernels: the shape functions of every shipped kind
+are typed here from the literature (``LITERATURE``: DESIGN.md section 3 for the 2-node beams,
+Project Chrono's ANCF-3333 beam and ANCF-3443 plate in their normalised coordinates for the
+others), differentiated once by SymPy into mpmath functions, and the energy is integrated by
+Gauss quadrature in 50-digit arithmetic.  What an element states as data is read from its
+metadata (``generated/<kind>/element.json``): the dimension, the domain (the span of each
+local axis in the geometry parameters, the thickness of a planar element) and the Gauss orders
+that integrate the straight element exactly.
+
+A kind without literature shape functions (a new element file) is integrated with the element
+file's own (``symgen/elements``): the arithmetic stays independent of the invariants and the
+kernels, the shape functions do not; ``shape_functions`` says which are used.
 """
 
 from __future__ import annotations
 
+import functools
+import itertools
+
 import mpmath as mp
 import numpy as np
+import sympy as sp
+
+from runtime.kernels import element_kind
 
 mp.mp.dps = 50
 
-
-def shape_gradients(kind: str, x, y, z, length):
-    """ds_k/d(x, y[, z]) for the beams of DESIGN.md section 3, as mpmath matrices."""
-    xi = x / length
-    d1 = [(-6 * xi + 6 * xi**2) / length, 1 - 4 * xi + 3 * xi**2, -y / length, -z / length,
-          (6 * xi - 6 * xi**2) / length, -2 * xi + 3 * xi**2, y / length, z / length]
-    dy = [0, 0, 1 - xi, 0, 0, 0, xi, 0]
-    dz = [0, 0, 0, 1 - xi, 0, 0, 0, xi]
-    if kind == "beam3d":
-        return mp.matrix([[d1[k], dy[k], dz[k]] for k in range(8)])
-    keep = [0, 1, 2, 4, 5, 6]
-    return mp.matrix([[d1[k], dy[k]] for k in keep])
+#: Local coordinates and the three geometry parameters (length, height, width: a beam's
+#: l, h, w, a plate's a, b, t), in which the shape functions below are written.
+X, Y, Z, L, H, W = sp.symbols("x y z L H W")
 
 
-def _gauss(order):
-    x, w = np.polynomial.legendre.leggauss(order)
+def _beam_2node(dim: int) -> list[sp.Expr]:
+    """DESIGN.md section 3 (Shabana & Yakoub; the planar beam drops the z ones)."""
+    xi = X / L
+    s = [1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3), Y * (1 - xi), Z * (1 - xi),
+         3 * xi**2 - 2 * xi**3, L * (-(xi**2) + xi**3), Y * xi, Z * xi]
+    return s if dim == 3 else [s[k] for k in (0, 1, 2, 4, 5, 6)]
+
+
+def _beam_3node(dim: int) -> list[sp.Expr]:
+    """Chrono 3333: nodes at xi = -1, 0, 1 (here ordered x = 0, L/2, L): N, y N, z N."""
+    xi = 2 * X / L - 1
+    n_end0 = (xi**2 - xi) / 2
+    n_mid = 1 - xi**2
+    n_end1 = (xi**2 + xi) / 2
+    per = (1, Y) if dim == 2 else (1, Y, Z)
+    return [f * n for n in (n_end0, n_mid, n_end1) for f in per]
+
+
+def _plate() -> list[sp.Expr]:
+    """Chrono 3443 (lenX = L, lenY = H, thickness W), corners A, B, C, D counter-clockwise."""
+    u, v = 2 * X / L - 1, 2 * Y / H - 1
+    zeta = 2 * Z / W  # z = W zeta / 2
+    t = W
+    return [
+        -sp.Rational(1, 8) * (u - 1) * (v - 1) * (v**2 + v + u**2 + u - 2),
+        -sp.Rational(1, 16) * L * (u + 1) * (u - 1) ** 2 * (v - 1),
+        -sp.Rational(1, 16) * H * (v + 1) * (v - 1) ** 2 * (u - 1),
+        -sp.Rational(1, 8) * (u - 1) * (v - 1) * (t - t - t * zeta),
+        sp.Rational(1, 8) * (u + 1) * (v - 1) * (v**2 + v + u**2 - u - 2),
+        -sp.Rational(1, 16) * L * (u - 1) * (u + 1) ** 2 * (v - 1),
+        sp.Rational(1, 16) * H * (v + 1) * (v - 1) ** 2 * (u + 1),
+        sp.Rational(1, 8) * (u + 1) * (v - 1) * (t - t - t * zeta),
+        -sp.Rational(1, 8) * (u + 1) * (v + 1) * (v**2 - v + u**2 - u - 2),
+        sp.Rational(1, 16) * L * (u - 1) * (u + 1) ** 2 * (v + 1),
+        sp.Rational(1, 16) * H * (v - 1) * (v + 1) ** 2 * (u + 1),
+        -sp.Rational(1, 8) * (u + 1) * (v + 1) * (t - t - t * zeta),
+        sp.Rational(1, 8) * (u - 1) * (v + 1) * (v**2 - v + u**2 + u - 2),
+        sp.Rational(1, 16) * L * (u + 1) * (u - 1) ** 2 * (v + 1),
+        -sp.Rational(1, 16) * H * (v - 1) * (v + 1) ** 2 * (u - 1),
+        sp.Rational(1, 8) * (u - 1) * (v + 1) * (t - t - t * zeta),
+    ]
+
+
+#: kind: its shape functions typed from the literature, node-major, in X, Y, Z, L, H, W.
+LITERATURE = {
+    "beam2d": lambda: _beam_2node(2),
+    "beam3d": lambda: _beam_2node(3),
+    "beam2d_3node": lambda: _beam_3node(2),
+    "beam3d_3node": lambda: _beam_3node(3),
+    "plate3d": _plate,
+}
+
+
+def shape_functions(kind: str, source: str | None = None) -> list[sp.Expr]:
+    """Shape functions of ``kind`` in X, Y, Z, L, H, W: ``source`` "literature" (typed here),
+    "element" (the element file's, renamed) or None (the literature's when typed)."""
+    if source == "literature" or (source is None and kind in LITERATURE):
+        return LITERATURE[kind]()
+    from symgen.elements import get
+
+    spec = get(kind)
+    names = dict(zip(spec.coordinates, (X, Y, Z), strict=False))
+    names.update(zip(spec.domain.parameters, (L, H, W), strict=True))
+    return [s.xreplace(names) for s in spec.shape_functions]
+
+
+def domain(kind: str, length, height, width) -> tuple[list[tuple], object]:
+    """(low, high) of each local axis and the thickness of a planar element (1 otherwise) for
+    the geometry parameters (length, height, width), from the element's metadata."""
+    meta = element_kind(kind).meta["domain"]
+    values = dict(zip(meta["parameters"], (length, height, width), strict=True))
+
+    spans = [tuple(num * values[axis["scale"]] / den for num, den in (axis["low"], axis["high"]))
+             for axis in meta["axes"]]
+    return spans, values[meta["thickness"]] if meta["thickness"] else 1
+
+
+def volume(kind: str, length: float, height: float, width: float) -> float:
+    """Volume (m^3) of the straight element: the product of the spans times the thickness."""
+    spans, thickness = domain(kind, length, height, width)
+    return float(np.prod([high - low for low, high in spans]) * thickness)
+
+
+@functools.cache
+def _gradient_function(kind: str, source: str | None):
+    coords = (X, Y, Z)[: element_kind(kind).dim]
+    grads = sp.Matrix([[sp.diff(s, c) for c in coords] for s in shape_functions(kind, source)])
+    return sp.lambdify((X, Y, Z, L, H, W), grads, modules="mpmath")
+
+
+@functools.cache
+def _gauss(order: int):
+    x, _ = np.polynomial.legendre.leggauss(order)
     # refine the nodes to 50 digits with mpmath's Legendre roots
     nodes = [mp.findroot(lambda t: mp.legendre(order, t), mp.mpf(xi)) for xi in x]
     weights = [2 / ((1 - t**2) * mp.diff(lambda s: mp.legendre(order, s), t) ** 2)
@@ -34,10 +132,14 @@ def _gauss(order):
     return nodes, weights
 
 
-def energy_and_force(kind, e, e0, length, height, width, E, nu, orders=None):
-    """(U, force) of one element by 50-digit Gauss quadrature; force = -dU/de."""
-    dim = 3 if kind == "beam3d" else 2
-    orders = orders or ((5, 3, 3) if dim == 3 else (5, 3))
+def energy_and_force(kind, e, e0, length, height, width, E, nu, orders=None, source=None):
+    """(U, force) of one element by 50-digit Gauss quadrature; force = -dU/de.  ``orders``:
+    Gauss orders per local axis (default: the element's exact orders for a straight
+    reference); ``source``: which shape functions (see ``shape_functions``)."""
+    info = element_kind(kind)
+    dim = info.dim
+    orders = orders or tuple(info.meta["exact_orders"])
+    gradients = _gradient_function(kind, source)
     E, nu = mp.mpf(E), mp.mpf(nu)
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
     shear = E / (2 * (1 + nu))
@@ -45,22 +147,19 @@ def energy_and_force(kind, e, e0, length, height, width, E, nu, orders=None):
     n = len(e) // dim
     q = mp.matrix([[mp.mpf(float(e[k * dim + c])) for c in range(dim)] for k in range(n)])
     q0 = mp.matrix([[mp.mpf(float(e0[k * dim + c])) for c in range(dim)] for k in range(n)])
-    spans = [(0, length), (-height / 2, height / 2), (-width / 2, width / 2)][:dim]
+    spans, thickness = domain(kind, length, height, width)
     rules = [_gauss(o) for o in orders]
     energy = mp.mpf(0)
     grad = mp.matrix(n, dim)
-    import itertools
     for combo in itertools.product(*[range(o) for o in orders]):
-        coords, weight = [], mp.mpf(1)
+        coords, weight = [], thickness
         for axis, i in enumerate(combo):
             low, high = spans[axis]
             t, w = rules[axis][0][i], rules[axis][1][i]
             coords.append(low + (t + 1) * (high - low) / 2)
             weight *= w * (high - low) / 2
-        if dim == 2:
-            weight *= width
-            coords.append(mp.mpf(0))
-        ds = shape_gradients(kind, coords[0], coords[1], coords[2], length)
+        coords += [mp.mpf(0)] * (3 - dim)
+        ds = mp.matrix(gradients(*coords, length, height, width))
         j0 = q0.T * ds
         b = ds * mp.inverse(j0)
         f = q.T * b
