@@ -17,6 +17,7 @@ import numpy as np
 
 from runtime import analysis, engines, progress
 from runtime.integrators import Divergence
+from runtime.kernels import element_kind
 from runtime.model import Model
 from runtime.progress import Bar, enabled
 from runtime.scene import Scene, Static, load_scene
@@ -297,17 +298,28 @@ class Simulation:
 
 
 def locking_warnings(scene: Scene) -> list[str]:
-    """A warning per material that beams use with the svk law and nu != 0 (Poisson locking:
-    bending sees lam + 2G instead of E)."""
+    """A warning per material and kind of domain (beams, plates) that uses the svk law with
+    nu != 0 (Poisson locking: bending sees lam + 2G instead of E, or of E / (1 - nu^2) in a
+    plate)."""
     out = []
     for name in sorted({body.material for body in scene.bodies}):
         material = scene.materials[name]
-        if material.law == "svk" and material.nu != 0:
-            nu = material.nu
+        if material.law != "svk" or material.nu == 0:
+            continue
+        nu = material.nu
+        domains = {element_kind(b.element).meta["domain"]["name"] for b in scene.bodies
+                   if b.material == name}
+        if "beam" in domains:
             stiffer = (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1
             out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
                        f"(Poisson locking): its beams come out up to {stiffer:.0%} too stiff "
                        f"in bending; use law = \"ecm\" (docs/laws.md)")
+        if "plate" in domains:
+            stiffer = nu * nu / (1 - 2 * nu)             # (lam + 2G) (1 - nu^2) / E - 1
+            out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
+                       f"(Poisson thickness locking): its plates come out about {stiffer:.0%} "
+                       f"too stiff in bending, and no locking-free law applies to plates "
+                       f"yet (ecm needs a beam axis); with nu = 0 they do not lock")
     return out
 
 

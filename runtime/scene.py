@@ -536,6 +536,12 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
         defined = ", ".join(materials) or "none"
         raise SceneError(f"{path}.material: material {_show(material)} is not defined; "
                          f"defined materials: {defined}")
+    law = materials[material].law
+    if (why := meta.law_not_applicable(law)) is not None:
+        raise SceneError(f"{path}.material: material {_show(material)} has law = "
+                         f"{_show(law)}, which does not apply to {kind} elements ({why}); "
+                         f"expected a material with one of the laws "
+                         f"{', '.join(meta.meta['laws'])}")
     plate = len(geometry.mesh_axes(meta)) == 2
     shape = _plate_shape if plate else _line_shape
     height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
