@@ -929,7 +929,8 @@ def _check_model_size(bodies: tuple[Body, ...]) -> None:
         i = max(range(len(bodies)), key=entries.__getitem__)
         n = ndof[bodies[i].name]
         most = memory // (per_entry * n * n)
-        raise SceneError(f"body[{i}].elements: {_big(elements)} elements ({_big(coordinates)} "
+        key = "rectangle.grid" if bodies[i].rectangle is not None else "elements"
+        raise SceneError(f"body[{i}].{key}: {_big(elements)} elements ({_big(coordinates)} "
                          f"coordinates) need about {_gib(model_bytes)} of memory (estimate: "
                          f"{per_entry} B per entry of the {n}x{n} element matrices), over the "
                          f"limit of {_gib(memory)}; expected at most about {most} "

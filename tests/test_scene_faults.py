@@ -128,7 +128,50 @@ C = {"body+": {"name": "c", "element": "beam3d", "material": "steel", "elements"
 DYN = "analysis.dynamic"
 LAW = "load.0.time_law"
 
+# a plate body after BASE's two beams (body[2])
+PLATE = """
+[[body]]
+name = "sheet"
+element = "plate3d"
+material = "steel"
+section = { thickness = 0.01 }
+rectangle = { corner = [0.0, 5.0, 0.0], size = [1.0, 0.5], grid = [4, 2] }
+"""
+
 CASES = [
+    # plates: rectangle bodies, grid indices, edges, line forces
+    ("plate grid of floats", PLATE.replace("[4, 2]", "[4.0, 2]"),
+     "body[2].rectangle.grid[0]: expected an integer, got 4.0 (a float; write 4)"),
+    ("plate without rectangle", PLATE.replace("rectangle =", "#"),
+     "body[2].rectangle: missing required key"),
+    ("plate with a beam section", PLATE.replace("thickness = 0.01", "height = 0.1, width = 0.1"),
+     "body[2].section.height: unknown key; expected one of thickness"),
+    ("plate thickness negative", PLATE.replace("0.01", "-0.01"),
+     "body[2].section.thickness: expected a positive number"),
+    ("plate grid too large", PLATE.replace("[4, 2]", "[100000, 100000]"),
+     "body[2].rectangle.grid: 10000000012 elements"),
+    ("plate size zero", PLATE.replace("[1.0, 0.5]", "[1.0, 0.0]"),
+     "body[2].rectangle.size: expected two positive finite sides"),
+    ("edge as a node", PLATE + '[[constraint]]\ntype = "pin"\nnode = "sheet:x=0"\n',
+     "constraint[1].node: expected an integer node index"),
+    ("clamp without node or edge", PLATE + '[[constraint]]\ntype = "clamp"\n',
+     "constraint[1]: expected either node"),
+    ("edge on a hub", PLATE + '[[constraint]]\ntype = "prescribed_rotation"\n'
+     'edge = "sheet:x=0"\nangle = { type = "constant_rate", omega = 1.0 }\n',
+     "constraint[1].edge: unknown key"),
+    ("line force without a force", PLATE + '[[load]]\ntype = "line_force"\nedge = "sheet:y=0"\n',
+     "load[1].force_per_length: missing required key"),
+    ("line force of 2 components", PLATE + '[[load]]\ntype = "line_force"\n'
+     'edge = "sheet:y=0"\nforce_per_length = [1.0, 2.0]\n',
+     "load[1].force_per_length: expected a list of 3 numbers"),
+    ("line force on a beam", PLATE + '[[load]]\ntype = "line_force"\nedge = "beam:x=0"\n'
+     'force_per_length = [1.0, 2.0, 3.0]\n', 'load[1].edge: body "beam" is a line'),
+    ("grid index out of range", PLATE + '[[sensor]]\nname = "c"\ntype = "position"\n'
+     'node = "sheet:5,0"\ncomponent = "z"\n',
+     'sensor[2].node: grid index I 5 out of range for body "sheet" with 5 node columns'),
+    ("grid index on a beam", PLATE + '[[sensor]]\nname = "c"\ntype = "position"\n'
+     'node = "beam:1,0"\ncomponent = "z"\n', "sensor[2].node: expected an integer node index"),
+
     # 1. wrong "ok"
     ("clamp and prescribed rotation on one node", {"constraint+": rot("beam:0")},
      "constraint[1].node: constraint[0] (clamp) and constraint[1] (prescribed_rotation) on node "
