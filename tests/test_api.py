@@ -355,7 +355,13 @@ def random_scene(rng: random.Random) -> Scene:
     plate = None
     if dim == 3 and rng.random() < 0.4:   # a plate apart from the chain
         grid = (rng.randint(1, 3), rng.randint(1, 3))
-        plate = Body("sheet", rng.choice(plate_kinds), rng.choice(materials).name,
+        kind = rng.choice(plate_kinds)       # with a material whose law applies to it
+        usable = [m.name for m in materials if element_kind(kind).law_not_applicable(m.law)
+                  is None]
+        if not usable:
+            materials.append(Material("sheet_metal", 2e11, 0.0, 7800.0))
+            usable = ["sheet_metal"]
+        plate = Body("sheet", kind, rng.choice(usable),
                      rectangle=Rectangle(tuple(np.add(_vector(rng, 3, 2.0), (0, 0, 10.0))),
                                          (_number(rng, 0.1, 2), _number(rng, 0.1, 2)), grid),
                      thickness=_number(rng, 0.001, 0.05))
