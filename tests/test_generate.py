@@ -1,12 +1,15 @@
 """Generated code is reproducible, and the command line works end to end."""
 
+import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
-from runtime import cli, jit
+from runtime import Element, cli, jit, kernels
 from runtime.kernels import generated_dir, kernel_family
+from symgen import emit
 
 
 def test_regeneration_is_byte_identical():
@@ -77,13 +80,6 @@ def test_missing_compiler_is_one_clear_sentence(tmp_path, monkeypatch):
 def test_kernels_in_parts_compute_what_the_whole_kernel_does(tmp_path, monkeypatch):
     # Split into many small parts (every temporary crossing parts through the spill arrays),
     # beam2d's gram kernels give the numbers of the whole kernels checked in.
-    import shutil
-
-    import numpy as np
-
-    from runtime import Element, kernels
-    from symgen import emit
-
     monkeypatch.setattr(emit, "C_PART_CHARS", 2000)
     assert cli.main(["generate", "--element", "beam2d", "--backend", "c", "--method", "gram",
                      "--out", str(tmp_path)]) == 0
