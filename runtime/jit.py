@@ -54,11 +54,28 @@ __all__ = [
     "JitEnvironmentError",
     "cache_dir",
     "cache_key",
+    "compile_flags",
     "compile_module",
     "module_name",
 ]
 
-COMPILE_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-ffp-contract=fast", "-std=gnu11")
+#: Flags of every module after its optimisation level.  ``-g0`` overrides the ``-g`` of
+#: Python's build flags: debug information of generated code in a cache serves no one and cost
+#: a quarter of the compile time of the large kernels.
+_FLAGS = ("-g0", "-march=native", "-ffp-contract=fast", "-std=gnu11")
+#: The optimisation level of a module whose caller does not choose one (kernel families
+#: declare theirs in element.json ``optimization``, docs/new-element.md section 6).
+OPTIMIZATION = 3
+
+
+def compile_flags(optimization: int = OPTIMIZATION) -> tuple[str, ...]:
+    """The compiler flags of a module at ``optimization`` level 0 to 3 (``-O0`` ... ``-O3``)."""
+    if isinstance(optimization, bool) or optimization not in (0, 1, 2, 3):
+        raise ValueError(f"optimization: expected a level 0, 1, 2 or 3, got {optimization!r}")
+    return (f"-O{optimization}", *_FLAGS)
+
+
+COMPILE_FLAGS: tuple[str, ...] = compile_flags()
 
 #: Bump when the way modules are built changes (invalidates every cached binary).
 #: 2: the ready marker holds the SHA-256 of the shared object.
@@ -601,9 +618,8 @@ def _diagnose_compiler(cmd: tuple[str, ...], tmp: Path) -> None:
         )
 
 
-def _build(
-    modname: str, source: str, cdef: str, cmd: tuple[str, ...], so: Path, ready: Path
-) -> None:
+def _build(modname: str, source: str, cdef: str, flags: tuple[str, ...], cmd: tuple[str, ...],
+           so: Path, ready: Path) -> None:
     """Compile in a private temporary folder (removed whatever happens), move the .so into
     place atomically, then write its ready marker (its SHA-256) atomically."""
     import cffi
@@ -618,7 +634,7 @@ def _build(
             try:
                 ffi = cffi.FFI()
                 ffi.cdef(cdef)
-                ffi.set_source(modname, source, extra_compile_args=list(COMPILE_FLAGS))
+                ffi.set_source(modname, source, extra_compile_args=list(flags))
                 built = ffi.compile(tmpdir=str(tmp), verbose=False)
             except Exception as exc:  # cffi.VerificationError, CDefError, distutils errors
                 error = exc
@@ -649,7 +665,8 @@ def _no_compiler_message(tried: list[str]) -> str:
 
 
 def _obtain(
-    modname: str, source: str, cdef: str, folder: Path, timeout_s: float, label: str
+    modname: str, source: str, cdef: str, flags: tuple[str, ...], folder: Path,
+    timeout_s: float, label: str
 ) -> tuple[types.ModuleType, bool, bool, Path]:
     """Load ``modname`` from the cache, compiling it (or waiting for another process) first.
 
@@ -706,7 +723,7 @@ def _obtain(
             try:
                 with progress.phase(f"compiling {label} (first use on this machine, cached "
                                     "afterwards)"):
-                    _build(modname, source, cdef, cmd, so, ready)
+                    _build(modname, source, cdef, flags, cmd, so, ready)
             except CompilerNotWorkingError:
                 raise  # a machine fault: no .failed, every process diagnoses it itself
             except CompilationError as exc:
@@ -729,7 +746,8 @@ def _obtain(
 
 
 def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0,
-                   label: str | None = None) -> CompiledModule:
+                   label: str | None = None,
+                   optimization: int = OPTIMIZATION) -> CompiledModule:
     """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
 
     ``name`` becomes part of the module name ``_ancf_{name}_{hash}``; ``label`` names the
@@ -737,21 +755,23 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0,
     module; ``compiled`` tells whether this call ran the compiler and ``waited`` whether it
     waited for another process's compile (``seconds`` includes that wait).  ``timeout_s`` is
     the age after which another process's lock counts as stale, and the longest this call
-    waits for one.  Raises :class:`CompilerNotFoundError` when no C compiler exists,
+    waits for one.  ``optimization`` is the level of :func:`compile_flags` (ValueError
+    outside 0 to 3).  Raises :class:`CompilerNotFoundError` when no C compiler exists,
     :class:`CompilerNotWorkingError` when it cannot build extensions,
     :class:`CompilationError` when the source fails to compile and :class:`CacheError` when
     the cache folder is unsafe or unusable (all :class:`JitEnvironmentError`).
     """
     t0 = time.perf_counter()
-    modname = module_name(name, source, cdef)
+    flags = compile_flags(optimization)
+    modname = module_name(name, source, cdef, flags)
     with _LOCK:
         memo = _MEMO.get(modname)
         if memo is not None:
             return CompiledModule(memo.module, False, time.perf_counter() - t0, memo.path)
         folder = cache_dir()
         try:
-            module, compiled, waited, path = _obtain(modname, source, cdef, folder, timeout_s,
-                                                     label or name)
+            module, compiled, waited, path = _obtain(modname, source, cdef, flags, folder,
+                                                     timeout_s, label or name)
         except OSError as exc:
             where = f": {exc.filename}" if exc.filename else ""
             raise CacheError(

@@ -146,7 +146,8 @@ class KernelFamily:
             compiled = jit.compile_module(f"{kind.name}_{family}",
                                           (folder / f"{family}.c").read_text(),
                                           (folder / f"{family}.h").read_text(),
-                                          label=f"{kind.name}/{family}")
+                                          label=f"{kind.name}/{family}",
+                                          optimization=kind.meta["optimization"][family])
             self.compile_s = compiled.seconds if compiled.compiled or compiled.waited else 0.0
             self._module = compiled.module
         else:

@@ -23,6 +23,14 @@ from symgen.printing import code
 
 BACKENDS = ("c", "numpy")
 LANES = 4
+#: A straight-line C kernel body of an optimised family longer than this (characters of
+#: code) is emitted as several functions ("parts", called in order) of at most about this
+#: size, its temporaries in demand order (each just before its first use): GCC's register
+#: allocation and combine time grow much faster than the function (beam3d's damping_straight:
+#: 29 s of CPU in two 260 kB kernels, 12 s in parts), and the parts even run a little faster
+#: (docs/new-element.md section 6).  Temporaries a later part reads go through a spill array
+#: (``SV`` vector, ``SD`` scalar).
+C_PART_CHARS = 50_000
 GENERATOR_VERSION = "1"
 
 
@@ -57,14 +65,18 @@ def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> 
     for st in body:
         if isinstance(st, Assign):
             vector = is_vector(st.expr)
+            names = sorted(s.name for s in sp.sympify(st.expr).free_symbols)
+            uses = [name for name in names if "[" not in name]  # temporaries
+            reads = sorted({name.split("[")[0] for name in names if "[" in name})  # arrays
             if "[" in st.target:
                 out.append({"kind": "store", "target": st.target, "code": code(st.expr),
-                            "vector": vector, "accumulate": st.accumulate})
+                            "vector": vector, "accumulate": st.accumulate, "uses": uses,
+                            "reads": reads})
             else:
                 if vector:
                     vector_temps.add(st.target)
                 out.append({"kind": "temp", "target": st.target, "code": code(st.expr),
-                            "vector": vector})
+                            "vector": vector, "uses": uses, "reads": reads})
         elif isinstance(st, SparseProduct):
             out.append({"kind": "sparse", "target": st.target, "matrix": st.matrix,
                         "source": st.source, "rows": st.rows})
@@ -75,6 +87,83 @@ def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> 
             out.append({"kind": "loop", "table": st.table, "width": None,
                         "body": _statements(list(st.body), vector_arrays, vector_temps)})
     return out
+
+
+def _demand_order(body: list[dict]) -> list[dict]:
+    """``body`` with every temporary moved to just before its first use (dead ones dropped):
+    short live ranges, so few temporaries cross from one part to the next.  Valid when no
+    statement reads an array that the body stores to."""
+    defining = {st["target"]: st for st in body if st["kind"] == "temp"}
+    out, done = [], set()
+
+    def need(name):
+        stack = [name]
+        while stack:
+            top = stack[-1]
+            if top in done:
+                stack.pop()
+                continue
+            missing = [u for u in defining[top]["uses"] if u not in done]
+            if missing:
+                stack.extend(missing)
+            else:
+                done.add(top)
+                out.append(defining[top])
+                stack.pop()
+
+    for st in body:
+        if st["kind"] == "store":
+            for u in st["uses"]:
+                need(u)
+            out.append(st)
+    return out
+
+
+def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
+    """The template-ready ``body`` of ``kernel`` in demand order, split into consecutive parts
+    of about ``C_PART_CHARS``, if it is straight-line code longer than that (else None):
+    per part its statements, the temporaries it reads from earlier parts (imports) and those
+    later parts read (exports), each with its slot in the spill array of its type; and the
+    parameters and arguments of the part functions (every array the body may touch)."""
+    if sum(len(st["code"]) for st in body if "code" in st) <= C_PART_CHARS or any(
+            st["kind"] not in ("temp", "store") for st in body):
+        return None
+    stored = {st["target"].split("[")[0] for st in body if st["kind"] == "store"}
+    if any(stored.intersection(st["reads"]) for st in body):
+        return None
+    body = _demand_order(body)
+    size = sum(len(st["code"]) for st in body)
+    count = -(-size // C_PART_CHARS)
+    parts: list[list[dict]] = [[] for _ in range(count)]
+    done = 0
+    for st in body:
+        parts[min(done * count // size, count - 1)].append(st)
+        done += len(st["code"])
+    order = {st["target"]: j for j, st in enumerate(body) if st["kind"] == "temp"}
+    owner = {st["target"]: i for i, part in enumerate(parts) for st in part
+             if st["kind"] == "temp"}
+    vector = {st["target"]: st["vector"] for st in body if st["kind"] == "temp"}
+    read_later = {name for i, part in enumerate(parts) for st in part for name in st["uses"]
+                  if owner[name] < i}
+    slots, counts = {}, {True: 0, False: 0}
+    for name in sorted(read_later, key=order.get):
+        slots[name] = counts[vector[name]]
+        counts[vector[name]] += 1
+
+    def spilled(names) -> list[dict]:
+        return [{"name": t, "vector": vector[t], "slot": slots[t]}
+                for t in sorted(names, key=order.get)]
+
+    roles = {"batch": "const vd", "shared": "const double", "local": "vd", "output": "vd"}
+    arrays = [(a.name, roles[a.role]) for role in roles for a in kernel.role(role)]
+    arrays += [("SV", "vd"), ("SD", "double")]
+    return {"vectors": counts[True], "scalars": counts[False],
+            "signature": ", ".join(f"{kind} *restrict {name}" for name, kind in arrays),
+            "arguments": ", ".join(name for name, _ in arrays), "parts": [
+        {"body": part,
+         "imports": spilled({n for st in part for n in st["uses"] if owner[n] < i}),
+         "exports": spilled({st["target"] for st in part if st["target"] in read_later})}
+        for i, part in enumerate(parts)]}
 
 
 def _c_signature(kernel: Kernel) -> str:
@@ -104,7 +193,7 @@ def _py_signature(kernel: Kernel) -> str:
     return ", ".join(names)
 
 
-def _template_kernel(kernel: Kernel) -> dict:
+def _template_kernel(kernel: Kernel, optimized: bool) -> dict:
     vector_arrays = {a.name for a in kernel.arrays if a.role in ("batch", "output", "local")}
     body = _statements(kernel.body, vector_arrays, set())
     tables = kernel.role("table")
@@ -116,6 +205,7 @@ def _template_kernel(kernel: Kernel) -> dict:
         "batch": kernel.role("batch"), "shared": kernel.role("shared"),
         "locals": kernel.role("local"), "outputs": kernel.role("output"),
         "signature": _c_signature(kernel), "py_signature": _py_signature(kernel),
+        "split": _c_parts(kernel, body) if optimized else None,
         "operations": kernel_operations(kernel),
     }
 
@@ -129,7 +219,8 @@ def render_family(spec: ElementSpec, family: str, backend: str,
     tables = next((k.loop_tables for k in built if k.loop_tables), None)
     context = {"banner": banner(spec, family), "element": spec.name, "family": family,
                "prefix": f"{spec.name}_{family}", "lanes": LANES,
-               "kernels": [_template_kernel(k) for k in built], "loop_tables": tables}
+               "kernels": [_template_kernel(k, kernels.optimization(family) > 0) for k in built],
+               "loop_tables": tables}
     env = _environment()
     if backend == "c":
         return {f"{family}.c": env.get_template("c_kernels.c.j2").render(context),
@@ -217,6 +308,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
         "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
+        "optimization": {family: kernels.optimization(family) for family in built},
         "generator": {"version": GENERATOR_VERSION, "sympy": sp.__version__},
     }
 

@@ -99,6 +99,19 @@ def looped(spec: ElementSpec, family: str | None = None) -> bool:
     return len(derive.patterns(spec, variant).gram) > LOOPED_PATTERN_ABOVE[method]
 
 
+#: Families that run once per element type before a simulation (invariants, law
+#: coefficients): their speed hardly matters, so their C is compiled at -O0, in a fraction of
+#: a second (beam3d's invariants_general: 0.3 s, 10 s at -O3); every other family at -O3.
+#: The levels go to element.json ``optimization`` (runtime.kernels passes them to the JIT) and
+#: decide which kernels the C emitter splits into parts (symgen.emit).
+PREPROCESSING = ("invariants", "invariants_general", "laws")
+
+
+def optimization(family: str) -> int:
+    """The C optimisation level (0 to 3) of ``family``."""
+    return 0 if family in PREPROCESSING else 3
+
+
 def families(spec: ElementSpec) -> list[str]:
     """Names of every kernel family generated for an element."""
     # the general (curved) svk map only where it is small (unrolled, it is the i4 -> stored

@@ -52,6 +52,19 @@ def leftovers(folder: Path, modname: str) -> list[str]:
     )
 
 
+def test_optimization_level_is_part_of_the_module_and_checked(cache: Path) -> None:
+    src = unique_source("levels")
+    assert jit.compile_flags(0)[0] == "-O0" and jit.compile_flags() == jit.COMPILE_FLAGS
+    assert "-g0" in jit.COMPILE_FLAGS  # no debug information for generated code
+    fast = jit.compile_module("axpy", src, CDEF, optimization=0)
+    default = jit.compile_module("axpy", src, CDEF)
+    assert fast.compiled and default.compiled and fast.path != default.path
+    assert fast.module.lib.axpy(2.0, 3.0, 4.0) == default.module.lib.axpy(2.0, 3.0, 4.0) == 10
+    for bad in (4, -1, True, "3"):
+        with pytest.raises(ValueError, match="optimization: expected a level 0, 1, 2 or 3"):
+            jit.compile_module("axpy", src, CDEF, optimization=bad)
+
+
 def test_compile_then_load_from_cache_in_fresh_process(
     cache: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
