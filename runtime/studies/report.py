@@ -53,7 +53,8 @@ def machine() -> str:
     return (f"{cpu}, {os.cpu_count()} cores{memory}; {platform.system()} {platform.release()}; "
             f"Python {platform.python_version()}, NumPy {np.__version__}, SciPy "
             f"{scipy.__version__}, SymPy {sympy.__version__}; {compiler} with "
-            f"`{' '.join(jit.COMPILE_FLAGS)}`.")
+            f"`{' '.join(jit.COMPILE_FLAGS)}` (pre-processing families at "
+            f"`{jit.compile_flags(0)[0]}`: element.json `optimization`).")
 
 
 def _scenes(out: Path, figures: Path, warm: bool = True) -> str:
