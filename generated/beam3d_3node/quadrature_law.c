@@ -4,7 +4,7 @@
    are row-major (m x size); a batch input with stride 0 is shared by every element. */
 #include <stddef.h>
 
-#define ANCF_LANES 4
+#define ANCF_LANES 8
 typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
 #define SPLAT(x) ((vd){0} + (x))
 /* Pair tables of the looped kernels: n = 9 shape functions, dim 3, 45
