@@ -144,7 +144,8 @@ class Model:
             coordinates += len(mesh.points) * kind.per_node
         self.size = coordinates
         self.n_nodes = nodes
-        self._first_nodes = np.array([b.first_node for b in self.bodies.values()])
+        self._body_list = list(self.bodies.values())
+        self._first_nodes = np.array([b.first_node for b in self._body_list])
         self.reference = np.concatenate([b.reference for b in self.bodies.values()])
         self._build_mass()
         self._build_constraints()
@@ -161,8 +162,7 @@ class Model:
 
     def body_of(self, node: int) -> BodyMesh:
         """The body that a global node belongs to."""
-        return list(self.bodies.values())[int(np.searchsorted(self._first_nodes, node,
-                                                              side="right")) - 1]
+        return self._body_list[int(np.searchsorted(self._first_nodes, node, side="right")) - 1]
 
     def node_vectors(self, node: int) -> tuple[str, ...]:
         """Names of the nodal vectors of a global node (``("r", "r_x", ...)``)."""

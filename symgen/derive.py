@@ -279,6 +279,16 @@ def _law_blocks(dim: int, coefficients):
     return normal, shear
 
 
+def _normal_part(normal, psi, first: tuple[int, int], second: tuple[int, int]) -> object:
+    """sum_ab DN_ab psi^ab_(first)(second) over the nonzero entries of the normal block."""
+    total = 0
+    for x, row in enumerate(normal):
+        for y, value in enumerate(row):
+            if value != 0:
+                total += value * psi(x, y, first, second)
+    return total
+
+
 def law_gram_value(spec: ElementSpec, parts, a: int, b: int) -> object:
     """Entry (a, b) of the gram matrix Dm of a law, from ``parts`` = [(DomainIntegrals,
     coefficients)].  Dm_ab = mu_a mu_b Dsym_klmn with, per domain,
@@ -294,10 +304,7 @@ def law_gram_value(spec: ElementSpec, parts, a: int, b: int) -> object:
     for integrals, coefficients in parts:
         normal, shear = _law_blocks(d, coefficients)
         psi = integrals.psi
-        for x in range(d):
-            for y in range(d):
-                if normal[x][y] != 0:
-                    total += normal[x][y] * psi(x, y, (k, m), (p, q)) / 8
+        total += _normal_part(normal, psi, (k, m), (p, q)) / 8
         for (x, y), value in zip(laws.shear_pairs(d), shear, strict=True):
             if value != 0:
                 total += value / 8 * (psi(x, y, (k, p), (m, q)) + psi(x, y, (k, q), (m, p))
@@ -316,10 +323,7 @@ def law_cij_value(spec: ElementSpec, parts, k: int, p: int, m: int, q: int) -> o
     for integrals, coefficients in parts:
         normal, shear = _law_blocks(d, coefficients)
         psi = integrals.psi
-        for x in range(d):
-            for y in range(d):
-                if normal[x][y] != 0:
-                    total += normal[x][y] * psi(x, y, (k, m), (p, q)) / 2
+        total += _normal_part(normal, psi, (k, m), (p, q)) / 2
         for (x, y), value in zip(laws.shear_pairs(d), shear, strict=True):
             if value != 0:
                 total += value * (psi(x, y, (k, q), (m, p)) + psi(y, x, (k, q), (m, p)))
