@@ -80,6 +80,11 @@ class NodeConstraint(Constraint):
         """The nodes it holds."""
         return [self.node]
 
+    @property
+    def target_key(self) -> str:
+        """The key that names its nodes ("node", or "edge")."""
+        return "node"
+
 
 @dataclass(frozen=True)
 class HeldNodes(NodeConstraint):
@@ -100,6 +105,10 @@ class HeldNodes(NodeConstraint):
 
     def targets(self) -> list[NodeRef]:
         return [self.node] if self.edge is None else self.edge.refs()
+
+    @property
+    def target_key(self) -> str:
+        return "node" if self.edge is None else "edge"
 
     def apply(self, model: Model, built: Built) -> None:
         vector = None if self.holds_gradients else "r"

@@ -52,6 +52,9 @@ class Load(Record):
         """Generalised force (size,) in N (per coordinate) at a time-law value of 1."""
         raise NotImplementedError
 
+    #: the key that names its nodes ("node", "edge"; none for a field such as gravity)
+    target_key: ClassVar[str] = ""
+
     def targets(self) -> list[NodeRef]:
         """The nodes it acts on (none for a field such as gravity)."""
         return []
@@ -64,6 +67,7 @@ class NodeLoad(Load):
 
     on_gradients: ClassVar[bool] = False
     noun: ClassVar[str] = "force"
+    target_key: ClassVar[str] = "node"
     node: NodeRef | str = key(node_key)
 
     def targets(self) -> list[NodeRef]:
@@ -157,6 +161,7 @@ class LineForce(Load):
     type: ClassVar[str] = "line_force"
     on_gradients: ClassVar[bool] = False
     noun: ClassVar[str] = "line force"
+    target_key: ClassVar[str] = "edge"
     edge: EdgeRef | str = key(edge_key)
     force_per_length: tuple[float, ...] = key(_vector_key)
 

@@ -56,7 +56,7 @@ from runtime.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint, 
 from runtime.element import METHODS
 from runtime.kernels import BACKENDS, element_kind, generated_kinds
 from runtime.laws import SceneError, _show
-from runtime.loads import LOADS, Load, NodeLoad
+from runtime.loads import LOADS, Load
 from runtime.schema import (
     NAME_LENGTH,
     Context,
@@ -246,7 +246,7 @@ class Body:
     def n_nodes(self) -> int:
         """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
         (nx + 1)(ny + 1) for 4-node plates."""
-        return math.prod(self.grid_shape)
+        return geometry.node_count(element_kind(self.element), self.counts)
 
     @property
     def geometry(self) -> tuple[float, float, float]:
@@ -810,7 +810,7 @@ def _check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, 
             why = CONFLICTS.get(frozenset({first.type, c.type}),
                                 "the same constraint twice" if first.type == c.type else
                                 "a node has at most one of them")
-            where = "node" if getattr(c, "edge", None) is None else "edge"
+            where = c.target_key
             raise SceneError(f"constraint[{i}].{where}: constraint[{j}] ({first.type}) and "
                              f"constraint[{i}] ({c.type}) on node {node}: {why}")
 
@@ -890,8 +890,9 @@ def _check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...]) -
             continue
         j = blocked[0]
         what, can = ("section", "turn") if load.on_gradients else ("position", "move")
-        where = "node" if isinstance(load, NodeLoad) else "edge"
-        nodes = f"{targets[0]}" if len(targets) == 1 else f"every node of {load.edge}"
+        where = load.target_key
+        nodes = f"{targets[0]}" if len(targets) == 1 else \
+            f"every node of {getattr(load, where)}"
         raise SceneError(f"load[{i}].{where}: the {what} of {nodes} is held by "
                          f"constraint[{j}] ({constraints[j].type}): a {load.noun} there does "
                          f"nothing; expected a node whose {what} can {can}")
