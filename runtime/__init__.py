@@ -5,21 +5,22 @@ validation and messages as TOML files, ``Scene.to_toml()``, ``load_scene(path)``
 ``run_scene(scene) -> Result`` (every analysis in memory, no file written).
 """
 
-from runtime.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
-from runtime.element import Element
-from runtime.laws import (
-    Constant,
-    ConstantRate,
-    CosineRamp,
-    LinearRamp,
-    SceneError,
-    Sine,
-    SpinUp,
-    Table,
+from runtime.app.simulation import Result, run_scene
+from runtime.element.element import Element
+from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
+from runtime.model.items.loads import Gravity, LineForce, PointForce, PointMoment
+from runtime.model.items.sensors import (
+    ConstraintViolation,
+    Displacement,
+    DissipatedEnergy,
+    KineticEnergy,
+    Position,
+    PotentialEnergy,
+    Sensor,
+    StrainEnergy,
+    TotalEnergy,
 )
-from runtime.loads import Gravity, LineForce, PointForce, PointMoment
-from runtime.result import Result, run_scene
-from runtime.scene import (
+from runtime.model.scene import (
     Arc,
     Body,
     Dynamic,
@@ -34,16 +35,15 @@ from runtime.scene import (
     Static,
     load_scene,
 )
-from runtime.sensors import (
-    ConstraintViolation,
-    Displacement,
-    DissipatedEnergy,
-    KineticEnergy,
-    Position,
-    PotentialEnergy,
-    Sensor,
-    StrainEnergy,
-    TotalEnergy,
+from runtime.model.time_laws import (
+    Constant,
+    ConstantRate,
+    CosineRamp,
+    LinearRamp,
+    SceneError,
+    Sine,
+    SpinUp,
+    Table,
 )
 
 __all__ = [

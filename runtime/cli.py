@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.jit import JitEnvironmentError
+from runtime.kernels.jit import JitEnvironmentError
 
 METHOD_FAMILIES = {
     "invariants": ["invariants", "invariants_general"],
@@ -50,7 +50,7 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
 
 def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:
     """Unified diff between freshly generated kernels and ``folder`` ('' when identical)."""
-    from runtime.kernels import generated_dir
+    from runtime.kernels.loader import generated_dir
     from symgen.elements import registry
 
     folder = folder or generated_dir()
@@ -72,7 +72,7 @@ def generation_diff(elements: list[str] | None = None, folder: Path | None = Non
 
 
 def cmd_generate(args) -> int:
-    from runtime.kernels import generated_dir
+    from runtime.kernels.loader import generated_dir
     from symgen.elements import registry
 
     known = list(registry())
@@ -101,14 +101,14 @@ def cmd_generate(args) -> int:
 
 
 def cmd_invariants(args) -> int:
-    from runtime.invariant_report import compare, report
+    from runtime.studies.invariant_comparison import compare, report
 
     print(report(compare(args.element, args.reference, args.quadrature, args.backend)))
     return 0
 
 
 def cmd_bench(args) -> int:
-    from runtime import bench
+    from runtime.studies import bench_kernels as bench
 
     print(bench.run(args.element, batch=args.batch, methods=args.method or bench.METHODS,
                     backends=args.backend or bench.BACKENDS))
@@ -141,7 +141,7 @@ def _interrupt_on_signals() -> Iterator[None]:
 
 
 def cmd_run(args) -> int:
-    from runtime.run import SUMMARY, ExitCode, RunInterrupted, run
+    from runtime.app.run import SUMMARY, ExitCode, RunInterrupted, run
 
     try:
         with _interrupt_on_signals():
@@ -203,7 +203,7 @@ def cmd_report(args) -> int:
 
 
 def cmd_bench_steps(args) -> int:
-    from runtime import bench_solvers
+    from runtime.studies import bench_solvers
 
     print(bench_solvers.step_table(tuple(args.elements or (10, 100, 1000, 10_000)),
                                    method=args.method, progress=not args.quiet))
@@ -211,7 +211,7 @@ def cmd_bench_steps(args) -> int:
 
 
 def cmd_bench_solvers(args) -> int:
-    from runtime import bench_solvers
+    from runtime.studies import bench_solvers
 
     text = bench_solvers.run(quick=args.quick, repeats=args.repeats, progress=not args.quiet)
     print(text)
@@ -229,10 +229,10 @@ class _Parser(argparse.ArgumentParser):
 
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
+    from runtime.app.shapes import AUTO_PLANE, PLANES
     from runtime.catalog import ENGINES
-    from runtime.element import METHODS
-    from runtime.kernels import BACKENDS
-    from runtime.shapes import AUTO_PLANE, PLANES
+    from runtime.element.element import METHODS
+    from runtime.kernels.loader import BACKENDS
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)

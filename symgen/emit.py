@@ -322,7 +322,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
 
 def closed_tables(spec: ElementSpec) -> dict:
     """The exact closed-form integrals of the straight reference as data (looped elements;
-    ``runtime.invariants.closed_law_invariants`` evaluates them): per shape function the
+    ``runtime.element.invariants.closed_law_invariants`` evaluates them): per shape function the
     parameter exponents of its factor, per law domain the exponents of dV and its rational
     measure, the nonzero ``pi[a, k, l]`` and ``psi^ab_(kl)(mn)`` as [indices..., numerator,
     denominator] (their parameter monomials follow from the exponents), and the shape-level

@@ -102,8 +102,8 @@ def looped(spec: ElementSpec, family: str | None = None) -> bool:
 #: Families that run once per element type before a simulation (invariants, law
 #: coefficients): their speed hardly matters, so their C is compiled at -O0, in a fraction of
 #: a second (beam3d's invariants_general: 0.3 s, 10 s at -O3); every other family at -O3.
-#: The levels go to element.json ``optimization`` (runtime.kernels passes them to the JIT) and
-#: decide which kernels the C emitter splits into parts (symgen.emit).
+#: The levels go to element.json ``optimization`` (runtime.kernels.loader passes them to the
+#: JIT) and decide which kernels the C emitter splits into parts (symgen.emit).
 PREPROCESSING = ("invariants", "invariants_general", "laws")
 
 

@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from runtime import Element
-from runtime.kernels import element_kind, generated_kinds
+from runtime.kernels.loader import element_kind, generated_kinds
 
 #: Every generated element kind (generated/*/element.json): the tests cover each one.
 KINDS = generated_kinds()

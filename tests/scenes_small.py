@@ -25,12 +25,12 @@ from runtime import (
     Scene,
     Sensor,
     StrainEnergy,
-    analysis,
 )
-from runtime.integrators import INTEGRATORS
-from runtime.laws import Law
-from runtime.model import Model
-from runtime.sensors import Sensors
+from runtime.model.items.sensors import Sensors
+from runtime.model.model import Model
+from runtime.model.time_laws import Law
+from runtime.solve import static as analysis
+from runtime.solve.python_engine import INTEGRATORS
 
 # first root of 1 + cos(x) cosh(x) = 0 (clamped-free beam), more digits than the paper's 1.8751
 BETA1_L = 1.8751040687119611

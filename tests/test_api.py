@@ -54,14 +54,14 @@ from runtime import (
     Table,
     TotalEnergy,
     Weld,
-    geometry,
     load_scene,
 )
-from runtime.constraints import CONSTRAINTS
-from runtime.kernels import element_kind, generated_kinds
-from runtime.loads import LOADS
-from runtime.scene import parse_scene
-from runtime.sensors import SENSORS
+from runtime.element import reference as geometry
+from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.model.items.constraints import CONSTRAINTS
+from runtime.model.items.loads import LOADS
+from runtime.model.items.sensors import SENSORS
+from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.3, rho=7800.0)
 

@@ -17,9 +17,10 @@ from pathlib import Path
 import pytest
 from scenes_small import cantilever
 
-from runtime import cli, jit
+from runtime import cli
 from runtime.cli import main
-from runtime.scene import toml_text
+from runtime.kernels import jit
+from runtime.model.scene import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -126,7 +127,7 @@ def test_environment_error_of_any_command_is_exit_3_in_one_line(monkeypatch, cap
 
 
 def test_interrupted_dynamic_run_writes_its_summary(tmp_path, monkeypatch, capsys):
-    from runtime.sensors import Sensors
+    from runtime.model.items.sensors import Sensors
 
     real = Sensors.values
     calls = []
@@ -153,7 +154,7 @@ def test_interrupted_dynamic_run_writes_its_summary(tmp_path, monkeypatch, capsy
 
 
 def test_interrupted_plots_keep_the_results(tmp_path, monkeypatch, capsys):
-    from runtime import output
+    from runtime.app import writers as output
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -170,7 +171,7 @@ def test_internal_error_is_exit_4_with_a_hint_to_report_it(tmp_path, monkeypatch
     def bug(*args, **kwargs):
         raise ZeroDivisionError("division by zero")
 
-    monkeypatch.setattr("runtime.result.Sensors", bug)
+    monkeypatch.setattr("runtime.app.simulation.Sensors", bug)
     out = tmp_path / "o"
     assert main(["run", str(scene_file(tmp_path)), "--out", str(out), "--quiet"]) == 4
     line = one_line(capsys.readouterr().err)

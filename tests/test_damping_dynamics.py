@@ -11,9 +11,11 @@ import pytest
 from scenes_small import cantilever
 from scipy.signal import find_peaks
 
-from runtime import Material, analysis, engines
-from runtime.model import Model
-from runtime.scene import parse_scene
+from runtime import Material
+from runtime.model.model import Model
+from runtime.model.scene import parse_scene
+from runtime.solve import engines
+from runtime.solve import static as analysis
 
 ALPHA = 2e-5   # s
 

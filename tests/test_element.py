@@ -41,8 +41,8 @@ from conftest import (
 )
 
 from runtime import Element
-from runtime import invariants as inv
-from runtime.kernels import element_kind, kernel_family
+from runtime.element import invariants as inv
+from runtime.kernels.loader import element_kind, kernel_family
 from runtime.studies import highprecision as reference
 
 EPS = np.finfo(float).eps

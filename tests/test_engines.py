@@ -33,12 +33,12 @@ from runtime import (
     Spherical,
     SpinUp,
     Weld,
-    engines,
     load_scene,
 )
-from runtime.integrators import Divergence
-from runtime.model import Model
-from runtime.run import run
+from runtime.app.run import run
+from runtime.model.model import Model
+from runtime.solve import engines
+from runtime.solve.python_engine import Divergence
 
 ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
@@ -198,8 +198,8 @@ def test_run_reports_engine_counters_and_built_modules(tmp_path):
 
 
 def test_stepper_source_is_reproducible_and_holds_only_what_the_scene_needs():
-    from runtime.dae import DAESystem
-    from runtime.stepper import render
+    from runtime.model.dae import DAESystem
+    from runtime.solve.compiled_engine import render
 
     def source(scene: Scene, integrator: str) -> str:
         model = Model(scene)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from runtime.studies.error_vs_time import CSV_COLUMNS, StudyError, add_cli, study
-from runtime.sweep import SchedulerError
+from runtime.studies.sweep import SchedulerError
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 CANTILEVER = SCENES / "cantilever.toml"

@@ -7,8 +7,10 @@ import sys
 import numpy as np
 import pytest
 
-from runtime import Element, cli, jit, kernels
-from runtime.kernels import generated_dir, kernel_family
+from runtime import Element, cli
+from runtime.kernels import jit
+from runtime.kernels import loader as kernels
+from runtime.kernels.loader import generated_dir, kernel_family
 from symgen import emit
 
 

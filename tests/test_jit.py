@@ -1,4 +1,4 @@
-"""Tests of runtime.jit: cffi compile-once cache, multi-process locking, error messages."""
+"""Tests of runtime.kernels.jit: cffi compile-once cache, multi-process locking, error messages."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime import jit
+from runtime.kernels import jit
 
 CDEF = "double axpy(double a, double x, double y);"
 # Where `runtime` was imported from (the source tree or site-packages), for subprocesses.
@@ -111,7 +111,7 @@ WORKER = """
 import json, os, sys, time
 from pathlib import Path
 import cffi  # noqa: F401  (import before the start signal, so all start compiling together)
-from runtime import jit
+from runtime.kernels import jit
 
 src, cdef, sync, i = sys.argv[1], sys.argv[2], Path(sys.argv[3]), sys.argv[4]
 jit.module_name("axpy", src, cdef)  # warm the compiler-identity memo

@@ -1,4 +1,4 @@
-"""Tests of runtime.jit under attack and faults: planted shared objects, unsafe or unusable
+"""Tests of runtime.kernels.jit under attack and faults: planted shared objects, unsafe or unusable
 cache folders, broken compilers, long or stale locks, killed compiles."""
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime import jit
+from runtime.kernels import jit
 
 CDEF = "double axpy(double a, double x, double y);"
 IMPORT_ROOT = str(Path(jit.__file__).resolve().parents[1])
@@ -120,7 +120,7 @@ def test_cache_path_that_is_a_file_is_one_clear_sentence(
 
 READ_ONLY = """
 import json, sys
-from runtime import jit
+from runtime.kernels import jit
 r = jit.compile_module('axpy', sys.argv[1], sys.argv[2])
 out = {'cached': [r.compiled, r.module.lib.axpy(2.0, 3.0, 4.0)]}
 try:
@@ -217,7 +217,7 @@ def test_planted_module_in_a_cache_folder_others_can_write_is_never_loaded(
 
 LOAD = """
 import json, sys
-from runtime import jit
+from runtime.kernels import jit
 r = jit.compile_module('axpy', sys.argv[1], sys.argv[2])
 print(json.dumps({'compiled': r.compiled, 'value': r.module.lib.axpy(2.0, 3.0, 4.0)}))
 """
@@ -346,7 +346,7 @@ def release_after(seconds: float, lock: Path) -> threading.Timer:
 
 SLOW_OWNER = """
 import sys, time
-from runtime import jit
+from runtime.kernels import jit
 build = jit._build
 def slow_build(*args):
     time.sleep(float(sys.argv[3]))

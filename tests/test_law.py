@@ -31,8 +31,8 @@ from conftest import (
 )
 
 from runtime import Element
-from runtime import invariants as inv
-from runtime.kernels import element_kind, kernel_family
+from runtime.element import invariants as inv
+from runtime.kernels.loader import element_kind, kernel_family
 
 SHAPES = ["straight", "curved"]
 ALPHA = 0.01  # s
@@ -477,7 +477,7 @@ def test_law_algebra_reproduces_the_isotropic_formulas(kind):
 def test_invariant_report_compares_law_invariants():
     """``invariant_report.compare(..., law="ecm")``: closed form against quadrature with the
     volume and axis rules (round-off for the straight element)."""
-    from runtime import invariant_report
+    from runtime.studies import invariant_comparison as invariant_report
 
     result = invariant_report.compare("beam2d", "straight", law="ecm")
     assert result["law"] == "ecm"

@@ -27,13 +27,13 @@ from runtime import (
     Spherical,
     Static,
     Weld,
-    geometry,
     load_scene,
     run_scene,
 )
-from runtime.kernels import element_kind, generated_kinds
-from runtime.model import Model
-from runtime.scene import parse_scene
+from runtime.element import reference as geometry
+from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.model.model import Model
+from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.0, rho=7850.0)
 LINE_KINDS = [k for k in generated_kinds() if geometry.mesh_axes(element_kind(k)) == [0]]
@@ -73,7 +73,7 @@ def test_mesh_numbers_nodes_by_the_kinds_layout(body):
     assert np.allclose(model.reference[mesh.element_dofs], mesh.element_e0, rtol=0,
                        atol=1e-14)
     # node positions are where the scene checks place them (joints, sensors)
-    from runtime.scene import _node_position
+    from runtime.model.scene import _node_position
     positions = model.reference[model.position_dofs()]
     for node in range(body.n_nodes):
         assert np.allclose(positions[node], _node_position(body, node), atol=1e-12)

@@ -58,12 +58,12 @@ from runtime import (
     StrainEnergy,
     Table,
     TotalEnergy,
-    analysis,
     load_scene,
 )
-from runtime.model import Model
-from runtime.run import run
-from runtime.sensors import Sensors
+from runtime.app.run import run
+from runtime.model.items.sensors import Sensors
+from runtime.model.model import Model
+from runtime.solve import static as analysis
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 G = 9.81
@@ -103,7 +103,7 @@ def spin_up(t: float, omega: float, t_ramp: float) -> tuple[float, float]:
 
 
 def run_scene(scene_: Scene, folder: Path, name: str = "scene"):
-    """Write a scene as TOML and run it through ``runtime.run.run``."""
+    """Write a scene as TOML and run it through ``runtime.app.run.run``."""
     path = folder / f"{name}.toml"
     path.write_text(scene_.to_toml())
     return run(path, folder / f"{name}_out", quiet=True)
@@ -766,7 +766,7 @@ def test_a_family_compiled_before_is_not_charged_again(monkeypatch):
     # kernel families are memoised per process: one compiled earlier (by another model, a
     # benchmark) must not add its compile time to a later model (a report once showed
     # compile 8.5 s and pre-processing -8.5 s for warm runs)
-    from runtime.kernels import kernel_family
+    from runtime.kernels.loader import kernel_family
     scene_ = load_scene(scenes.path("cantilever"))
     family = kernel_family("beam3d", "gram_straight", "c")
     monkeypatch.setattr(family, "compile_s", 5.0)

@@ -25,7 +25,7 @@ from runtime import (
     Weld,
     load_scene,
 )
-from runtime.model import Model
+from runtime.model.model import Model
 
 
 def angular_momentum(model: Model, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -150,8 +150,8 @@ def test_free_motions_name_the_null_space_of_the_constrained_stiffness(
 def test_static_analysis_of_a_free_body_names_the_body_and_motion(tmp_path):
     """Issue 10: an unrestrained body in static analysis was "Newton did not converge"
     without a cause; now it is an invalid scene (exit 2) naming the body and its motions."""
-    from runtime.run import run
-    from runtime.scene import parse_scene
+    from runtime.app.run import run
+    from runtime.model.scene import parse_scene
 
     data = {"material": {"m": {"E": 2.1e11, "nu": 0.0, "rho": 7800.0}},
             "body": [{"name": "rod", "element": "beam2d", "material": "m", "elements": 2,

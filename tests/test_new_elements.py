@@ -1,5 +1,5 @@
 """Elements as data (symgen/domains.py, symgen/closed.py) and meshes of any kind
-(runtime/geometry.py): exact integration over the declared domains, the fast closed forms
+(runtime/element/reference.py): exact integration over the declared domains, the fast closed forms
 against direct symbolic integration, interpolation of every element file, meshing by
 connectivity, and cantilevers of the new elements against beam theory."""
 
@@ -10,8 +10,9 @@ import pytest
 import sympy as sp
 from conftest import KINDS
 
-from runtime import Element, geometry
-from runtime.kernels import element_kind
+from runtime import Element
+from runtime.element import reference as geometry
+from runtime.kernels.loader import element_kind
 from symgen import closed, derive, domains
 from symgen.elements import get, registry
 

@@ -12,8 +12,8 @@ import os
 
 import pytest
 
-from runtime import output
-from runtime.output import (
+from runtime.app import writers as output
+from runtime.app.writers import (
     OutputError,
     TimeSeriesWriter,
     plot_file_name,

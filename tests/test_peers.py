@@ -1,4 +1,4 @@
-"""The Exudyn peer models of runtime/peers.py are faithful to the paper problems: the
+"""The Exudyn peer models of runtime/studies/peers.py are faithful to the paper problems: the
 cantilever's static deflection and first frequency against the closed forms, short dynamic
 runs, and the rotating beam against our own solver.  Skipped without Exudyn."""
 
@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 from scenes_small import cantilever_frequency, simulate, tip_deflection
 
-from runtime import load_scene, peers
+from runtime import load_scene
+from runtime.studies import peers
 
 pytestmark = pytest.mark.skipif(
     not peers.exudyn_available(),

@@ -12,7 +12,7 @@ import pytest
 from scenes_small import STEEL, body, cantilever, scene, second_moment, simulate
 
 from runtime import Arc, Body, Clamp, Pin, PointMoment, SceneError, Static
-from runtime.model import Model
+from runtime.model.model import Model
 
 
 def _node_rotation_work(model: Model, node: int, force: np.ndarray,

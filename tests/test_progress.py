@@ -9,9 +9,9 @@ import pytest
 from scenes_small import cantilever
 
 from runtime import progress
+from runtime.app.simulation import run_scene
+from runtime.model.scene import parse_scene
 from runtime.progress import Bar, enabled, phase
-from runtime.result import run_scene
-from runtime.scene import parse_scene
 
 
 class Clock:

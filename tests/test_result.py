@@ -14,10 +14,10 @@ import pytest
 import scipy.linalg
 from scenes_small import body, cantilever, scene
 
-from runtime.analysis import modal_shapes
-from runtime.result import Modes, Observer, Result, States, requested, run_scene
-from runtime.run import run
-from runtime.scene import SceneError, parse_scene, toml_text
+from runtime.app.run import run
+from runtime.app.simulation import Modes, Observer, Result, States, requested, run_scene
+from runtime.model.scene import SceneError, parse_scene, toml_text
+from runtime.solve.static import modal_shapes
 
 SENSORS = [
     {"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -153,7 +153,7 @@ def test_mode_shapes_with_a_joint_satisfy_it():
 
 
 def test_modal_shapes_match_the_frequencies_alone(full):
-    from runtime.analysis import modal
+    from runtime.solve.static import modal
 
     found = modal_shapes(full.model, full.model.reference, 3)
     assert found.frequencies.tolist() == pytest.approx(

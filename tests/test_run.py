@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 from scenes_small import cantilever
 
+from runtime.app.run import run
 from runtime.cli import main
-from runtime.run import run
-from runtime.scene import toml_text
+from runtime.model.scene import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -338,7 +338,7 @@ TRICKY_SENSORS = [
 
 @pytest.mark.parametrize("name", ["ab", "tip-y", "return"])
 def test_response_frequency_is_of_the_sensor_named_exactly(name, tmp_path):
-    from runtime.signal import dominant_frequency
+    from runtime.app.signal import dominant_frequency
 
     data = numpy_dynamic(TRICKY_SENSORS, frequency_of=name, frequency_after=0.05)
     summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True)
@@ -375,7 +375,7 @@ class Refuse:
 
 @pytest.mark.parametrize("where", ["file", "under_file"])
 def test_unusable_output_folder_is_exit_3_before_any_work(where, tmp_path, monkeypatch):
-    monkeypatch.setattr("runtime.result.Model", Refuse)
+    monkeypatch.setattr("runtime.app.simulation.Model", Refuse)
     Refuse.calls = 0
     scene = write(tmp_path, small_scene())
     (tmp_path / "file").write_text("not a folder")
@@ -390,7 +390,7 @@ def test_unusable_output_folder_is_exit_3_before_any_work(where, tmp_path, monke
 
 
 def test_read_only_output_folder_is_exit_3(tmp_path, monkeypatch):
-    from runtime import output
+    from runtime.app import writers as output
 
     real_open = os.open
 
@@ -400,7 +400,7 @@ def test_read_only_output_folder_is_exit_3(tmp_path, monkeypatch):
         return real_open(path, flags, *args)
 
     monkeypatch.setattr(output.os, "open", read_only)
-    monkeypatch.setattr("runtime.result.Model", Refuse)
+    monkeypatch.setattr("runtime.app.simulation.Model", Refuse)
     (tmp_path / "out").mkdir()
     summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
     assert code == 3
@@ -422,7 +422,7 @@ def test_invalid_scene_and_unusable_folder_is_exit_2_saying_no_summary(tmp_path)
 def test_full_disk_during_the_run_is_exit_3_with_whole_csv_rows(tmp_path, monkeypatch):
     from test_output import FullDisk
 
-    from runtime.output import TimeSeriesWriter
+    from runtime.app.writers import TimeSeriesWriter
 
     real_init = TimeSeriesWriter.__init__
 
@@ -452,12 +452,12 @@ def test_full_disk_during_the_run_is_exit_3_with_whole_csv_rows(tmp_path, monkey
     ("CacheError", "ANCF_CACHE_DIR"),
 ])
 def test_jit_environment_errors_are_exit_3_with_a_hint(error, hint, tmp_path, monkeypatch):
-    from runtime import jit
+    from runtime.kernels import jit
 
     def broken(*args, **kwargs):
         raise getattr(jit, error)(f"{error} first line\ndetails: compiler output")
 
-    monkeypatch.setattr("runtime.result.Model", broken)
+    monkeypatch.setattr("runtime.app.simulation.Model", broken)
     out = tmp_path / "out"
     summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
     assert code == 3
@@ -469,7 +469,7 @@ def test_jit_environment_errors_are_exit_3_with_a_hint(error, hint, tmp_path, mo
 
 
 def test_long_sensor_name_keeps_results_and_plot(tmp_path):
-    from runtime.output import plot_file_name
+    from runtime.app.writers import plot_file_name
 
     # the longest name a scene accepts (300 characters are a scene error: tests/test_scene*)
     name = "s" * 64
@@ -501,7 +501,7 @@ def test_failing_plots_are_warnings_not_failures(tmp_path, monkeypatch):
 def test_plots_are_drawn_after_the_summary_is_written(tmp_path, monkeypatch):
     import time
 
-    from runtime import output
+    from runtime.app import writers as output
 
     real = output.plot_series
     seen = {}
@@ -567,7 +567,7 @@ def test_internal_error_still_writes_a_failed_summary(tmp_path, monkeypatch):
     def bug(*args, **kwargs):
         raise ZeroDivisionError("a bug")
 
-    monkeypatch.setattr("runtime.result.Sensors", bug)
+    monkeypatch.setattr("runtime.app.simulation.Sensors", bug)
     out = tmp_path / "out"
     summary, code = run(write(tmp_path, small_scene()), out, quiet=True)
     assert code == 4
@@ -581,7 +581,7 @@ def test_out_of_memory_is_exit_3(tmp_path, monkeypatch):
     def huge(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr("runtime.result.Model", huge)
+    monkeypatch.setattr("runtime.app.simulation.Model", huge)
     summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)
     assert code == 3
     assert summary["message"] == "out of memory during the model build"
@@ -589,7 +589,7 @@ def test_out_of_memory_is_exit_3(tmp_path, monkeypatch):
 
 
 def test_summary_that_cannot_be_written_is_exit_3(tmp_path, monkeypatch):
-    from runtime import output
+    from runtime.app import writers as output
 
     def full_disk(path, data):
         raise OSError(28, "No space left on device")
@@ -604,7 +604,8 @@ def test_summary_that_cannot_be_written_is_exit_3(tmp_path, monkeypatch):
 
 
 def test_compiler_fault_when_the_dynamic_engine_is_built_is_exit_3(tmp_path, monkeypatch):
-    from runtime import engines, jit
+    from runtime.kernels import jit
+    from runtime.solve import engines
 
     def no_compiler(*args, **kwargs):
         raise jit.CompilerNotFoundError("no C compiler for the stepper")

@@ -31,8 +31,9 @@ from runtime import (
     StrainEnergy,
     load_scene,
 )
-from runtime.kernels import generated_kinds
-from runtime.laws import (
+from runtime.kernels.loader import generated_kinds
+from runtime.model.scene import parse_scene
+from runtime.model.time_laws import (
     Constant,
     ConstantRate,
     CosineRamp,
@@ -43,7 +44,6 @@ from runtime.laws import (
     Table,
     parse_law,
 )
-from runtime.scene import parse_scene
 
 # --------------------------------------------------------------------------- laws
 

@@ -20,7 +20,7 @@ import tomllib
 import pytest
 
 from runtime import Revolute
-from runtime.scene import Material, SceneError, load_scene, parse_scene
+from runtime.model.scene import Material, SceneError, load_scene, parse_scene
 
 BASE = """
 [material.steel]

@@ -1,4 +1,4 @@
-"""Shapes (runtime.shapes): centre lines and plate mid-surfaces sampled from the shape
+"""Shapes (runtime.app.shapes): centre lines and plate mid-surfaces sampled from the shape
 functions of every generated kind, VTU files read back by meshio, the PVD collections, mode
 shapes, the GIF and the static snapshot (beams and plates), through ``ancf run --vtk --gif``
 too."""
@@ -16,14 +16,17 @@ import pytest
 from scenes_small import body, cantilever, scene
 from scipy.spatial.transform import Rotation
 
-from runtime import Body, Clamp, LinearRamp, LineForce, Rectangle, geometry, output, shapes
+from runtime import Body, Clamp, LinearRamp, LineForce, Rectangle
+from runtime.app import shapes
+from runtime.app import writers as output
+from runtime.app.run import run
+from runtime.app.shapes import PER_ELEMENT, Frames, Shape, VtkSeries
+from runtime.app.simulation import run_scene
 from runtime.cli import main
-from runtime.kernels import element_kind, generated_kinds
-from runtime.model import Model
-from runtime.result import run_scene
-from runtime.run import run
-from runtime.scene import parse_scene, toml_text
-from runtime.shapes import PER_ELEMENT, Frames, Shape, VtkSeries
+from runtime.element import reference as geometry
+from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.model.model import Model
+from runtime.model.scene import parse_scene, toml_text
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SENSORS = [{"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -368,7 +371,7 @@ def test_a_reused_folder_loses_old_vtu_files_only(tmp_path):
 def test_scene_output_table_asks_for_shapes(tmp_path, monkeypatch):
     from types import SimpleNamespace
 
-    from runtime import run as run_module
+    from runtime.app import run as run_module
 
     wanted = SimpleNamespace(vtk=True, animation=True, states=False)
     monkeypatch.setattr(run_module, "requested", lambda scene, name: getattr(wanted, name))

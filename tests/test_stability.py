@@ -12,9 +12,9 @@ from dataclasses import fields
 
 import pytest
 
-from runtime.kernels import generated_kinds
+from runtime.kernels.loader import generated_kinds
 from runtime.studies import stability
-from runtime.sweep import SchedulerError
+from runtime.studies.sweep import SchedulerError
 
 FIELDS = {"group", "case", "method", "measured", "tolerance", "passed", "detail", "cause"}
 

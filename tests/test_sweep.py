@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from runtime.sweep import SchedulerError, run_cases
+from runtime.studies.sweep import SchedulerError, run_cases
 
 
 def _double(x: int) -> int:

@@ -25,8 +25,8 @@ from runtime import (
     Weld,
     load_scene,
 )
-from runtime.model import Model
-from runtime.scene import parse_scene
+from runtime.model.model import Model
+from runtime.model.scene import parse_scene
 
 
 def _rigid(model: Model, rotation: np.ndarray, shift: np.ndarray) -> np.ndarray:

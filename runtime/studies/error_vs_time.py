@@ -1,8 +1,8 @@
 """``ancf study error-vs-time SCENE``: a work-precision study of a scene.
 
 Every combination of mesh size (elements per body), time step (s), integrator and elastic
-force method is run as an independent case (in parallel through ``runtime.sweep``); each run's
-error is measured
+force method is run as an independent case (in parallel through ``runtime.studies.sweep``);
+each run's error is measured
 
 * ``static_tip``: against the Euler-Bernoulli tip deflection ``P L^3 / (3 E I)`` of a
   cantilever (relative error of the static value of a displacement sensor of the loaded tip);
@@ -58,10 +58,10 @@ from typing import Any
 
 import numpy as np
 
-from runtime.element import METHODS
-from runtime.kernels import BACKENDS
-from runtime.scene import INTEGRATORS, Scene, SceneError, Static, parse_scene, read_scene_file
-from runtime.sweep import SchedulerError, run_cases
+from runtime.element.element import METHODS
+from runtime.kernels.loader import BACKENDS
+from runtime.model.scene import INTEGRATORS, Scene, SceneError, Static, parse_scene, read_scene_file
+from runtime.studies.sweep import SchedulerError, run_cases
 
 __all__ = [
     "CSV_COLUMNS",
@@ -192,8 +192,8 @@ def cantilever(scene: Scene, label: str, measure: str) -> Cantilever:
     clamp, force = clamps[0].node, forces[0]
     if force.node.index != last - clamp.index:
         raise fail(f"the point force acts on {force.node}, not on the free end")
-    from runtime.geometry import gradient_frame, straight_reference
-    from runtime.kernels import element_kind
+    from runtime.element.reference import gradient_frame, straight_reference
+    from runtime.kernels.loader import element_kind
 
     kind = element_kind(body.element)
     dim = kind.dim
@@ -468,7 +468,7 @@ def run_case(scene_text: str, repeat: int = 1, series: str | None = None) -> dic
     run gives status "failed" with its message: one case never stops the study.
     Module-level, so that dask can ship it to its workers.
     """
-    from runtime.run import run
+    from runtime.app.run import run
 
     result: dict = {"status": "failed", "message": "", "simulate_s": math.nan,
                     "total_s": math.nan, "summary": {}}
@@ -538,7 +538,7 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
     elements (ints), step (s), integrator, method (lists), backend, error (a MEASURES),
     sensor (a sensor name), reference ({elements, step[, integrator, method]} or
     [elements, step]), t_end (s), repeat (runs per case), targets (accuracies of the summary).
-    scheduler / workers / serial: see ``runtime.sweep.run_cases``.  out_dir (default
+    scheduler / workers / serial: see ``runtime.studies.sweep.run_cases``.  out_dir (default
     ``results/error_vs_time/<scene stem>``) receives error_vs_time.csv, .png and .md.
     Raises StudyError / SceneError for invalid input and SchedulerError for an unreachable
     scheduler, all before any run starts.
@@ -637,7 +637,7 @@ def _measure(plan: Plan, summary: dict, result: dict, ref_t, ref_y) -> tuple[flo
     if t.size == 0:
         raise ValueError(f"the run wrote no time series of sensor {plan.sensor!r}")
     if plan.measure == "frequency":
-        from runtime.signal import dominant_frequency
+        from runtime.app.signal import dominant_frequency
 
         keep = t >= plan.frequency_after
         value = dominant_frequency(t[keep], y[keep])

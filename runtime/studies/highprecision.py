@@ -23,7 +23,7 @@ import mpmath as mp
 import numpy as np
 import sympy as sp
 
-from runtime.kernels import element_kind
+from runtime.kernels.loader import element_kind
 
 mp.mp.dps = 50
 

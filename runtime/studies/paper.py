@@ -16,8 +16,8 @@ import tempfile
 from pathlib import Path
 
 import scenes
-from runtime.kernels import element_kind
-from runtime.scene import Scene, load_scene
+from runtime.kernels.loader import element_kind
+from runtime.model.scene import Scene, load_scene
 
 SCENE = scenes.path("cantilever")
 METHODS = ("gram", "cij", "quadrature")
@@ -63,7 +63,7 @@ def paper_scene(elements: int, t_end: float, step: float | None = None) -> Scene
 def paper_case(table: str, elements: int, t_end: float, method: str, backend: str = "c",
                step: float | None = None) -> dict:
     """Run one row with one method; returns the measured figures (module-level for dask)."""
-    from runtime.run import run
+    from runtime.app.run import run
 
     scene = paper_scene(elements, t_end, step)
     with tempfile.TemporaryDirectory() as folder:
@@ -164,7 +164,7 @@ def write(results: list[dict], out_dir: str | Path) -> dict[str, Path]:
 def bench_paper(quick: bool = False, scheduler: str | None = None, workers: int | None = None,
                 serial: bool = False, backend: str = "c") -> list[dict]:
     """Every row of Tables I and II with every method, in parallel on dask."""
-    from runtime.sweep import run_cases
+    from runtime.studies.sweep import run_cases
 
     return run_cases(paper_case, cases(quick, backend=backend), scheduler=scheduler,
                      workers=workers, serial=serial, label="paper tables")

@@ -22,10 +22,12 @@ import scipy
 import sympy
 
 import scenes
-from runtime import bench, bench_solvers, invariant_report, jit
-from runtime.kernels import generated_kinds
-from runtime.run import run
-from runtime.studies import error_vs_time, paper, stability
+from runtime.app.run import run
+from runtime.kernels import jit
+from runtime.kernels.loader import generated_kinds
+from runtime.studies import bench_kernels as bench
+from runtime.studies import bench_solvers, error_vs_time, paper, stability
+from runtime.studies import invariant_comparison as invariant_report
 
 #: the shipped scenes run for section 4
 SCENES = tuple(scenes.names())
@@ -132,7 +134,7 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
               "compiled before), min and median of interleaved repeats in this process; "
               "`/ Exudyn modified` divides by Exudyn's default (modified Newton) on the same "
               "problem. Exudyn's elements are the closest it has, not ours: see "
-              "`runtime/peers.py`.", "",
+              "`runtime/studies/peers.py`.", "",
               _demote(bench_solvers.run(quick=quick, repeats=1 if quick else 3,
                                         progress=False), 1)]
     parts += ["## 6. Error against run time (`ancf study error-vs-time`)", ""]

@@ -19,7 +19,7 @@ Four groups of rows, each row pass / fail against a stated tolerance (or informa
   beam3d elements) under an axial load, a tip load and gravity, against P L / EA,
   P L^3 / 3EI and q L^4 / 8EI, with both laws.
 
-Independent cases run through ``runtime.sweep.run_cases`` (dask.distributed: a local
+Independent cases run through ``runtime.studies.sweep.run_cases`` (dask.distributed: a local
 cluster by default, or an existing scheduler).  Case functions are module-level so that dask
 can ship them; each returns plain dicts.
 """
@@ -38,10 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.constraints import Clamp
-from runtime.kernels import element_kind, generated_kinds
-from runtime.loads import Gravity, PointForce
-from runtime.scene import Body, Material, Scene, Static
+from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.model.items.constraints import Clamp
+from runtime.model.items.loads import Gravity, PointForce
+from runtime.model.scene import Body, Material, Scene, Static
 
 EPS = float(np.finfo(float).eps)
 
@@ -292,8 +292,8 @@ def slender_scene(tip_load: float = 0.0) -> Scene:
 @functools.cache
 def _slender_start() -> tuple:
     """(unloaded model, static deflected coordinates) of the slender beam."""
-    from runtime import analysis
-    from runtime.model import Model
+    from runtime.model.model import Model
+    from runtime.solve import static as analysis
 
     loaded = Model(slender_scene(_tip_load()))
     static = analysis.solve_static(loaded, Static())
@@ -304,7 +304,7 @@ def slender_frequencies() -> dict:
     """Lowest and highest angular frequencies (rad/s) of the slender beam about the
     reference, the analytic first axial frequency pi/2 sqrt(E/rho)/L, and the initial (static)
     tip deflection (m)."""
-    from runtime import analysis
+    from runtime.solve import static as analysis
 
     model, q_static = _slender_start()
     omega = analysis.modal(model, model.reference, model.free.size)
@@ -321,8 +321,8 @@ def integrator_case(integrator: str, step: float, rho_inf: float = 0.8, t_end: f
     fixed ``step`` (s).  Returns energy drift (max |E(t) - E0| / E0 and the final one),
     Newton iterations (mean and max per step), the largest first Newton correction of a step
     (m), the status (ok | diverged), its message, the time reached and the wall time (s)."""
-    from runtime.integrators import INTEGRATORS, Divergence
-    from runtime.scene import Dynamic
+    from runtime.model.scene import Dynamic
+    from runtime.solve.python_engine import INTEGRATORS, Divergence
 
     model, q_static = _slender_start()
     settings = Dynamic(t_end=t_end, step=step, integrator=integrator, rho_inf=rho_inf,
@@ -501,7 +501,7 @@ ORDER_TOLERANCE = 1.8
 
 
 def _newton_model():
-    from runtime.model import Model
+    from runtime.model.model import Model
 
     p = NEWTON
     return Model(cantilever_scene(
@@ -680,8 +680,8 @@ def poisson_case(nu: float, elements: int, law: str = "svk") -> list[dict]:
     """The 2D cantilever (beam2d, clamped, 62.5 kN tip load) with ``elements`` elements and
     the material ``law`` (svk locks, ecm is the remedy): static tip deflection against
     8.099e-4 m (passes within 1 %)."""
-    from runtime import analysis
-    from runtime.model import Model
+    from runtime.model.model import Model
+    from runtime.solve import static as analysis
 
     p = POISSON
     model = Model(cantilever_scene(
@@ -746,8 +746,8 @@ def chrono_beam_case(law: str, load: str) -> list[dict]:
     """Chrono's 20-element aluminium cantilever (nu = 0.33) under ``load`` (axial: 1 kN
     along x, P L / EA; tip: 10 N across the wide side, P L^3 / 3EI; gravity: distributed,
     q L^4 / 8EI) with the material ``law``: static deflection against the closed form."""
-    from runtime import analysis
-    from runtime.model import Model
+    from runtime.model.model import Model
+    from runtime.solve import static as analysis
 
     c = CHRONO_BEAM
     length, thin, wide, E = c["length"], c["thin"], c["wide"], c["E"]
@@ -837,9 +837,9 @@ def cases(quick: bool = False) -> list[dict]:
 
 def stability_study(scheduler: str | None = None, workers: int | None = None,
                     quick: bool = False, serial: bool = False) -> list[Row]:
-    """Every case through ``runtime.sweep.run_cases`` (dask: a local cluster of ``workers``
+    """Every case through ``runtime.studies.sweep.run_cases`` (dask: a local cluster of ``workers``
     processes, or the scheduler at ``scheduler``); ``quick``: a small subset (tests)."""
-    from runtime.sweep import run_cases
+    from runtime.studies.sweep import run_cases
 
     todo = cases(quick)
     results = run_cases(run_case, todo, scheduler=scheduler, workers=workers, serial=serial,

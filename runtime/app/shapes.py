@@ -9,7 +9,7 @@ centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plat
 holds the element's nodes, so every model node is a sample point.  Displacements, velocities
 and mode shapes (all linear in the coordinates) are sampled the same way.
 
-Writers (all atomic, a write error is :class:`runtime.output.OutputError`):
+Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
 * :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates,
   point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given;
@@ -30,11 +30,12 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from runtime import geometry, output
-from runtime.kernels import ElementKind, kernel_family
-from runtime.model import BodyMesh, Model
+from runtime.app import writers as output
+from runtime.app.simulation import Modes, Observer
+from runtime.element import reference as geometry
+from runtime.kernels.loader import ElementKind, kernel_family
+from runtime.model.model import BodyMesh, Model
 from runtime.progress import Bar
-from runtime.result import Modes, Observer
 
 __all__ = ["PLANES", "Frames", "Shape", "VtkSeries", "magnification", "write_animation",
            "write_pvd", "write_snapshot", "write_vtu"]

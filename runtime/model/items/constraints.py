@@ -3,7 +3,7 @@
 A constraint either holds coordinates of one node (``NodeConstraint``: clamp, pin, a hub
 whose rotation is prescribed) or ties two nodes together with linear joint rows
 ``A q = 0`` solved with Lagrange multipliers (``Joint``: spherical, revolute, weld).  Each
-class declares its TOML keys as fields (``runtime.schema.Record``) and implements its effect
+class declares its TOML keys as fields (``runtime.model.schema.Record``) and implements its effect
 on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``.
 """
 
@@ -15,8 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from runtime.laws import Law, SceneError, _show
-from runtime.schema import (
+from runtime.model.schema import (
     Context,
     EdgeRef,
     NodeRef,
@@ -28,9 +27,10 @@ from runtime.schema import (
     registry,
     unit_axis,
 )
+from runtime.model.time_laws import Law, SceneError, _show
 
 if TYPE_CHECKING:
-    from runtime.model import Model
+    from runtime.model.model import Model
 
 __all__ = ["CONSTRAINTS", "Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
            "Pin", "Revolute", "Spherical", "Weld"]

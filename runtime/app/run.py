@@ -1,5 +1,5 @@
 """``ancf run``: a scene from file to results (summary.json, timeseries.csv, plots, shapes):
-``runtime.result.run_scene``'s machinery plus writers.
+``runtime.app.simulation.run_scene``'s machinery plus writers.
 
 Exit codes (:class:`ExitCode`): 0 ok, 1 diverged, 2 invalid scene or options, 3 environment
 (output folder or files, C compiler, kernel cache, memory), 4 internal error (a bug),
@@ -15,11 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import output, progress, shapes
-from runtime.jit import CacheError, JitEnvironmentError
-from runtime.result import TIMING_KEYS, Observer, Simulation, requested
-from runtime.scene import Scene, SceneError, load_scene
-from runtime.sensors import ENERGY_TYPES
+from runtime import progress
+from runtime.app import shapes
+from runtime.app import writers as output
+from runtime.app.simulation import TIMING_KEYS, Observer, Simulation, requested
+from runtime.kernels.jit import CacheError, JitEnvironmentError
+from runtime.model.items.sensors import ENERGY_TYPES
+from runtime.model.scene import Scene, SceneError, load_scene
 
 CSV = "timeseries.csv"
 SUMMARY = "summary.json"
@@ -65,7 +67,7 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
 
     Order: the scene is validated; ``out_dir`` is created, checked writable and cleared of a
     previous run's outputs (only those); the model is built (kernels compiled); the analyses
-    run (:func:`runtime.result.run_scene`'s machinery), timeseries.csv and, if asked, the
+    run (:func:`runtime.app.simulation.run_scene`'s machinery), timeseries.csv and, if asked, the
     VTU series written as they go.  summary.json is written atomically when the analyses
     end, then the plots are drawn (unless ``plots`` is False) with, if asked, the shape
     snapshot and animation, and the summary rewritten with their time in

@@ -6,7 +6,8 @@ rad/s, accelerations in m/s^2, E in Pa, rho in kg/m^3, angles in degrees where t
 ``_deg`` and in rad in time laws, times in s.
 
 A ``Scene`` is built from the dataclasses of this module and the typed records of
-``runtime.constraints``, ``runtime.loads`` and ``runtime.sensors``, in Python or from a TOML
+``runtime.model.items.constraints``, ``runtime.model.items.loads`` and
+``runtime.model.items.sensors``, in Python or from a TOML
 file (``load_scene``).  There is one validation path: a scene built in Python is written as
 its TOML table (``Scene.to_dict``) and read by the parser of TOML files, so both raise the same
 ``SceneError`` whose message starts with the key path of the culprit (``body[1].sectoin:
@@ -34,7 +35,8 @@ Beyond the types, a scene is checked for what it would do wrong:
   Newton iterations, 1000 modes (and no more than the degrees of freedom), 1000 sensors and
   Gauss orders up to 64; a relative Newton tolerance in [1e-15, 1e-2];
 * names: sensor names are file names (at most 64 characters, unique ignoring case, none
-  reserved: ``runtime.sensors``); body and material names printable, at most 64 characters;
+  reserved: ``runtime.model.items.sensors``); body and material names printable, at most 64
+  characters;
 * files (``read_scene_file``): UTF-8 (a byte order mark is skipped), at most 16 MiB, a
   regular file, not empty; errors name the file (and the byte offset or the line).
 """
@@ -50,14 +52,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime import geometry
 from runtime.catalog import ENGINES, NEWTON_MODES
-from runtime.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint, Weld
-from runtime.element import METHODS
-from runtime.kernels import BACKENDS, element_kind, generated_kinds
-from runtime.laws import SceneError, _show
-from runtime.loads import LOADS, Load
-from runtime.schema import (
+from runtime.element import reference as geometry
+from runtime.element.element import METHODS
+from runtime.kernels.loader import BACKENDS, element_kind, generated_kinds
+from runtime.model.items.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint, Weld
+from runtime.model.items.loads import LOADS, Load
+from runtime.model.items.sensors import SENSORS, Sensor
+from runtime.model.schema import (
     NAME_LENGTH,
     Context,
     NodeRef,
@@ -74,7 +76,7 @@ from runtime.schema import (
     table,
     vector,
 )
-from runtime.sensors import SENSORS, Sensor
+from runtime.model.time_laws import SceneError, _show
 
 __all__ = [
     "Arc",
@@ -114,7 +116,7 @@ LIMITS = {
     "iterations": 1000,                  # Newton iterations per step
     "modes": 1000,
     "sensors": 1000,                     # one CSV column and one PNG each
-    "quadrature": 64,                    # Gauss order per direction (runtime.element)
+    "quadrature": 64,                    # Gauss order per direction (runtime.element.element)
     "scene_bytes": 16 * 2**20,           # size of a scene file
 }
 # two node constraints on one node: why not (by their types; one type: the same twice)
@@ -200,7 +202,7 @@ class Rectangle:
 @dataclass(frozen=True)
 class Body:
     """A mesh of elements of kind ``element`` sharing nodes (numbered by the kind's node layout:
-    ``n_nodes`` of them, see ``runtime.geometry.structured_mesh``).
+    ``n_nodes`` of them, see ``runtime.element.reference.structured_mesh``).
 
     Beam kinds (a line of ``elements`` elements): section ``height`` and ``width`` (m; TOML
     ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or

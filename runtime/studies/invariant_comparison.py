@@ -11,10 +11,10 @@ import time
 
 import numpy as np
 
-from runtime import invariants as inv
-from runtime.element import lame
-from runtime.geometry import bent_reference
-from runtime.kernels import element_kind, kernel_family
+from runtime.element import invariants as inv
+from runtime.element.element import lame
+from runtime.element.reference import bent_reference
+from runtime.kernels.loader import element_kind, kernel_family
 
 #: Element and material used for the comparison (SI units).
 GEOMETRY = (1.0, 0.1, 0.1)
@@ -51,7 +51,7 @@ def _symbolic_derivation_s(kind: str) -> float | None:
 
 def curved_reference(meta):
     """The curved reference of the comparison: the element bent along x onto a circle of
-    radius 2 m (an arc for beams, a cylindrical panel for plates; runtime.geometry)."""
+    radius 2 m (an arc for beams, a cylindrical panel for plates; runtime.element.reference)."""
     return bent_reference(meta, GEOMETRY, 2.0)
 
 

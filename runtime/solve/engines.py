@@ -1,8 +1,8 @@
 """Engines that run a dynamic analysis: the registry (the only list of them).
 
-* ``compiled``: the whole time step in generated C (``runtime.stepper``), the default
+* ``compiled``: the whole time step in generated C (``runtime.solve.compiled_engine``), the default
   wherever the C backend works;
-* ``python``: the readable reference (``runtime.integrators``), the only one with the
+* ``python``: the readable reference (``runtime.solve.python_engine``), the only one with the
   NumPy backend.
 
 Both take ``(model, settings, q_full)`` and offer ``run(t_end, step, observe, progress)``
@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from runtime import catalog
-from runtime.integrators import INTEGRATORS
-from runtime.model import Model
+from runtime.model.model import Model
+from runtime.solve.python_engine import INTEGRATORS
 
 
 def _python(model: Model, settings, q_full: np.ndarray):
@@ -23,7 +23,7 @@ def _python(model: Model, settings, q_full: np.ndarray):
 
 
 def _compiled(model: Model, settings, q_full: np.ndarray):
-    from runtime.stepper import CompiledEngine
+    from runtime.solve.compiled_engine import CompiledEngine
 
     return CompiledEngine(model, settings, q_full)
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.kernels import ElementKind
+from runtime.kernels.loader import ElementKind
 
 
 def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 A load is a constant generalised force vector (``nominal``, N per coordinate, at a time-law
 value of 1) scaled by its ``time_law`` (default: constant 1).  Each class declares its TOML
-keys as fields (``runtime.schema.Record``); adding one is one class here and one entry in
+keys as fields (``runtime.model.schema.Record``); adding one is one class here and one entry in
 ``LOADS``.
 """
 
@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from runtime import geometry, invariants
-from runtime.kernels import kernel_family
-from runtime.laws import Constant, Law
-from runtime.schema import (
+from runtime.element import invariants
+from runtime.element import reference as geometry
+from runtime.kernels.loader import kernel_family
+from runtime.model.schema import (
     Context,
     EdgeRef,
     NodeRef,
@@ -29,9 +29,10 @@ from runtime.schema import (
     rotation_vector,
     vector,
 )
+from runtime.model.time_laws import Constant, Law
 
 if TYPE_CHECKING:
-    from runtime.model import Model
+    from runtime.model.model import Model
 
 __all__ = ["LOADS", "Gravity", "LineForce", "Load", "NodeLoad", "PointForce", "PointMoment"]
 

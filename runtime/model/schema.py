@@ -1,6 +1,7 @@
 """The scene schema's building blocks: value checkers, node references and ``Record``, the base
-of the typed registries of constraints, loads and sensors (``runtime.constraints``,
-``runtime.loads``, ``runtime.sensors``), modelled on the time laws of ``runtime.laws``.
+of the typed registries of constraints, loads and sensors (``runtime.model.items.constraints``,
+``runtime.model.items.loads``, ``runtime.model.items.sensors``), modelled on the time laws of
+``runtime.model.time_laws``.
 
 A record is a frozen dataclass whose fields are the keys of its TOML table
 ``{type = "...", key = value, ...}``: each field says how its value is checked
@@ -20,10 +21,10 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from runtime.laws import Law, SceneError, _is_finite, _show, parse_law
+from runtime.model.time_laws import Law, SceneError, _is_finite, _show, parse_law
 
 if TYPE_CHECKING:
-    from runtime.scene import Body
+    from runtime.model.scene import Body
 
 # what a missing required key should hold, for error messages
 HINTS = {

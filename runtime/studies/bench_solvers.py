@@ -7,7 +7,7 @@ Tables (Markdown):
 1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3) and rotating beam
    (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3): simulate time of each
    engine and Newton mode, the same run with the quadrature method (the paper's "without
-   invariants"), and Exudyn (``runtime.peers``, when installed) with modified and full
+   invariants"), and Exudyn (``runtime.studies.peers``, when installed) with modified and full
    Newton; min and median of the repeats, and ratios to Exudyn's default (modified Newton);
 2. the cost of a step from 10 to 100,000 beam3d elements: microseconds per step and per
    element-step, Newton iterations per step, and the shares of the element kernels and of
@@ -26,12 +26,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import scenes
-from runtime import engines, peers
-from runtime.laws import Constant
-from runtime.model import Model
+from runtime.model.items.sensors import Sensors
+from runtime.model.model import Model
+from runtime.model.scene import Scene, load_scene
+from runtime.model.time_laws import Constant
 from runtime.progress import Bar, enabled
-from runtime.scene import Scene, load_scene
-from runtime.sensors import Sensors
+from runtime.solve import engines
+from runtime.studies import peers
 
 
 @dataclass

@@ -1,5 +1,5 @@
 """Run outputs (DESIGN.md section 7): the output folder, the time-series CSV written as the
-run goes, the atomic ``summary.json`` and PNG plots (shapes: ``runtime.shapes``; progress:
+run goes, the atomic ``summary.json`` and PNG plots (shapes: ``runtime.app.shapes``; progress:
 ``runtime.progress``).
 
 Every file is created with the ordinary permissions of ``open`` (0666 less the umask).  A
@@ -29,11 +29,11 @@ __all__ = ["ENERGIES_FILE", "OutputError", "RESERVED_FILES", "TimeSeriesWriter",
            "write_json_atomic"]
 
 ENERGIES_FILE = "energies.png"
-#: the snapshot of the static state and the animation (runtime.shapes)
+#: the snapshot of the static state and the animation (runtime.app.shapes)
 SHAPE_FILE, ANIMATION_FILE = "shape_static.png", "shape_animation.gif"
 #: PNG names of a run that no sensor plot may take
 RESERVED_FILES = (ENERGIES_FILE, SHAPE_FILE)
-#: subfolder of the VTU/PVD files of a run (runtime.shapes), owned by the run
+#: subfolder of the VTU/PVD files of a run (runtime.app.shapes), owned by the run
 VTK_FOLDER = "vtk"
 # longest plot file stem: room for the temporary-file decoration within 255 bytes
 MAX_STEM = 100

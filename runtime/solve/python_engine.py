@@ -1,5 +1,5 @@
 """Fixed-step implicit integrators for M q'' + A^T lambda = F(q, t), A q = 0 (the Python
-engine: the readable reference of the compiled one in ``runtime.stepper``).
+engine: the readable reference of the compiled one in ``runtime.solve.compiled_engine``).
 
 * ``trapezoidal``: the paper's scheme - the index-1 form (eq. 8) integrated with the
   second-order Adams-Moulton (trapezoidal) rule, Newton on the new accelerations, then
@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from runtime.catalog import NEWTON_MODES
-from runtime.dae import DAESystem
-from runtime.linear import SchurSolver, single_threaded_blas
-from runtime.model import Model
+from runtime.model.dae import DAESystem
+from runtime.model.model import Model
+from runtime.solve.linear import SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
 #: the previous one (the same rule in both engines).

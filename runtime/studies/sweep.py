@@ -2,7 +2,7 @@
 
 By default a local cluster of processes (one per core, one thread each) is started for the
 sweep; ``scheduler`` connects to an existing cluster instead.  Workers share the C kernel
-cache safely (``runtime.jit`` compiles each kernel once, whatever the number of processes).
+cache safely (``runtime.kernels.jit`` compiles each kernel once, whatever the number of processes).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """``run_scene``: every analysis of a scene in memory, with no file I/O, into a ``Result``.
 
-``ancf run`` (``runtime.run``) is ``run_scene`` plus writers: they are :class:`Observer`
+``ancf run`` (``runtime.app.run``) is ``run_scene`` plus writers: they are :class:`Observer`
 objects that receive the results as they are computed (the time-series CSV and the VTU
 series stream rows and files while the dynamic analysis goes on).
 """
@@ -15,14 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import analysis, engines, progress
-from runtime.integrators import Divergence
-from runtime.kernels import element_kind
-from runtime.model import Model
+from runtime import progress
+from runtime.app.signal import dominant_frequency
+from runtime.kernels.loader import element_kind
+from runtime.model.items.sensors import Sensors
+from runtime.model.model import Model
+from runtime.model.scene import Scene, Static, load_scene
 from runtime.progress import Bar, enabled
-from runtime.scene import Scene, Static, load_scene
-from runtime.sensors import Sensors
-from runtime.signal import dominant_frequency
+from runtime.solve import engines
+from runtime.solve import static as analysis
+from runtime.solve.python_engine import Divergence
 
 __all__ = ["Modes", "Observer", "Result", "Simulation", "States", "requested", "run_scene"]
 
@@ -229,7 +231,7 @@ class Simulation:
             self._states[1].append(np.array(v))
 
     def _dynamic(self, settings) -> int:
-        """The dynamic analysis with the chosen engine (``runtime.engines``); fills
+        """The dynamic analysis with the chosen engine (``runtime.solve.engines``); fills
         summary["dynamic"] however it ends."""
         self.phase = "dynamic analysis"
         summary, names = self.summary, self.sensors.names
@@ -336,7 +338,7 @@ def run_scene(scene: Scene | str | Path, method: str | None = None,
 
     Returns a :class:`Result` with exit code 0 (ok) or 1 (a diverged analysis: the results
     up to then are kept).  Raises SceneError / ValueError for an invalid scene or option,
-    ``runtime.jit.JitEnvironmentError`` or OSError when the kernels cannot be built, and
+    ``runtime.kernels.jit.JitEnvironmentError`` or OSError when the kernels cannot be built, and
     KeyboardInterrupt as it comes.
     """
     start = time.perf_counter()

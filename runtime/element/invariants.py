@@ -17,7 +17,7 @@ from fractions import Fraction
 import numpy as np
 import scipy.sparse
 
-from runtime.kernels import ElementKind, KernelFamily, csr
+from runtime.kernels.loader import ElementKind, KernelFamily, csr
 
 
 @dataclass(frozen=True)
@@ -400,7 +400,7 @@ def law_algebra(kind: ElementKind, variant: str, parts, mass: np.ndarray,
 
 @functools.cache
 def _closed_data(kind_name: str) -> dict:
-    from runtime.kernels import generated_dir
+    from runtime.kernels.loader import generated_dir
 
     data = json.loads((generated_dir() / kind_name / "closed.json").read_text())
     out = {"shape": np.array(data["shape_exponents"], dtype=np.int64),

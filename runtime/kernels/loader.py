@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse
 
-from runtime import jit
+from runtime.kernels import jit
 
 BACKENDS = ("c", "numpy")
 _FLOAT = np.dtype(np.float64)

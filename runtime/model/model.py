@@ -1,6 +1,6 @@
 """A scene turned into a model: meshed bodies, global coordinates, assembly, constraints.
 
-Each body is meshed by connectivity (``runtime.geometry.structured_mesh``: a line of beam
+Each body is meshed by connectivity (``runtime.element.reference.structured_mesh``: a line of beam
 elements, interior nodes included for 3-node beams; a grid of plate elements); its nodes
 are numbered along x, then y, and the bodies one after the other.  Coordinates are
 node-major over the whole model: a node owns ``per_node`` consecutive coordinates (its
@@ -20,12 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse
 
-from runtime import geometry
-from runtime.constraints import Built
-from runtime.element import Element
-from runtime.kernels import ElementKind, element_kind
-from runtime.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
-from runtime.scene import Body, NodeRef, Scene
+from runtime.element import reference as geometry
+from runtime.element.element import Element
+from runtime.kernels.loader import ElementKind, element_kind
+from runtime.model.items.constraints import Built
+from runtime.model.scene import Body, NodeRef, Scene
+from runtime.solve.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """Sensors: named scalar outputs of a model state (``[[sensor]]`` tables), a typed registry
 ``SENSORS``.
 
-Each class declares its TOML keys as fields (``runtime.schema.Record``), its ``unit`` and
+Each class declares its TOML keys as fields (``runtime.model.schema.Record``), its ``unit`` and
 whether it is an ``energy`` (plotted together), and computes its value from (model, q, v, t);
 adding one is one class here and one entry in ``SENSORS``.  ``Sensors`` evaluates all the
 sensors of a model's scene.
@@ -15,8 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from runtime.laws import SceneError, _show
-from runtime.schema import (
+from runtime.model.schema import (
     NAME_LENGTH,
     Context,
     NodeRef,
@@ -27,9 +26,10 @@ from runtime.schema import (
     registry,
     string,
 )
+from runtime.model.time_laws import SceneError, _show
 
 if TYPE_CHECKING:
-    from runtime.model import Model
+    from runtime.model.model import Model
 
 __all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
            "KineticEnergy", "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy",

@@ -8,8 +8,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
 
-from runtime.linear import DENSE_LIMIT, single_threaded_blas
-from runtime.model import Model
+from runtime.model.model import Model
+from runtime.solve.linear import DENSE_LIMIT, single_threaded_blas
 
 
 class ConvergenceError(RuntimeError):

@@ -8,8 +8,8 @@ import time
 
 import numpy as np
 
-from runtime import invariants as inv
-from runtime.kernels import BACKENDS, element_kind, kernel_family, output_array, real_array
+from runtime.element import invariants as inv
+from runtime.kernels.loader import BACKENDS, element_kind, kernel_family, output_array, real_array
 
 METHODS = ("gram", "cij", "quadrature")
 MAGNITUDE = 1e30  # length, height, width, E and rho lie in [1 / MAGNITUDE, MAGNITUDE]
@@ -279,7 +279,7 @@ class Element:
 
     @property
     def damping_kernel_family(self):
-        """The loaded damping kernel family (``runtime.kernels``); compiled on first use."""
+        """The loaded damping kernel family (``runtime.kernels.loader``); compiled on first use."""
         self._damping_kernels()
         return self._damping_family
 
@@ -420,7 +420,7 @@ class Element:
         """``kernel`` (force, jacobian, energy, force_jacobian) for a group of elements that
         share this element's invariants but each have their own reference: call it with
         ``{"e": (m, ndof), "e0": (m, ndof) or (1, ndof)}`` and optional ``out``, checked as
-        ``runtime.kernels.BoundKernel`` documents (C-contiguous float64 input is not copied).
+        ``runtime.kernels.loader.BoundKernel`` documents (C-contiguous float64 input is not copied).
 
         Valid for rigid placements of this element's reference (invariants are rotation
         and translation invariant), e.g. the elements of a uniformly meshed line or arc.
@@ -429,7 +429,7 @@ class Element:
 
     @property
     def kernel_family(self):
-        """The loaded kernel family of this element's method (``runtime.kernels``)."""
+        """The loaded kernel family of this element's method (``runtime.kernels.loader``)."""
         return self._method_kernels
 
     @property

@@ -8,8 +8,8 @@
 at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values).
 ``F`` is the elastic force of the element groups plus the external loads, each a constant
 vector times a time law.  A ``DAESystem`` is built once from a ``Model`` and holds only
-arrays and the element groups; the Python engine (``runtime.integrators``) and the
-compiled engine (``runtime.stepper``) both consume it, nothing else of the model.
+arrays and the element groups; the Python engine (``runtime.solve.python_engine``) and the
+compiled engine (``runtime.solve.compiled_engine``) both consume it, nothing else of the model.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from runtime.analysis import length_scale
-from runtime.model import Model
+from runtime.model.model import Model
+from runtime.solve.static import length_scale
 
 
 @dataclass(frozen=True)
