@@ -1,7 +1,70 @@
-"""Names of the interchangeable parts of a run, the only lists of them (scene validation,
-CLI choices and registries read them from here, so a new part is added in one place)."""
+"""Every list of names of the interchangeable parts of a run, and the rule that names kernel
+families: the only place they are typed.  Scene validation, CLI choices, registries, studies
+and benchmarks read them from here (``tests/test_catalog.py`` checks that no other module
+spells one of these lists), so a new part is added in one place.
 
+Element kinds and material laws are not typed at all: they are read from the generated
+``element.json`` files (what ``symgen`` emitted is what exists).  Registries keyed by these
+names (engines, integrators) assert that they hold exactly the catalog's names.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+#: Elastic force methods of ``runtime.Element`` (DESIGN: docs/design.md, "three ways").
+METHODS = ("gram", "cij", "quadrature")
+#: Kernel backends: compiled C through cffi, or NumPy.
+BACKENDS = ("c", "numpy")
+#: Reference variants of the invariants: closed forms of straight elements, quadrature of any.
+VARIANTS = ("straight", "general")
+#: Time integrators of dynamic analyses (registry: ``runtime.solve.python_engine``).
+INTEGRATORS = ("trapezoidal", "generalized_alpha")
 #: Dynamic engines (registry: ``runtime.solve.engines.ENGINES``).
 ENGINES = ("compiled", "python")
 #: Newton modes of the dynamic integrators (both engines).
 NEWTON_MODES = ("full", "modified")
+#: The material law of a material that names none.
+DEFAULT_LAW = "svk"
+
+
+def generated_dir() -> Path:
+    """The folder of the generated kernels (inside the installed package)."""
+    return Path(str(resources.files("generated")))
+
+
+def generated_kinds() -> list[str]:
+    """Every element kind with generated kernels (``runtime.Element`` takes any), sorted."""
+    return sorted(p.parent.name for p in generated_dir().glob("*/element.json"))
+
+
+@cache
+def material_laws() -> tuple[str, ...]:
+    """Every material law some generated kind has, the default first, then by name."""
+    laws = set()
+    for kind in generated_kinds():
+        laws |= set(json.loads((generated_dir() / kind / "element.json").read_text())["laws"])
+    return tuple(sorted(laws, key=lambda law: (law != DEFAULT_LAW, law)))
+
+
+def family_name(method: str, law: str, variant: str, damped: bool = False) -> str:
+    """The kernel family that evaluates ``method`` for material law ``law`` on elements of
+    reference ``variant`` (``VARIANTS``): the elastic kernels, or with ``damped`` the
+    Kelvin-Voigt damping kernels.
+
+    gram: ``gram_<variant>`` (damping ``damping_<variant>``); cij: ``cij`` (damping through
+    the gram invariant, ``damping_<variant>``); quadrature: ``quadrature`` for the default
+    law, ``quadrature_law`` for any other law and for damping.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+    if variant not in VARIANTS:
+        raise ValueError(f"variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
+    if method == "quadrature":
+        return "quadrature" if law == DEFAULT_LAW and not damped else "quadrature_law"
+    if damped:
+        return f"damping_{variant}"
+    return f"gram_{variant}" if method == "gram" else method

@@ -50,7 +50,7 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
 
 def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:
     """Unified diff between freshly generated kernels and ``folder`` ('' when identical)."""
-    from runtime.kernels.loader import generated_dir
+    from runtime.catalog import generated_dir
     from symgen.elements import registry
 
     folder = folder or generated_dir()
@@ -72,7 +72,7 @@ def generation_diff(elements: list[str] | None = None, folder: Path | None = Non
 
 
 def cmd_generate(args) -> int:
-    from runtime.kernels.loader import generated_dir
+    from runtime.catalog import generated_dir
     from symgen.elements import registry
 
     known = list(registry())
@@ -230,9 +230,7 @@ class _Parser(argparse.ArgumentParser):
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.app.shapes import AUTO_PLANE, PLANES
-    from runtime.catalog import ENGINES
-    from runtime.element.element import METHODS
-    from runtime.kernels.loader import BACKENDS
+    from runtime.catalog import BACKENDS, ENGINES, METHODS
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)

@@ -11,7 +11,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from runtime import Element
-from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.catalog import generated_kinds
+from runtime.kernels.kind import element_kind
 
 #: Every generated element kind (generated/*/element.json): the tests cover each one.
 KINDS = generated_kinds()

@@ -56,8 +56,8 @@ from runtime import (
     Weld,
     load_scene,
 )
-from runtime.element import reference as geometry
-from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.catalog import generated_kinds
+from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
 from runtime.model.items.sensors import SENSORS
@@ -312,7 +312,7 @@ def random_scene(rng: random.Random) -> Scene:
     """A random valid scene using every kind of body, constraint, load, sensor and table."""
     dim = rng.choice([2, 3])
     line_kinds = [k for k in generated_kinds() if element_kind(k).dim == dim
-                  and len(geometry.mesh_axes(element_kind(k))) == 1]
+                  and len(element_kind(k).mesh_axes) == 1]
     materials = []
     for name in rng.sample(MATERIAL_NAMES, rng.randint(1, 3)):
         law = rng.choice(["svk", "ecm"])
@@ -351,7 +351,7 @@ def random_scene(rng: random.Random) -> Scene:
             body = dataclasses.replace(body, initial_angular_velocity=Spin(
                 _rotation(rng, dim), _vector(rng, dim)))
         bodies.append(body)
-    plate_kinds = [k for k in generated_kinds() if len(geometry.mesh_axes(element_kind(k))) == 2]
+    plate_kinds = [k for k in generated_kinds() if len(element_kind(k).mesh_axes) == 2]
     plate = None
     if dim == 3 and rng.random() < 0.4:   # a plate apart from the chain
         grid = (rng.randint(1, 3), rng.randint(1, 3))

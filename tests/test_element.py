@@ -42,7 +42,8 @@ from conftest import (
 
 from runtime import Element
 from runtime.element import invariants as inv
-from runtime.kernels.loader import element_kind, kernel_family
+from runtime.kernels.kind import element_kind
+from runtime.kernels.loader import kernel_family
 from runtime.studies import highprecision as reference
 
 EPS = np.finfo(float).eps

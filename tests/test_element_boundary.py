@@ -32,7 +32,8 @@ from conftest import (
 )
 
 from runtime import Element
-from runtime.kernels.loader import element_kind, kernel_family
+from runtime.kernels.kind import element_kind
+from runtime.kernels.loader import kernel_family
 
 GOOD = dict(length=LENGTH, height=HEIGHT, width=WIDTH, E=E_MODULUS, nu=NU, rho=RHO)
 

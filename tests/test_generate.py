@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from runtime import Element, cli
+from runtime.catalog import generated_dir
 from runtime.kernels import jit
 from runtime.kernels import loader as kernels
-from runtime.kernels.loader import generated_dir, kernel_family
+from runtime.kernels.loader import kernel_family
 from symgen import emit
 
 

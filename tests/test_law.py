@@ -32,7 +32,8 @@ from conftest import (
 
 from runtime import Element
 from runtime.element import invariants as inv
-from runtime.kernels.loader import element_kind, kernel_family
+from runtime.kernels.kind import element_kind
+from runtime.kernels.loader import kernel_family
 
 SHAPES = ["straight", "curved"]
 ALPHA = 0.01  # s

@@ -30,14 +30,15 @@ from runtime import (
     load_scene,
     run_scene,
 )
-from runtime.element import reference as geometry
-from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.catalog import generated_kinds
+from runtime.kernels.kind import element_kind
+from runtime.model import mesh as meshing
 from runtime.model.model import Model
 from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.0, rho=7850.0)
-LINE_KINDS = [k for k in generated_kinds() if geometry.mesh_axes(element_kind(k)) == [0]]
-PLATE_KINDS = [k for k in generated_kinds() if geometry.mesh_axes(element_kind(k)) == [0, 1]]
+LINE_KINDS = [k for k in generated_kinds() if element_kind(k).mesh_axes == [0]]
+PLATE_KINDS = [k for k in generated_kinds() if element_kind(k).mesh_axes == [0, 1]]
 
 
 def _line_body(kind: str, elements: int = 3, arc: bool = False) -> Body:
@@ -67,7 +68,7 @@ def test_mesh_numbers_nodes_by_the_kinds_layout(body):
     model = Model(Scene(materials=[STEEL], bodies=[body]))
     kind = element_kind(body.element)
     mesh = model.bodies[body.name]
-    assert mesh.nodes == body.n_nodes == geometry.node_count(kind, body.counts)
+    assert mesh.nodes == body.n_nodes == meshing.node_count(kind, body.counts)
     assert model.size == body.n_nodes * kind.per_node
     # every element's reference is its nodes' reference (shared nodes agree between elements)
     assert np.allclose(model.reference[mesh.element_dofs], mesh.element_e0, rtol=0,

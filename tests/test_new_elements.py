@@ -12,7 +12,8 @@ from conftest import KINDS
 
 from runtime import Element
 from runtime.element import reference as geometry
-from runtime.kernels.loader import element_kind
+from runtime.kernels.kind import element_kind
+from runtime.model import mesh as meshing
 from symgen import closed, derive, domains
 from symgen.elements import get, registry
 
@@ -76,17 +77,17 @@ def test_kinds_come_from_the_generated_metadata():
 
 def test_structured_meshes_share_nodes_by_position():
     beam = element_kind("beam3d_3node")
-    mesh = geometry.structured_mesh(beam, 3)
+    mesh = meshing.structured_mesh(beam, 3)
     assert mesh.connectivity.tolist() == [[0, 1, 2], [2, 3, 4], [4, 5, 6]]
     np.testing.assert_allclose(mesh.points[:, 0], np.arange(7) / 2)
     assert mesh.dofs(beam).shape == (3, 27) and mesh.dofs(beam)[1, 0] == 2 * 9
     plate = element_kind("plate3d")
-    mesh = geometry.structured_mesh(plate, (2, 2))
+    mesh = meshing.structured_mesh(plate, (2, 2))
     assert mesh.connectivity.tolist() == [[0, 1, 4, 3], [1, 2, 5, 4], [3, 4, 7, 6],
                                           [4, 5, 8, 7]]
     assert mesh.points.shape == (9, 2)
     with pytest.raises(ValueError, match="counts"):
-        geometry.structured_mesh(plate, 3)
+        meshing.structured_mesh(plate, 3)
     e0 = geometry.rectangle_reference(plate, [0, 0, 0], [1.0, 0, 0], [0, 0.5, 0])
     np.testing.assert_allclose(e0, plate.straight_reference(1.0, 0.5, 0.05))
     with pytest.raises(ValueError, match="not a line element"):
@@ -98,7 +99,7 @@ def static_tip_deflection(kind: str, counts, law: str, nu: float, load: float) -
     a plate: 0.1 m wide, 0.05 m thick) meshed by connectivity, a total ``load`` (N) along -z
     at the free end, shared equally by the free end's nodes."""
     info = element_kind(kind)
-    mesh = geometry.structured_mesh(info, counts)
+    mesh = meshing.structured_mesh(info, counts)
     m = np.atleast_1d(counts)
     length = 1.0 / m[0]
     width = 0.1 / (m[1] if len(m) > 1 else 1)

@@ -31,7 +31,7 @@ from runtime import (
     StrainEnergy,
     load_scene,
 )
-from runtime.kernels.loader import generated_kinds
+from runtime.catalog import generated_kinds
 from runtime.model.scene import parse_scene
 from runtime.model.time_laws import (
     Constant,

@@ -22,9 +22,9 @@ from runtime.app import writers as output
 from runtime.app.run import run
 from runtime.app.shapes import PER_ELEMENT, Frames, Shape, VtkSeries
 from runtime.app.simulation import run_scene
+from runtime.catalog import generated_kinds
 from runtime.cli import main
-from runtime.element import reference as geometry
-from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.kernels.kind import element_kind
 from runtime.model.model import Model
 from runtime.model.scene import parse_scene, toml_text
 
@@ -112,7 +112,7 @@ def test_several_bodies_are_separate_polylines():
 # --------------------------------------------------------------------------- every kind
 
 KINDS = generated_kinds()
-PLATE_KINDS = [k for k in KINDS if geometry.mesh_axes(element_kind(k)) == [0, 1]]
+PLATE_KINDS = [k for k in KINDS if element_kind(k).mesh_axes == [0, 1]]
 CORNER, SIZE = (0.1, -0.2, 0.3), (1.0, 0.4)     # a plate body's rectangle (m)
 
 
@@ -120,7 +120,7 @@ def kind_body(kind: str, name: str = "body") -> Body:
     """A small body of ``kind``: 2 elements along a slanted line from the origin (0.8, 0.6
     [, 0]) (m) for a line kind, a 2 x 3 grid over the rectangle CORNER, SIZE for a plate."""
     info = element_kind(kind)
-    if geometry.mesh_axes(info) == [0]:
+    if info.mesh_axes == [0]:
         return Body(name, kind, "m", 0.02, 0.01, 2, (0.0,) * info.dim,
                     (0.8, 0.6) + (0.0,) * (info.dim - 2))
     return Body(name, kind, "m", rectangle=Rectangle(CORNER, SIZE, (2, 3)), thickness=0.01)
@@ -149,7 +149,7 @@ def test_samples_at_the_nodes_are_the_nodal_positions(kind, per_element):
         q[model.position_dofs()], rel=1e-13, abs=1e-15)
     assert not sampled[:, model.dim:].any()
     # every sample point belongs to a cell of the kind's type (line or quad) and the outline
-    axes = geometry.mesh_axes(element_kind(kind))
+    axes = element_kind(kind).mesh_axes
     [(name, cells)] = shape.cells
     assert name == shapes.CELL_TYPES[len(axes)] and cells.shape[1] == 2 ** len(axes)
     assert set(cells.ravel().tolist()) == set(range(shape.points))
@@ -210,7 +210,7 @@ def test_vtu_of_every_kind_reads_back_with_its_cells(kind, tmp_path):
     displacement = shape.sample(q - model.reference)
     shapes.write_vtu(tmp_path / "a.vtu", shape, q, {"displacement": displacement})
     mesh = meshio.read(tmp_path / "a.vtu")
-    axes = len(geometry.mesh_axes(element_kind(kind)))
+    axes = len(element_kind(kind).mesh_axes)
     elements = model.bodies["body"].elements
     assert [(c.type, len(c.data)) for c in mesh.cells] == [
         (shapes.CELL_TYPES[axes], elements * PER_ELEMENT**axes)]

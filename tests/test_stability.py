@@ -12,7 +12,7 @@ from dataclasses import fields
 
 import pytest
 
-from runtime.kernels.loader import generated_kinds
+from runtime.catalog import generated_kinds
 from runtime.studies import stability
 from runtime.studies.sweep import SchedulerError
 

@@ -4,7 +4,7 @@ animation.
 An element's position field is ``r(p) = S(p) e`` at local points ``p`` of its reference
 domain, with the shape functions ``S`` of the element kind (the generated ``shape_values``
 kernel of its invariants family).  :class:`Shape` samples it on a small grid per element over
-the axes the kind's mesh tiles (``geometry.mesh_axes``), at the middle of the other axes: the
+the axes the kind's mesh tiles (``ElementKind.mesh_axes``), at the middle of the other axes: the
 centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate.  The grid
 holds the element's nodes, so every model node is a sample point.  Displacements, velocities
 and mode shapes (all linear in the coordinates) are sampled the same way.
@@ -32,8 +32,8 @@ import numpy as np
 
 from runtime.app import writers as output
 from runtime.app.simulation import Modes, Observer
-from runtime.element import reference as geometry
-from runtime.kernels.loader import ElementKind, kernel_family
+from runtime.kernels.kind import ElementKind
+from runtime.kernels.loader import kernel_family
 from runtime.model.model import BodyMesh, Model
 from runtime.progress import Bar
 
@@ -48,7 +48,7 @@ PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 MAX_FRAMES = 100
 #: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2)
 CELL_TYPES = {1: "line", 2: "quad"}
-#: sample points are matched on a grid of 2**-20 element units (as geometry.structured_mesh)
+#: sample points are matched on a grid of 2**-20 element units (as meshing.structured_mesh)
 _KEY = 2**20
 
 
@@ -74,7 +74,7 @@ class Shape:
         outline, node_points, first = [], [], 0
         for body in model.bodies.values():
             kind = body.kind
-            axes = geometry.mesh_axes(kind)
+            axes = kind.mesh_axes
             if len(axes) not in CELL_TYPES:
                 raise ValueError(f"shape: cannot draw {kind.name}, meshed over {len(axes)} "
                                  f"axes (meshes over 1 or 2 axes are drawn)")
@@ -117,7 +117,7 @@ class Shape:
 def _sample_fractions(kind: ElementKind, axes: list[int], per_element: int) -> list[np.ndarray]:
     """Sample fractions of the element along each meshed axis: ``per_element`` equal
     intervals of [0, 1] and the nodes' fractions."""
-    nodes = geometry.node_fractions(kind)[:, axes]
+    nodes = kind.node_fractions[:, axes]
     even = np.linspace(0.0, 1.0, per_element + 1)
     return [np.unique(np.round(np.concatenate([even, nodes[:, a]]) * _KEY)) / _KEY
             for a in range(len(axes))]
@@ -171,11 +171,8 @@ def _shape_values(body: BodyMesh, axes: list[int], local: np.ndarray) -> np.ndar
     axes) of the meshed axes, at the middle of the other axes (a beam's centre line, a
     plate's mid-surface)."""
     element = body.element
-    domain = element.kind.meta["domain"]
     points = np.zeros((len(local), element.kind.dim))
-    for a, axis in enumerate(domain["axes"]):
-        scale = element.geometry[domain["parameters"].index(axis["scale"])]
-        low, high = (scale * n / d for n, d in (axis["low"], axis["high"]))
+    for a, (low, high) in enumerate(element.kind.domain.bounds(element.geometry)):
         points[:, a] = (low + local[:, axes.index(a)] * (high - low) if a in axes
                         else (low + high) / 2)
     family = kernel_family(element.kind.name, "invariants", element.backend)
@@ -189,7 +186,7 @@ def _sample_points(body: BodyMesh, axes: list[int],
     along x, then y), the point of each element sample (elements, samples) and the point of
     each node (nodes,)."""
     mesh = body.mesh
-    corner = mesh.points[mesh.connectivity[:, 0]] - geometry.node_fractions(body.kind)[0, axes]
+    corner = mesh.points[mesh.connectivity[:, 0]] - body.kind.node_fractions[0, axes]
     samples = np.round((corner[:, None, :] + local[None, :, :]) * _KEY).astype(np.int64)
     keys, inverse = np.unique(samples.reshape(-1, len(axes))[:, ::-1], axis=0,
                               return_inverse=True)

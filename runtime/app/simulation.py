@@ -17,7 +17,7 @@ import numpy as np
 
 from runtime import progress
 from runtime.app.signal import dominant_frequency
-from runtime.kernels.loader import element_kind
+from runtime.kernels.kind import element_kind
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, Static, load_scene
@@ -301,27 +301,25 @@ class Simulation:
 
 def locking_warnings(scene: Scene) -> list[str]:
     """A warning per material and kind of domain (beams, plates) that uses the svk law with
-    nu != 0 (Poisson locking: bending sees lam + 2G instead of E, or of E / (1 - nu^2) in a
-    plate)."""
+    nu != 0 (Poisson locking, by the amount ``ElementKind.svk_locking`` states)."""
     out = []
     for name in sorted({body.material for body in scene.bodies}):
         material = scene.materials[name]
-        if material.law != "svk" or material.nu == 0:
+        if material.law != "svk":
             continue
         nu = material.nu
-        domains = {element_kind(b.element).meta["domain"]["name"] for b in scene.bodies
-                   if b.material == name}
-        if "beam" in domains:
-            stiffer = (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1
+        locking = dict(filter(None, (element_kind(b.element).svk_locking(nu)
+                                     for b in scene.bodies if b.material == name)))
+        if "beams" in locking:
             out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
-                       f"(Poisson locking): its beams come out up to {stiffer:.0%} too stiff "
-                       f"in bending; use law = \"ecm\" (docs/laws.md)")
-        if "plate" in domains:
-            stiffer = nu * nu / (1 - 2 * nu)             # (lam + 2G) (1 - nu^2) / E - 1
+                       f"(Poisson locking): its beams come out up to {locking['beams']:.0%} "
+                       f"too stiff in bending; use law = \"ecm\" (docs/laws.md)")
+        if "plates" in locking:
             out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
-                       f"(Poisson thickness locking): its plates come out about {stiffer:.0%} "
-                       f"too stiff in bending, and no locking-free law applies to plates "
-                       f"yet (ecm needs a beam axis); with nu = 0 they do not lock")
+                       f"(Poisson thickness locking): its plates come out about "
+                       f"{locking['plates']:.0%} too stiff in bending, and no locking-free law "
+                       f"applies to plates yet (ecm needs a beam axis); with nu = 0 they do not "
+                       f"lock")
     return out
 
 

@@ -8,10 +8,12 @@ import time
 
 import numpy as np
 
+from runtime.catalog import BACKENDS, METHODS
 from runtime.element import invariants as inv
-from runtime.kernels.loader import BACKENDS, element_kind, kernel_family, output_array, real_array
+from runtime.kernels.boundary import output_array, real_array
+from runtime.kernels.kind import element_kind
+from runtime.kernels.loader import kernel_family
 
-METHODS = ("gram", "cij", "quadrature")
 MAGNITUDE = 1e30  # length, height, width, E and rho lie in [1 / MAGNITUDE, MAGNITUDE]
 
 
@@ -100,7 +102,7 @@ class Element:
         # svk through its own kernels where the kind has them (the 2-node beams), otherwise
         # (closed forms as data, or no general svk map) through the law path
         if self.law == "svk" and not inv.has_closed_tables(self.kind) and (
-                self.straight or "invariants_general" in self.kind.meta["families"]):
+                self.straight or "invariants_general" in self.kind.families):
             self.invariants = self._svk_invariants(builders)
         else:
             self.invariants = self._law_invariants(builders)
@@ -122,7 +124,7 @@ class Element:
     # --- material law and damping (docs/laws.md) ------------------------------------------
 
     def _law(self, law) -> str:
-        known = list(self.kind.meta["laws"])
+        known = list(self.kind.laws)
         reason = self.kind.law_not_applicable(law) if isinstance(law, str) else None
         if reason is not None:
             raise ValueError(f"law: {reason}; expected one of {tuple(known)} for "
@@ -140,7 +142,7 @@ class Element:
         return float(damping)
 
     def _shear_correction(self, value) -> tuple[float, ...]:
-        names = self.kind.meta["laws"][self.law]["corrections"]
+        names = self.kind.laws[self.law].corrections
         if not names:
             if value is not None:
                 raise ValueError(f"shear_correction: law {self.law!r} takes none (only a law "

@@ -17,7 +17,8 @@ from fractions import Fraction
 import numpy as np
 import scipy.sparse
 
-from runtime.kernels.loader import ElementKind, KernelFamily, csr
+from runtime.kernels.kind import ElementKind
+from runtime.kernels.loader import KernelFamily, csr
 
 
 @dataclass(frozen=True)
@@ -36,15 +37,15 @@ def domain_rule(kind: ElementKind, geometry, orders: tuple[int, ...],
     ``subdomain`` of the kind's reference domain (element.json ``domain``): a fixed axis of a
     subdomain contributes one point at its value and its extent to the weights; a 2D
     domain's thickness scales the weights."""
-    domain = kind.meta["domain"]
-    values = dict(zip(domain["parameters"], (float(v) for v in geometry), strict=True))
-    fixed = {axis: value[0] / value[1] for axis, value in domain["subdomains"][subdomain]}
-    factor = values[domain["thickness"]] if domain["thickness"] else 1.0
+    domain = kind.domain
+    geometry = tuple(float(v) for v in geometry)
+    values = domain.values(geometry)
+    fixed = domain.fixed_axes(subdomain)
+    factor = float(domain.thickness_of(geometry))
     axes, weights = [], []
-    for i, (axis, order) in enumerate(zip(domain["axes"], orders, strict=True)):
-        scale = values[axis["scale"]]
-        low, high = (axis["low"][0] / axis["low"][1] * scale,
-                     axis["high"][0] / axis["high"][1] * scale)
+    for i, ((low, high), axis, order) in enumerate(zip(domain.bounds(geometry), domain.axes,
+                                                       orders, strict=True)):
+        scale = values[axis.scale]
         if i in fixed:
             axes.append(np.array([fixed[i] * scale]))
             weights.append(np.array([1.0]))
@@ -75,7 +76,7 @@ def shape_gradient_table(kind: ElementKind, family: KernelFamily, geometry,
 def full_gradients(kind: ElementKind, table: np.ndarray) -> np.ndarray:
     """Expand a gradient table (p, pattern) into ds_k/dx_alpha arrays (p, n, dim)."""
     grads = np.zeros((table.shape[0], kind.n_shape, kind.dim))
-    for j, (k, c) in enumerate(kind.meta["gradient_pattern"]):
+    for j, (k, c) in enumerate(kind.gradient_pattern):
         grads[:, k, c] = table[:, j]
     return grads
 
@@ -236,10 +237,10 @@ def law_coefficients(kind: ElementKind, laws: KernelFamily, law: str, E: float, 
     """Law coefficients (Pa) per domain (``volume``, ``axis``) of ``law`` for E (Pa), nu and
     the shear corrections (only for laws that take them)."""
     inputs = {"material": np.array([[E, nu]], dtype=float)}
-    if kind.meta["laws"][law]["corrections"]:
+    if kind.laws[law].corrections:
         inputs["correction"] = np.asarray(corrections, dtype=float)[None, :]
     out = laws(f"law_{law}", inputs)
-    return {domain: out[domain][0] for domain in kind.meta["law_domains"]}
+    return {domain: out[domain][0] for domain in kind.law_domains}
 
 
 def default_corrections(laws: KernelFamily, law: str, E: float, nu: float) -> tuple:
@@ -283,7 +284,7 @@ def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
     Raises ValueError when the reference mapping is degenerate or inverted at a point.
     """
     rules = {}
-    for domain in kind.meta["law_domains"]:
+    for domain in kind.law_domains:
         points, weights = subdomain_rule(kind, geometry, orders, domain)
         table = shape_gradient_table(kind, family, geometry, points)
         j0, det = reference_mapping(kind, e0, full_gradients(kind, table))
@@ -400,7 +401,7 @@ def law_algebra(kind: ElementKind, variant: str, parts, mass: np.ndarray,
 
 @functools.cache
 def _closed_data(kind_name: str) -> dict:
-    from runtime.kernels.loader import generated_dir
+    from runtime.catalog import generated_dir
 
     data = json.loads((generated_dir() / kind_name / "closed.json").read_text())
     out = {"shape": np.array(data["shape_exponents"], dtype=np.int64),
@@ -421,7 +422,7 @@ def _closed_data(kind_name: str) -> dict:
 
 def has_closed_tables(kind: ElementKind) -> bool:
     """Whether the kind's straight closed forms are data (closed.json) rather than kernels."""
-    return bool(kind.meta.get("closed_tables"))
+    return bool(kind.closed_tables)
 
 
 def closed_parts(kind: ElementKind, geometry, coefficients: dict[str, np.ndarray]):
@@ -430,11 +431,10 @@ def closed_parts(kind: ElementKind, geometry, coefficients: dict[str, np.ndarray
     data = _closed_data(kind.name)
     params = np.asarray(geometry, float)
     n, d = kind.n_shape, kind.dim
-    axes = kind.meta["domain"]["axes"]
-    names = kind.meta["domain"]["parameters"]
+    names = kind.domain.parameters
     unit = np.zeros((d, 3), dtype=np.int64)        # exponents of 1 / s_a
-    for a, axis in enumerate(axes):
-        unit[a, names.index(axis["scale"])] = 1
+    for a, axis in enumerate(kind.domain.axes):
+        unit[a, names.index(axis.scale)] = 1
     shape = data["shape"]
 
     def monomial(exps):

@@ -1,15 +1,12 @@
 """Reference coordinates e0 of elements placed in space (straight segments, arcs, flat
-rectangles, bent panels) and structured meshes of shared nodes, for any element kind: node
-points and nodal vectors come from element.json."""
+rectangles, bent panels) and node frames, for any element kind: node points and nodal vectors
+come from element.json (``runtime.kernels.kind``)."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-
 import numpy as np
 
-from runtime.kernels.loader import ElementKind
+from runtime.kernels.kind import ElementKind
 
 
 def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
@@ -18,7 +15,7 @@ def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray
     frames[i][:, a] is the gradient dr0/dx_a at node i (a unit-speed parameterisation has
     orthonormal frames).  Nodal vectors are taken in the kind's storage order.
     """
-    vectors = kind.meta["vectors"]
+    vectors = kind.vectors
     e0 = []
     for position, frame in zip(positions, frames, strict=True):
         for name in vectors:
@@ -48,31 +45,12 @@ def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
     return basis * np.sign(np.diag(upper))
 
 
-def node_fractions(kind: ElementKind) -> np.ndarray:
-    """Local node coordinates (n_nodes, dim) as fractions of the domain parameters along the
-    meshed axes (x for beams; x and y for plates): 0, 1/2, 1 for a 3-node beam."""
-    domain = kind.meta["domain"]
-    out = np.zeros((kind.n_nodes, kind.dim))
-    for i, node in enumerate(kind.meta["nodes"]):
-        for a, coeffs in enumerate(node):
-            scale = domain["parameters"].index(domain["axes"][a]["scale"])
-            out[i, a] = coeffs[scale]
-    return out
-
-
-def mesh_axes(kind: ElementKind) -> list[int]:
-    """The axes a mesh of this kind tiles: those spanning [0, 1] of their parameter (a beam's
-    x; a plate's x and y), not the symmetric section or thickness axes."""
-    return [a for a, axis in enumerate(kind.meta["domain"]["axes"])
-            if axis["low"] == [0, 1] and axis["high"] == [1, 1]]
-
-
 def straight_reference(kind: ElementKind, start, end) -> np.ndarray:
     """e0 of a straight line element from ``start`` to ``end`` (m); its nodes at their
     fractions of the length (0, 1 for 2-node beams; 0, 1/2, 1 for 3-node beams); local y lies
     in the x-y plane (perpendicular to the axis: +y for an element along +x), local z
     completes a right-handed frame (+z for an element along +x)."""
-    if mesh_axes(kind) != [0]:
+    if kind.mesh_axes != [0]:
         raise ValueError(f"straight element: {kind.name} is not a line element (use "
                          "rectangle_reference)")
     start, end = np.asarray(start, float), np.asarray(end, float)
@@ -89,7 +67,7 @@ def straight_reference(kind: ElementKind, start, end) -> np.ndarray:
         normal = np.cross(helper, tangent)
         normal /= np.linalg.norm(normal)
         frame = np.column_stack([tangent, normal, np.cross(tangent, normal)])
-    fractions = node_fractions(kind)[:, 0]
+    fractions = kind.node_fractions[:, 0]
     positions = start[None, :] + fractions[:, None] * axis[None, :]
     return frame_reference(kind, positions, np.stack([frame] * kind.n_nodes))
 
@@ -98,7 +76,7 @@ def rectangle_reference(kind: ElementKind, origin, side_x, side_y) -> np.ndarray
     """e0 of a flat rectangular (plate) element: corner ``origin`` (m), local x along the
     vector ``side_x`` (its length is the side a), local y along ``side_y`` (side b,
     perpendicular to side_x), local z their unit normal; nodes at their fractions of a, b."""
-    if mesh_axes(kind) != [0, 1]:
+    if kind.mesh_axes != [0, 1]:
         raise ValueError(f"rectangle element: {kind.name} is not a plate element")
     origin, side_x, side_y = (np.asarray(v, float) for v in (origin, side_x, side_y))
     a, b = np.linalg.norm(side_x), np.linalg.norm(side_y)
@@ -106,7 +84,7 @@ def rectangle_reference(kind: ElementKind, origin, side_x, side_y) -> np.ndarray
         raise ValueError("rectangle element: expected two nonzero perpendicular sides")
     normal = np.cross(side_x, side_y)
     frame = np.column_stack([side_x / a, side_y / b, normal / np.linalg.norm(normal)])
-    fractions = node_fractions(kind)
+    fractions = kind.node_fractions
     positions = origin + fractions[:, :1] * side_x + fractions[:, 1:2] * side_y
     return frame_reference(kind, positions, np.stack([frame] * kind.n_nodes))
 
@@ -118,7 +96,7 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
     to y, towards +z (r_z the outward normal of the flat panel turned with it)."""
     points = kind.node_points(*geometry)
     positions, frames = [], []
-    plate = mesh_axes(kind) == [0, 1]
+    plate = kind.mesh_axes == [0, 1]
     for p in points:
         t = p[0] / radius
         c, s = np.cos(t), np.sin(t)
@@ -133,60 +111,6 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
     return frame_reference(kind, np.array(positions, float), np.array(frames, float))
 
 
-@dataclass(frozen=True)
-class Mesh:
-    """Elements of one kind sharing nodes: ``points`` (nodes, axes) the node coordinates in
-    element units along the meshed axes (``mesh_axes``), ``connectivity`` (elements,
-    n_nodes) the global node of each element node, in the kind's node order."""
-
-    points: np.ndarray
-    connectivity: np.ndarray
-
-    def dofs(self, kind: ElementKind) -> np.ndarray:
-        """Global coordinate indices (elements, ndof) of every element (node-major)."""
-        per_node = kind.per_node
-        return (self.connectivity[:, :, None] * per_node
-                + np.arange(per_node)[None, None, :]).reshape(len(self.connectivity), -1)
-
-
-def grid_shape(kind: ElementKind, counts) -> tuple[int, ...]:
-    """Node points along each meshed axis of a structured mesh of ``counts`` elements (one
-    count per meshed axis): ``c (k - 1) + 1`` for k node points per element along the axis
-    (tensor node layouts: 2-node beams m + 1, 3-node beams 2 m + 1, 4-node plates
-    (nx + 1, ny + 1))."""
-    fractions = node_fractions(kind)[:, mesh_axes(kind)]
-    per_axis = [len(np.unique(fractions[:, a])) for a in range(fractions.shape[1])]
-    return tuple(int(c) * (k - 1) + 1 for c, k in zip(np.atleast_1d(counts), per_axis,
-                                                       strict=True))
-
-
-def node_count(kind: ElementKind, counts) -> int:
-    """Number of nodes of a structured mesh of ``counts`` elements (see ``grid_shape``),
-    computed without building the mesh."""
-    return math.prod(grid_shape(kind, counts))
-
-
-def structured_mesh(kind: ElementKind, counts) -> Mesh:
-    """A structured mesh of ``counts`` elements along each meshed axis (one number for a
-    beam, (nx, ny) for a plate): element (i, j) spans [i, i + 1] x [j, j + 1]; nodes at the
-    same point are shared, numbered in order of y, then x (so a line is numbered along x)."""
-    axes = mesh_axes(kind)
-    counts = tuple(int(c) for c in np.atleast_1d(counts))
-    if len(counts) != len(axes) or min(counts) < 1:
-        raise ValueError(f"counts: expected {len(axes)} positive element counts for "
-                         f"{kind.name}, got {counts}")
-    fractions = node_fractions(kind)[:, axes]
-    cells = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"),
-                     axis=-1).reshape(-1, len(axes))
-    # element order: x fastest (a line: along x; a plate: rows of constant y)
-    cells = cells[np.lexsort(cells.T)]
-    points = cells[:, None, :] + fractions[None, :, :]
-    keys = np.round(points * 2**20).astype(np.int64).reshape(-1, len(axes))
-    unique, inverse = np.unique(keys[:, ::-1], axis=0, return_inverse=True)
-    connectivity = inverse.reshape(len(cells), kind.n_nodes)
-    return Mesh(unique[:, ::-1] / 2**20, connectivity)
-
-
 def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
                   angle: float) -> np.ndarray:
     """e0 of one element on a circular arc in the x-y plane (angles in rad, radius in m).
@@ -195,12 +119,12 @@ def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
     angle > 0; local y points to the centre for angle > 0 (away from it for angle < 0) so the
     frame stays right-handed; local z is the plane normal.
     """
-    if mesh_axes(kind) != [0]:
+    if kind.mesh_axes != [0]:
         raise ValueError(f"arc element: {kind.name} is not a line element")
     center = np.asarray(center, float)[: kind.dim]
     positions, frames = [], []
     sign = 1.0 if angle > 0 else -1.0
-    for theta in start_angle + angle * node_fractions(kind)[:, 0]:
+    for theta in start_angle + angle * kind.node_fractions[:, 0]:
         radial = np.array([np.cos(theta), np.sin(theta)])
         tangent = sign * np.array([-np.sin(theta), np.cos(theta)])
         normal = -sign * radial

@@ -22,7 +22,8 @@ import scipy.sparse
 
 from runtime.element import reference as geometry
 from runtime.element.element import Element
-from runtime.kernels.loader import ElementKind, element_kind
+from runtime.kernels.kind import ElementKind, element_kind
+from runtime.model import mesh as meshing
 from runtime.model.items.constraints import Built
 from runtime.model.scene import Body, NodeRef, Scene
 from runtime.solve.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
@@ -34,7 +35,7 @@ class BodyMesh:
 
     name: str
     element: Element
-    mesh: geometry.Mesh
+    mesh: meshing.Mesh
     first_node: int          # global index of the body's node 0
     first_coordinate: int    # global index of the body's first coordinate
     reference: np.ndarray    # (nodes * per_node,) reference coordinates of the body
@@ -101,7 +102,7 @@ def element_references(body: Body, kind: ElementKind) -> np.ndarray:
                      for j in range(m)])
 
 
-def node_references(kind: ElementKind, mesh: geometry.Mesh, e0s: np.ndarray) -> np.ndarray:
+def node_references(kind: ElementKind, mesh: meshing.Mesh, e0s: np.ndarray) -> np.ndarray:
     """Reference coordinates (nodes * per_node,) of the mesh's nodes from its elements'
     references (elements, ndof) (a node shared by elements takes the last one's value)."""
     nodes = np.zeros((len(mesh.points), kind.per_node))
@@ -134,7 +135,7 @@ class Model:
                               backend=self.backend, quadrature=body.quadrature,
                               law=material.law, shear_correction=material.shear_correction,
                               damping=material.damping)
-            mesh = geometry.structured_mesh(kind, body.counts)
+            mesh = meshing.structured_mesh(kind, body.counts)
             self.bodies[body.name] = BodyMesh(
                 body.name, element, mesh, nodes, coordinates,
                 node_references(kind, mesh, e0s), coordinates + mesh.dofs(kind),

@@ -52,10 +52,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime.catalog import ENGINES, NEWTON_MODES
-from runtime.element import reference as geometry
-from runtime.element.element import METHODS
-from runtime.kernels.loader import BACKENDS, element_kind, generated_kinds
+from runtime.catalog import (
+    BACKENDS,
+    DEFAULT_LAW,
+    ENGINES,
+    INTEGRATORS,
+    METHODS,
+    NEWTON_MODES,
+    generated_kinds,
+    material_laws,
+)
+from runtime.kernels.kind import element_kind
+from runtime.model import mesh as meshing
 from runtime.model.items.constraints import CONSTRAINTS, Constraint, Joint, NodeConstraint, Weld
 from runtime.model.items.loads import LOADS, Load
 from runtime.model.items.sensors import SENSORS, Sensor
@@ -98,8 +106,6 @@ __all__ = [
     "toml_text",
 ]
 
-INTEGRATORS = ("trapezoidal", "generalized_alpha")
-MATERIAL_LAWS = ("svk", "ecm")
 MODAL_ABOUT = ("reference", "static")
 TITLE_LENGTH = 200
 # relative tolerance on t_end / step and output_every / step being integers
@@ -242,13 +248,13 @@ class Body:
     def grid_shape(self) -> tuple[int, ...]:
         """Node points along each meshed axis: (nodes,) for a line, (columns along x, rows
         along y) for a rectangle."""
-        return geometry.grid_shape(element_kind(self.element), self.counts)
+        return meshing.grid_shape(element_kind(self.element), self.counts)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
         (nx + 1)(ny + 1) for 4-node plates."""
-        return geometry.node_count(element_kind(self.element), self.counts)
+        return meshing.node_count(element_kind(self.element), self.counts)
 
     @property
     def geometry(self) -> tuple[float, float, float]:
@@ -507,7 +513,7 @@ def _material(name: str, data: Any) -> Material:
     if not -1.0 < nu < 0.5:
         raise SceneError(f"{path}.nu: expected a Poisson ratio in (-1, 0.5), got {_show(nu)}")
     rho = number(data["rho"], f"{path}.rho", positive=True)
-    law = choice(data.get("law", "svk"), f"{path}.law", MATERIAL_LAWS, "material law")
+    law = choice(data.get("law", DEFAULT_LAW), f"{path}.law", material_laws(), "material law")
     shear = None
     if "shear_correction" in data:
         shear = number(data["shear_correction"], f"{path}.shear_correction", positive=True)
@@ -543,8 +549,8 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
         raise SceneError(f"{path}.material: material {_show(material)} has law = "
                          f"{_show(law)}, which does not apply to {kind} elements ({why}); "
                          f"expected a material with one of the laws "
-                         f"{', '.join(meta.meta['laws'])}")
-    plate = len(geometry.mesh_axes(meta)) == 2
+                         f"{', '.join(meta.laws)}")
+    plate = len(meta.mesh_axes) == 2
     shape = _plate_shape if plate else _line_shape
     height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
 

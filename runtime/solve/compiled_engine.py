@@ -97,7 +97,7 @@ def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
     env = _environment()
     groups, slots_needed = [], 1
     for group in dae.groups:
-        signatures = group.element.kind.meta["families"][group.family]
+        signatures = group.element.kind.families[group.family]
         slots = _input_slots(signatures, ELASTIC)
         slots_needed = max(slots_needed, 2 * len(slots))
         force_params, force_args = _kernel_call(signatures["force"]["arrays"], slots)
@@ -106,7 +106,7 @@ def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
                  "force_args": force_args, "force_jacobian_params": fj_params,
                  "force_jacobian_args": fj_args, "damped": group.element.damping > 0}
         if entry["damped"]:
-            damping = group.element.kind.meta["families"][group.element.damping_family]
+            damping = group.element.kind.families[group.element.damping_family]
             slots = _input_slots(damping, DAMPING)
             slots_needed = max(slots_needed, 2 * len(slots))
             entry["damping_params"], entry["damping_args"] = _kernel_call(
@@ -219,7 +219,7 @@ class CompiledEngine:
 
     def _group(self, target, group) -> None:
         element = group.element
-        signatures = element.kind.meta["families"][group.family]
+        signatures = element.kind.families[group.family]
         inputs = element.kernel_inputs
         elements, ndof = group.dofs.shape
         target.elements = elements
@@ -234,7 +234,7 @@ class CompiledEngine:
         target.force = self._work(chunk * ndof)
         target.jacobian = self._work(chunk * ndof * ndof)
         if element.damping > 0:
-            damping = element.kind.meta["families"][element.damping_family]
+            damping = element.kind.families[element.damping_family]
             self._inputs(target, "damping_", _input_slots(damping, DAMPING),
                          element.damping_inputs)
             family = element.damping_kernel_family

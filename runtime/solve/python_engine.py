@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from runtime import catalog
 from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
@@ -343,3 +344,4 @@ def alpha_parameters(rho_inf: float) -> tuple[float, float, float, float]:
 
 
 INTEGRATORS = {"trapezoidal": Trapezoidal, "generalized_alpha": GeneralizedAlpha}
+assert tuple(INTEGRATORS) == catalog.INTEGRATORS

@@ -7,8 +7,9 @@ import time
 
 import numpy as np
 
-from runtime.element.element import METHODS, Element
-from runtime.kernels.loader import BACKENDS, element_kind, generated_kinds
+from runtime.catalog import BACKENDS, METHODS, generated_kinds
+from runtime.element.element import Element
+from runtime.kernels.kind import element_kind
 from runtime.progress import Bar
 
 #: The paper's operation counts per element force (section 7): with and without invariants.

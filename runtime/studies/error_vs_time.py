@@ -58,9 +58,8 @@ from typing import Any
 
 import numpy as np
 
-from runtime.element.element import METHODS
-from runtime.kernels.loader import BACKENDS
-from runtime.model.scene import INTEGRATORS, Scene, SceneError, Static, parse_scene, read_scene_file
+from runtime.catalog import BACKENDS, INTEGRATORS, METHODS
+from runtime.model.scene import Scene, SceneError, Static, parse_scene, read_scene_file
 from runtime.studies.sweep import SchedulerError, run_cases
 
 __all__ = [
@@ -193,7 +192,7 @@ def cantilever(scene: Scene, label: str, measure: str) -> Cantilever:
     if force.node.index != last - clamp.index:
         raise fail(f"the point force acts on {force.node}, not on the free end")
     from runtime.element.reference import gradient_frame, straight_reference
-    from runtime.kernels.loader import element_kind
+    from runtime.kernels.kind import element_kind
 
     kind = element_kind(body.element)
     dim = kind.dim

@@ -23,7 +23,7 @@ import mpmath as mp
 import numpy as np
 import sympy as sp
 
-from runtime.kernels.loader import element_kind
+from runtime.kernels.kind import element_kind
 
 mp.mp.dps = 50
 
@@ -101,12 +101,9 @@ def shape_functions(kind: str, source: str | None = None) -> list[sp.Expr]:
 def domain(kind: str, length, height, width) -> tuple[list[tuple], object]:
     """(low, high) of each local axis and the thickness of a planar element (1 otherwise) for
     the geometry parameters (length, height, width), from the element's metadata."""
-    meta = element_kind(kind).meta["domain"]
-    values = dict(zip(meta["parameters"], (length, height, width), strict=True))
-
-    spans = [tuple(num * values[axis["scale"]] / den for num, den in (axis["low"], axis["high"]))
-             for axis in meta["axes"]]
-    return spans, values[meta["thickness"]] if meta["thickness"] else 1
+    domain = element_kind(kind).domain
+    geometry = (length, height, width)
+    return domain.bounds(geometry), domain.thickness_of(geometry)
 
 
 def volume(kind: str, length: float, height: float, width: float) -> float:
@@ -138,7 +135,7 @@ def energy_and_force(kind, e, e0, length, height, width, E, nu, orders=None, sou
     reference); ``source``: which shape functions (see ``shape_functions``)."""
     info = element_kind(kind)
     dim = info.dim
-    orders = orders or tuple(info.meta["exact_orders"])
+    orders = orders or info.exact_orders
     gradients = _gradient_function(kind, source)
     E, nu = mp.mpf(E), mp.mpf(nu)
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))

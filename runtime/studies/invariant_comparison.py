@@ -14,7 +14,8 @@ import numpy as np
 from runtime.element import invariants as inv
 from runtime.element.element import lame
 from runtime.element.reference import bent_reference
-from runtime.kernels.loader import element_kind, kernel_family
+from runtime.kernels.kind import element_kind
+from runtime.kernels.loader import kernel_family
 
 #: Element and material used for the comparison (SI units).
 GEOMETRY = (1.0, 0.1, 0.1)
@@ -60,7 +61,7 @@ def _law_pair(meta, builders, law: str, backend: str, reference: str, e0, orders
     the straight reference's entries outside the straight gram pattern (relative)."""
     laws = kernel_family(meta.name, "laws", backend)
     corrections = (inv.default_corrections(laws, law, MATERIAL["E"], MATERIAL["nu"])
-                   if meta.meta["laws"][law]["corrections"] else ())
+                   if meta.laws[law].corrections else ())
     coefficients = inv.law_coefficients(meta, laws, law, MATERIAL["E"], MATERIAL["nu"],
                                         corrections)
     variant = "straight" if reference == "straight" else "general"
@@ -86,8 +87,8 @@ def _law_pair(meta, builders, law: str, backend: str, reference: str, e0, orders
 
     def off_pattern() -> float:
         full = by_quadrature("general", orders)["gram"]
-        keys = [tuple(k) for k in meta.meta["patterns"]["general"]["gram"]]
-        stored = {tuple(k) for k in meta.meta["patterns"]["straight"]["gram"]}
+        keys = [tuple(k) for k in meta.patterns["general"]["gram"]]
+        stored = {tuple(k) for k in meta.patterns["straight"]["gram"]}
         outside = np.array([key not in stored for key in keys])
         return float(np.abs(full[outside]).max() / np.abs(full).max())
 
@@ -108,10 +109,10 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
         raise ValueError(f"--quadrature: expected {meta.dim} positive orders, got {orders}")
     if reference not in ("straight", "curved"):
         raise ValueError(f"--reference: expected straight or curved, got {reference!r}")
-    if law not in meta.meta["laws"]:
-        raise ValueError(f"--law: expected one of {', '.join(meta.meta['laws'])}, got {law!r}")
+    if law not in meta.laws:
+        raise ValueError(f"--law: expected one of {', '.join(meta.laws)}, got {law!r}")
     if law != "svk" or inv.has_closed_tables(meta) or (
-            reference == "curved" and "invariants_general" not in meta.meta["families"]):
+            reference == "curved" and "invariants_general" not in meta.families):
         # kinds whose svk invariants come from the law path (closed forms as data tables, or
         # no general svk map) compare through it too
         result = _compare_law(meta, reference, orders, backend, law)
@@ -170,9 +171,9 @@ def _storage(meta, variant: str) -> dict:
     npairs_dof = meta.ndof * (meta.ndof + 1) // 2
     npairs = meta.n_shape * (meta.n_shape + 1) // 2
     return {
-        "cij_nonzeros": meta.meta["cij_sizes"][variant]["k2_nnz"],
+        "cij_nonzeros": meta.cij_sizes[variant]["k2_nnz"],
         "cij_dense": npairs_dof * meta.ndof**2,
-        "gram_nonzeros": len(meta.meta["patterns"][variant]["gram"]),
+        "gram_nonzeros": len(meta.patterns[variant]["gram"]),
         "gram_dense": npairs * npairs,
         "k1_mass_entries": npairs,
     }

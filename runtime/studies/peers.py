@@ -39,6 +39,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from runtime.catalog import INTEGRATORS
+
 # paper cantilever (DESIGN.md section 6, scenes/cantilever.toml)
 CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 8245.2,
               "force": 300.0, "ramp": 3.5}
@@ -47,7 +49,6 @@ ROTATING_BEAM = {"length": 8.0, "area": 7.299e-5, "inertia": 8.215e-9, "E": 68.9
                  "rho": 2766.67, "omega": 4.0, "t_ramp": 15.0}
 TOLERANCE = 1e-10           # Newton, relative to the model size, as the project's default
 NEWTON = ("modified", "full")
-INTEGRATORS = ("trapezoidal", "generalized_alpha")
 
 
 @dataclass

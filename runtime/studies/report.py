@@ -23,8 +23,8 @@ import sympy
 
 import scenes
 from runtime.app.run import run
+from runtime.catalog import generated_kinds
 from runtime.kernels import jit
-from runtime.kernels.loader import generated_kinds
 from runtime.studies import bench_kernels as bench
 from runtime.studies import bench_solvers, error_vs_time, paper, stability
 from runtime.studies import invariant_comparison as invariant_report

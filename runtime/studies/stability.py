@@ -38,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.kernels.loader import element_kind, generated_kinds
+from runtime.catalog import METHODS, generated_kinds
+from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import Clamp
 from runtime.model.items.loads import Gravity, PointForce
 from runtime.model.scene import Body, Material, Scene, Static
@@ -88,7 +89,6 @@ GROUPS = {
 KERNEL_TOLERANCE = 1e-6
 EXPLAINED = 100   # a cij error within 100 times its rounding estimate is explained by it
 KINDS = tuple(generated_kinds())   # every generated element kind
-METHODS = ("gram", "cij", "quadrature")
 GRID = 2.0**-33   # positions rounded to it: x + 1e6 is exact for |x| < 2**20 - 1e6
 
 

@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from runtime.element import invariants
-from runtime.element import reference as geometry
 from runtime.kernels.loader import kernel_family
 from runtime.model.schema import (
     Context,
@@ -177,7 +176,7 @@ class LineForce(Load):
         size = element.geometry[along]
         family = kernel_family(kind.name, "invariants", element.backend)
         t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
-        fractions = geometry.node_fractions(kind)
+        fractions = kind.node_fractions
         on_edge = np.isin(body.mesh.connectivity, self.edge.nodes)
         out = np.zeros(model.size)
         for e in np.flatnonzero(on_edge.sum(axis=1) > 1):

@@ -1,0 +1,233 @@
+"""The typed view of one generated element kind: ``generated/<kind>/element.json`` as written
+by ``symgen.emit.element_metadata`` (domain, nodes, nodal vectors, laws, kernel families and
+their calling conventions, storage patterns).  The runtime reads element metadata only through
+``ElementKind``; physics that depends on the kind of domain (beam, plate) is asked of it here.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+from runtime.catalog import generated_dir, generated_kinds
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the reference domain: ``coordinate`` (x, y, z), its bounds ``low`` and
+    ``high`` as (numerator, denominator) multiples of the parameter ``scale``."""
+
+    coordinate: str
+    low: tuple[int, int]
+    high: tuple[int, int]
+    scale: str
+
+    @property
+    def meshed(self) -> bool:
+        """Whether a mesh tiles this axis: it spans [0, 1] of its parameter (a beam's x, a
+        plate's x and y), unlike a symmetric section or thickness axis."""
+        return self.low == (0, 1) and self.high == (1, 1)
+
+
+@dataclass(frozen=True)
+class Domain:
+    """The reference domain of a kind: ``name`` (beam, plate), its ``parameters`` (symbols,
+    e.g. l, h, w) and what they are called as ``Element`` arguments (``labels``), its axes,
+    integration ``subdomains`` and the thickness parameter of 2D kinds (or None)."""
+
+    name: str
+    parameters: tuple[str, ...]
+    labels: tuple[str, ...]
+    axes: tuple[Axis, ...]
+    subdomains: dict[str, Any]
+    thickness: str | None
+
+    def values(self, geometry) -> dict[str, Any]:
+        """{parameter: value} of the geometry (length, height, width) as ``Element`` takes it
+        (floats, or exact numbers for the high-precision reference)."""
+        return dict(zip(self.parameters, geometry, strict=True))
+
+    def bounds(self, geometry) -> list[tuple[Any, Any]]:
+        """(low, high) of every axis for the geometry (length, height, width)."""
+        values = self.values(geometry)
+        return [tuple(num * values[axis.scale] / den for num, den in (axis.low, axis.high))
+                for axis in self.axes]
+
+    def thickness_of(self, geometry) -> Any:
+        """The thickness that scales the volume of a 2D kind (1 for 3D kinds)."""
+        return self.values(geometry)[self.thickness] if self.thickness else 1
+
+    def fixed_axes(self, subdomain: str) -> dict[int, float]:
+        """{axis: fraction of its parameter} of the axes that ``subdomain`` holds fixed (the
+        beam axis fixes y and z at 0; the volume fixes none)."""
+        return {axis: value[0] / value[1] for axis, value in self.subdomains[subdomain]}
+
+
+@dataclass(frozen=True)
+class LawInfo:
+    """A material law as generated for a kind: its shear ``corrections`` (names of the
+    factors it takes), ``description`` and ``parts`` (each {name, domain})."""
+
+    name: str
+    corrections: tuple[str, ...]
+    description: str
+    parts: tuple[dict[str, str], ...]
+
+
+@dataclass(frozen=True)
+class ElementKind:
+    """Metadata of one generated element kind (see the module docstring).
+
+    ``families`` maps a kernel family to its kernels, each {"arrays": [{name, role, size}],
+    "operations": count}; ``patterns`` the stored index patterns per reference variant;
+    ``meta`` keeps the document as read (for tools that print it; the runtime reads the
+    typed fields).
+    """
+
+    name: str
+    description: str
+    dim: int
+    n_shape: int
+    ndof: int
+    position_vectors: tuple[int, ...]
+    quadrature: tuple[int, ...]
+    exact_orders: tuple[int, ...]
+    domain: Domain
+    nodes: tuple
+    vectors: tuple[str, ...]
+    laws: dict[str, LawInfo]
+    law_domains: tuple[str, ...]
+    laws_not_applicable: dict[str, str]
+    families: dict[str, dict]
+    optimization: dict[str, int]
+    patterns: dict[str, dict]
+    cij_sizes: dict[str, dict]
+    gradient_pattern: tuple[tuple[int, int], ...]
+    closed_tables: str | None
+    straight_reference_coefficients: tuple
+    meta: dict = field(repr=False, compare=False)
+
+    @classmethod
+    def from_document(cls, meta: dict) -> ElementKind:
+        """The view of an element.json document."""
+        d = meta["domain"]
+        domain = Domain(d["name"], tuple(d["parameters"]), tuple(d["labels"]),
+                        tuple(Axis(a["coordinate"], tuple(a["low"]), tuple(a["high"]),
+                                   a["scale"]) for a in d["axes"]),
+                        d["subdomains"], d["thickness"])
+        laws = {name: LawInfo(name, tuple(law["corrections"]), law["description"],
+                              tuple(law["parts"])) for name, law in meta["laws"].items()}
+        return cls(meta["name"], meta["description"], meta["dim"], meta["n_shape"],
+                   meta["ndof"], tuple(meta["position_vectors"]), tuple(meta["quadrature"]),
+                   tuple(meta["exact_orders"]), domain, tuple(meta["nodes"]),
+                   tuple(meta["vectors"]), laws, tuple(meta["law_domains"]),
+                   dict(meta.get("laws_not_applicable", {})), meta["families"],
+                   meta["optimization"], meta["patterns"], meta["cij_sizes"],
+                   tuple(tuple(p) for p in meta["gradient_pattern"]), meta.get("closed_tables"),
+                   tuple(meta["straight_reference"]), meta)
+
+    def _linear(self, coeffs, geometry) -> np.ndarray:
+        """Values of entries linear in the domain parameters ([a0, a1, a2, b] each)."""
+        coeffs = np.array(coeffs, dtype=float).reshape(-1, 4)
+        values = np.zeros(3)
+        for i, value in enumerate(geometry):
+            if value is not None:
+                values[i] = value
+        missing = [self.parameter_labels[i] for i in range(3)
+                   if (i >= len(geometry) or geometry[i] is None) and coeffs[:, i].any()]
+        if missing:
+            raise ValueError(f"{', '.join(missing)}: needed for the reference of {self.name}")
+        return coeffs[:, :3] @ values + coeffs[:, 3]
+
+    def straight_reference(self, length: float, height: float | None = None,
+                           width: float | None = None) -> np.ndarray:
+        """Coordinates e0 (ndof,) of the straight (flat) element from the origin: positions at
+        the node points, unit gradients (a beam's depends on the length only, a plate's on
+        its sides: ``length`` and ``height`` are the sizes along local x and y)."""
+        return self._linear(self.straight_reference_coefficients, (length, height, width))
+
+    @property
+    def n_nodes(self) -> int:
+        """Nodes per element."""
+        return len(self.nodes)
+
+    @property
+    def per_node(self) -> int:
+        """Coordinates per node: nodal vectors times dim."""
+        return len(self.vectors) * self.dim
+
+    @property
+    def parameter_labels(self) -> tuple[str, ...]:
+        """What the three geometry parameters (length, height, width) are for this kind."""
+        return self.domain.labels
+
+    @property
+    def mesh_axes(self) -> list[int]:
+        """The axes a mesh of this kind tiles (``Axis.meshed``): [0] for beams, [0, 1] for
+        plates."""
+        return [a for a, axis in enumerate(self.domain.axes) if axis.meshed]
+
+    @property
+    def node_fractions(self) -> np.ndarray:
+        """Local node coordinates (n_nodes, dim) as fractions of the domain parameters along
+        the meshed axes (x for beams; x and y for plates): 0, 1/2, 1 for a 3-node beam."""
+        out = np.zeros((self.n_nodes, self.dim))
+        for i, node in enumerate(self.nodes):
+            for a, coeffs in enumerate(node):
+                scale = self.domain.parameters.index(self.domain.axes[a].scale)
+                out[i, a] = coeffs[scale]
+        return out
+
+    def node_points(self, length: float, height: float | None = None,
+                    width: float | None = None) -> np.ndarray:
+        """Local coordinates (n_nodes, dim) of the nodes in the reference domain."""
+        points = self._linear([c for node in self.nodes for c in node],
+                              (length, height, width))
+        return points.reshape(self.n_nodes, self.dim)
+
+    def law_not_applicable(self, law: str) -> str | None:
+        """Why material law ``law`` does not apply to this kind (None when it does or is
+        unknown)."""
+        return self.laws_not_applicable.get(law)
+
+    def pattern(self, variant: str, name: str) -> np.ndarray:
+        """Storage pattern ``name`` (i4, gram, cij) of ``variant`` as an int array."""
+        return np.array(self.patterns[variant][name], dtype=np.int64)
+
+    def operations(self, family: str, kernel: str) -> int:
+        """Floating-point operations per element counted from the generated code."""
+        return self.families[family][kernel]["operations"]
+
+    def svk_locking(self, nu: float) -> tuple[str, float] | None:
+        """How much too stiff in bending the St. Venant-Kirchhoff law makes this kind at
+        Poisson's ratio ``nu``: (what locks, relative excess stiffness), None without
+        locking.  Beam bending sees lam + 2G instead of E (Poisson locking), plate bending
+        lam + 2G instead of E / (1 - nu^2) (Poisson thickness locking)."""
+        if nu == 0:
+            return None
+        if self.domain.name == "beam":
+            return "beams", (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1
+        if self.domain.name == "plate":
+            return "plates", nu * nu / (1 - 2 * nu)    # (lam + 2G) (1 - nu^2) / E - 1
+        return None
+
+
+def element_kind(name: str) -> ElementKind:
+    """The generated element kind ``name``; ValueError naming the known kinds otherwise."""
+    if not isinstance(name, str):  # checked before the cache, which needs hashable names
+        raise ValueError(f"kind: expected an element kind name ({', '.join(generated_kinds())}), "
+                         f"got {name!r}")
+    return _load_kind(str(name))
+
+
+@cache
+def _load_kind(name: str) -> ElementKind:
+    if name not in generated_kinds():
+        raise ValueError(f"kind: unknown element kind {name!r}; known kinds: "
+                         f"{', '.join(generated_kinds())}")
+    return ElementKind.from_document(
+        json.loads((generated_dir() / name / "element.json").read_text()))
