@@ -7,6 +7,8 @@ validation and messages as TOML files, ``Scene.to_toml()``, ``load_scene(path)``
 
 from runtime.app.simulation import Result, run_scene
 from runtime.element.element import Element
+from runtime.model.bodies import Body, Material, Spin
+from runtime.model.errors import SceneError
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
 from runtime.model.items.loads import Gravity, LineForce, PointForce, PointMoment
 from runtime.model.items.sensors import (
@@ -20,27 +22,15 @@ from runtime.model.items.sensors import (
     StrainEnergy,
     TotalEnergy,
 )
-from runtime.model.scene import (
-    Arc,
-    Body,
-    Dynamic,
-    Material,
-    Modal,
-    NodeRef,
-    Output,
-    Rectangle,
-    Scene,
-    Solver,
-    Spin,
-    Static,
-    load_scene,
-)
+from runtime.model.placements import Arc, Rectangle
+from runtime.model.scene import Scene, load_scene
+from runtime.model.schema import NodeRef
+from runtime.model.settings import Dynamic, Modal, Output, Solver, Static
 from runtime.model.time_laws import (
     Constant,
     ConstantRate,
     CosineRamp,
     LinearRamp,
-    SceneError,
     Sine,
     SpinUp,
     Table,

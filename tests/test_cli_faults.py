@@ -20,7 +20,7 @@ from scenes_small import cantilever
 from runtime import cli
 from runtime.cli import main
 from runtime.kernels import jit
-from runtime.model.scene import toml_text
+from runtime.model.toml_io import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -74,10 +74,9 @@ def test_mesh_numbers_nodes_by_the_kinds_layout(body):
     assert np.allclose(model.reference[mesh.element_dofs], mesh.element_e0, rtol=0,
                        atol=1e-14)
     # node positions are where the scene checks place them (joints, sensors)
-    from runtime.model.scene import _node_position
     positions = model.reference[model.position_dofs()]
     for node in range(body.n_nodes):
-        assert np.allclose(positions[node], _node_position(body, node), atol=1e-12)
+        assert np.allclose(positions[node], body.node_position(node), atol=1e-12)
 
 
 @pytest.mark.parametrize("body", _bodies())

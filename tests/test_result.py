@@ -16,7 +16,9 @@ from scenes_small import body, cantilever, scene
 
 from runtime.app.run import run
 from runtime.app.simulation import Modes, Observer, Result, States, requested, run_scene
-from runtime.model.scene import SceneError, parse_scene, toml_text
+from runtime.model.errors import SceneError
+from runtime.model.scene import parse_scene
+from runtime.model.toml_io import toml_text
 from runtime.solve.static import modal_shapes
 
 SENSORS = [

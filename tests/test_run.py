@@ -17,7 +17,7 @@ from scenes_small import cantilever
 
 from runtime.app.run import run
 from runtime.cli import main
-from runtime.model.scene import toml_text
+from runtime.model.toml_io import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

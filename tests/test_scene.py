@@ -32,13 +32,13 @@ from runtime import (
     load_scene,
 )
 from runtime.catalog import generated_kinds
+from runtime.model.errors import SceneError
 from runtime.model.scene import parse_scene
 from runtime.model.time_laws import (
     Constant,
     ConstantRate,
     CosineRamp,
     LinearRamp,
-    SceneError,
     Sine,
     SpinUp,
     Table,

@@ -20,7 +20,9 @@ import tomllib
 import pytest
 
 from runtime import Revolute
-from runtime.model.scene import Material, SceneError, load_scene, parse_scene
+from runtime.model.bodies import Material
+from runtime.model.errors import SceneError
+from runtime.model.scene import load_scene, parse_scene
 
 BASE = """
 [material.steel]

@@ -26,7 +26,8 @@ from runtime.catalog import generated_kinds
 from runtime.cli import main
 from runtime.kernels.kind import element_kind
 from runtime.model.model import Model
-from runtime.model.scene import parse_scene, toml_text
+from runtime.model.scene import parse_scene
+from runtime.model.toml_io import toml_text
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SENSORS = [{"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},

@@ -20,8 +20,9 @@ from runtime.app import shapes
 from runtime.app import writers as output
 from runtime.app.simulation import TIMING_KEYS, Observer, Simulation, requested
 from runtime.kernels.jit import CacheError, JitEnvironmentError
+from runtime.model.errors import SceneError
 from runtime.model.items.sensors import ENERGY_TYPES
-from runtime.model.scene import Scene, SceneError, load_scene
+from runtime.model.scene import Scene, load_scene
 
 CSV = "timeseries.csv"
 SUMMARY = "summary.json"

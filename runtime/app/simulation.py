@@ -20,7 +20,8 @@ from runtime.app.signal import dominant_frequency
 from runtime.kernels.kind import element_kind
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
-from runtime.model.scene import Scene, Static, load_scene
+from runtime.model.scene import Scene, load_scene
+from runtime.model.settings import Static
 from runtime.progress import Bar, enabled
 from runtime.solve import engines
 from runtime.solve import static as analysis

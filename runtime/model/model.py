@@ -25,7 +25,8 @@ from runtime.element.element import Element
 from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
 from runtime.model.items.constraints import Built
-from runtime.model.scene import Body, NodeRef, Scene
+from runtime.model.scene import Scene
+from runtime.model.schema import NodeRef
 from runtime.solve.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
 
 
@@ -78,30 +79,6 @@ class BodyMesh:
         return self.element.damping > 0
 
 
-def element_references(body: Body, kind: ElementKind) -> np.ndarray:
-    """Reference coordinates (elements, ndof) of every element of ``body``, in the element
-    order of ``structured_mesh`` (along x, then y): segments of its line, arc or grid."""
-    m = body.elements
-    if body.rectangle is not None:
-        rectangle = body.rectangle
-        (a, b), (nx, ny) = rectangle.size, rectangle.grid
-        side_x, side_y = np.array([a / nx, 0.0, 0.0]), np.array([0.0, b / ny, 0.0])
-        corner = np.asarray(rectangle.corner, float)
-        return np.array([geometry.rectangle_reference(kind, corner + i * side_x + j * side_y,
-                                                      side_x, side_y)
-                         for j in range(ny) for i in range(nx)])
-    if body.arc is not None:
-        arc = body.arc
-        step = np.radians(arc.angle_deg) / m
-        start = np.radians(arc.start_angle_deg)
-        return np.array([geometry.arc_reference(kind, arc.center, arc.radius, start + j * step,
-                                                step) for j in range(m)])
-    start, end = np.asarray(body.start, float), np.asarray(body.end, float)
-    points = [start + (end - start) * j / m for j in range(m + 1)]
-    return np.array([geometry.straight_reference(kind, points[j], points[j + 1])
-                     for j in range(m)])
-
-
 def node_references(kind: ElementKind, mesh: meshing.Mesh, e0s: np.ndarray) -> np.ndarray:
     """Reference coordinates (nodes * per_node,) of the mesh's nodes from its elements'
     references (elements, ndof) (a node shared by elements takes the last one's value)."""
@@ -129,7 +106,7 @@ class Model:
         for body in scene.bodies:
             material = scene.materials[body.material]
             kind = element_kind(body.element)
-            e0s = element_references(body, kind)
+            e0s = body.placement.element_references(kind, body.counts)
             element = Element(kind.name, *body.geometry, material.E, material.nu,
                               material.rho, e0=e0s[0], method=self.method,
                               backend=self.backend, quadrature=body.quadrature,

@@ -17,14 +17,12 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from runtime.model.time_laws import Law, SceneError, _is_finite, _show, parse_law
-
-if TYPE_CHECKING:
-    from runtime.model.scene import Body
+from runtime.model.errors import SceneError, is_finite, show
+from runtime.model.time_laws import Law, parse_law
 
 # what a missing required key should hold, for error messages
 HINTS = {
@@ -110,7 +108,7 @@ def keys(data: Any, path: str, required: tuple[str, ...], optional: tuple[str, .
          what: str = "a table") -> dict:
     """Check that ``data`` is a table holding all ``required`` keys and no unknown key."""
     if not isinstance(data, dict):
-        raise SceneError(f"{path}: expected {what}, got {_show(data)}")
+        raise SceneError(f"{path}: expected {what}, got {show(data)}")
     allowed = (*required, *optional)
     prefix = f"{path}." if path else ""
     for key_ in data:
@@ -125,25 +123,25 @@ def keys(data: Any, path: str, required: tuple[str, ...], optional: tuple[str, .
 
 def number(value: Any, path: str, positive: bool = False) -> float:
     """A finite number (a positive one if asked) as a float."""
-    if not _is_finite(value):
+    if not is_finite(value):
         raise SceneError(f"{path}: expected a {'positive' if positive else 'finite'} number, "
-                         f"got {_show(value)}")
+                         f"got {show(value)}")
     if positive and value <= 0:
-        raise SceneError(f"{path}: expected a positive number, got {_show(value)}")
+        raise SceneError(f"{path}: expected a positive number, got {show(value)}")
     return float(value)
 
 
 def string(value: Any, path: str) -> str:
     """A non-empty string."""
     if not isinstance(value, str) or not value:
-        raise SceneError(f"{path}: expected a non-empty string, got {_show(value)}")
+        raise SceneError(f"{path}: expected a non-empty string, got {show(value)}")
     return value
 
 
 def choice(value: Any, path: str, choices: tuple[str, ...], what: str = "value") -> str:
     """One of ``choices``."""
     if not isinstance(value, str) or value not in choices:
-        raise SceneError(f"{path}: unknown {what} {_show(value)}; expected one of "
+        raise SceneError(f"{path}: unknown {what} {show(value)}; expected one of "
                          f"{', '.join(choices)}")
     return value
 
@@ -151,14 +149,14 @@ def choice(value: Any, path: str, choices: tuple[str, ...], what: str = "value")
 def boolean(value: Any, path: str) -> bool:
     """true or false."""
     if not isinstance(value, bool):
-        raise SceneError(f"{path}: expected true or false, got {_show(value)}")
+        raise SceneError(f"{path}: expected true or false, got {show(value)}")
     return value
 
 
 def vector(value: Any, path: str, dim: int, why: str) -> tuple[float, ...]:
     """A list of ``dim`` finite numbers (``why`` says where ``dim`` comes from)."""
-    if not isinstance(value, list) or len(value) != dim or not all(map(_is_finite, value)):
-        raise SceneError(f"{path}: expected a list of {dim} numbers ({why}), got {_show(value)}")
+    if not isinstance(value, list) or len(value) != dim or not all(map(is_finite, value)):
+        raise SceneError(f"{path}: expected a list of {dim} numbers ({why}), got {show(value)}")
     return tuple(float(x) for x in value)
 
 
@@ -166,25 +164,39 @@ def rotation_vector(value: Any, path: str, dim: int, what: str) -> float | tuple
     """A pseudo-vector (moment, angular velocity): a number about z in 2D, a 3-vector in 3D."""
     if dim == 3:
         return vector(value, path, 3, "the scene is 3D")
-    if not _is_finite(value):
+    if not is_finite(value):
         raise SceneError(f"{path}: expected a number ({what} about z; the scene is 2D), got "
-                         f"{_show(value)}")
+                         f"{show(value)}")
     return float(value)
+
+
+class MeshedBody(Protocol):
+    """What node references are resolved against: a body's name, element kind and node grid
+    (``runtime.model.bodies.Body``)."""
+
+    name: str
+    element: str
+
+    @property
+    def grid_shape(self) -> tuple[int, ...]: ...
+
+    @property
+    def n_nodes(self) -> int: ...
 
 
 class Nodes:
     """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies) and
     edges ``"BODY:x=I"`` / ``"BODY:y=J"`` against the bodies of a scene."""
 
-    def __init__(self, bodies: tuple[Body, ...]) -> None:
+    def __init__(self, bodies: tuple[MeshedBody, ...]) -> None:
         self.bodies = {b.name: b for b in bodies}
 
-    def _body(self, value: Any, path: str, form: str) -> tuple[Body, str]:
+    def _body(self, value: Any, path: str, form: str) -> tuple[MeshedBody, str]:
         if not isinstance(value, str) or value.count(":") != 1:
-            raise SceneError(f"{path}: expected {form}, got {_show(value)}")
+            raise SceneError(f"{path}: expected {form}, got {show(value)}")
         name, rest = value.split(":")
         if name not in self.bodies:
-            raise SceneError(f"{path}: unknown body {_show(name)} in {_show(value)}; bodies: "
+            raise SceneError(f"{path}: unknown body {show(name)} in {show(value)}; bodies: "
                              f"{', '.join(self.bodies)}")
         return self.bodies[name], rest
 
@@ -195,16 +207,16 @@ class Nodes:
             parts = text.split(",")
             if len(parts) != 2:
                 raise SceneError(f'{path}: expected a grid index "BODY:I,J" (two integers), '
-                                 f"got {_show(value)}")
+                                 f"got {show(value)}")
             i, j = (_index(part, n, path, value, f"grid index {axis}",
-                           f"body {_show(body.name)} with {n} node {what}")
+                           f"body {show(body.name)} with {n} node {what}")
                     for part, n, axis, what in zip(parts, shape, "IJ", ("columns", "rows"),
                                                    strict=True))
             index = j * shape[0] + i
             return NodeRef(body.name, index, None if text == str(index) else text)
         n = body.n_nodes
         index = _index(text, n, path, value, "node index",
-                       f"body {_show(body.name)} with {n} nodes", grid=len(shape) == 2)
+                       f"body {show(body.name)} with {n} nodes", grid=len(shape) == 2)
         return NodeRef(body.name, index, None if text == str(index) else text)
 
     def edge(self, value: Any, path: str) -> EdgeRef:
@@ -213,16 +225,16 @@ class Nodes:
         body, text = self._body(value, path, form)
         shape = body.grid_shape
         if len(shape) != 2:
-            raise SceneError(f"{path}: body {_show(body.name)} is a line of {body.element} "
+            raise SceneError(f"{path}: body {show(body.name)} is a line of {body.element} "
                              f"elements; edges are grid lines of rectangle bodies (use node "
-                             f'"{body.name}:INDEX"), got {_show(value)}')
+                             f'"{body.name}:INDEX"), got {show(value)}')
         if text[:2] not in ("x=", "y="):
-            raise SceneError(f"{path}: expected {form}, got {_show(value)}")
+            raise SceneError(f"{path}: expected {form}, got {show(value)}")
         axis = text[0]
         a = "xy".index(axis)
         n = shape[a]
         line = _index(text[2:], n, path, value, f"grid line {axis}",
-                      f"body {_show(body.name)} with {n} node {('columns', 'rows')[a]}")
+                      f"body {show(body.name)} with {n} node {('columns', 'rows')[a]}")
         nx, ny = shape
         nodes = (tuple(j * nx + line for j in range(ny)) if axis == "x"
                  else tuple(line * nx + i for i in range(nx)))
@@ -237,7 +249,7 @@ def _index(text: str, n: int, path: str, value: str, noun: str, owner: str,
         also = ' or a grid index "I,J"' if grid else ""
         raise SceneError(f'{path}: expected an integer {noun} after ":" (ASCII digits and an '
                          f'optional leading "-"; no "+", blanks, "_" or leading zeros, "-0" '
-                         f'neither: 0 is the first, -1 the last){also}, got {_show(value)}')
+                         f'neither: 0 is the first, -1 the last){also}, got {show(value)}')
     index = int(text) if len(text) <= 20 else None
     if index is None or not -n <= index < n:
         shown = text if index is not None else f"{text[:20]}..."
@@ -389,7 +401,32 @@ def unit_axis(value: Any, path: str) -> tuple[float, ...]:
     axis = vector(value, path, 3, "an axis is 3D")
     norm = math.hypot(*axis)
     if norm == 0.0:
-        raise SceneError(f"{path}: expected a non-zero axis, got {_show(value)}")
+        raise SceneError(f"{path}: expected a non-zero axis, got {show(value)}")
     if abs(norm - 1.0) <= 1e-12:
         return axis
     return tuple(x / norm for x in axis)
+
+
+def count(value: Any, path: str, maximum: int | None = None, why: str = "") -> int:
+    """A positive integer (TOML integer: a float such as 1e20 or 10.0 is not one), at most
+    ``maximum`` (``why`` says where the limit comes from)."""
+    if isinstance(value, float):
+        hint = f"; write {int(value)}" if value.is_integer() and abs(value) < 1e15 else ""
+        raise SceneError(f"{path}: expected an integer, got {show(value)} (a float{hint})")
+    if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
+        raise SceneError(f"{path}: expected a positive integer, got {show(value)}")
+    if maximum is not None and value > maximum:
+        raise SceneError(f"{path}: expected at most {maximum}{why}, got {show(value)}")
+    return value
+
+
+def checked_name(value: Any, path: str, what: str = "a name") -> str:
+    """A non-empty printable name of at most NAME_LENGTH characters, without blanks around."""
+    name = string(value, path)
+    if len(name) > NAME_LENGTH:
+        raise SceneError(f"{path}: expected {what} of at most {NAME_LENGTH} characters, got "
+                         f"{len(name)} characters {show(name)}")
+    if not name.isprintable() or name != name.strip():
+        raise SceneError(f"{path}: expected {what} of printable characters without blanks at "
+                         f"either end, got {show(name)}")
+    return name

@@ -15,12 +15,13 @@ of a ramp the formula of the ramp is used (``t <= duration``), as in eqs. 42 and
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+
+from runtime.model.errors import SceneError, is_finite, show
 
 __all__ = [
     "LAWS",
@@ -29,16 +30,11 @@ __all__ = [
     "CosineRamp",
     "Law",
     "LinearRamp",
-    "SceneError",
     "Sine",
     "SpinUp",
     "Table",
     "parse_law",
 ]
-
-
-class SceneError(ValueError):
-    """An invalid scene; the message starts with the key path (``body[1].elements: ...``)."""
 
 
 @dataclass(frozen=True)
@@ -222,64 +218,27 @@ LAWS: dict[str, type[Law]] = {cls.type: cls for cls in (
     Constant, CosineRamp, LinearRamp, Sine, Table, SpinUp, ConstantRate)}
 
 
-def _show(value: Any, depth: int = 0) -> str:
-    """A value as the scene spells it, for error messages: one line, at most about 80
-    characters (control characters escaped, long strings, lists and integers shortened)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        text = "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in value[:60])
-        more = f"... ({len(value)} characters)" if len(value) > 60 else ""
-        return f'"{text}"{more}'
-    if isinstance(value, dict):
-        return "a table"
-    if isinstance(value, list):
-        if depth >= 2 and value:
-            return "[...]"
-        items = ", ".join(_show(x, depth + 1) for x in value[:6])
-        return f"[{items}, ... ({len(value)} items)]" if len(value) > 6 else f"[{items}]"
-    if isinstance(value, datetime.date | datetime.time):
-        return f"{value.isoformat()} (a {type(value).__name__})"
-    if isinstance(value, int) and value.bit_length() > 200:
-        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
-    return repr(value)
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _is_finite(value: Any) -> bool:
-    """A number (not a boolean) that is finite as a float (huge integers are not)."""
-    if not _is_number(value):
-        return False
-    try:
-        return math.isfinite(value)
-    except OverflowError:
-        return False
-
-
 def _check_number(value: Any, path: str, check: str) -> float:
     if check == "positive":
-        if not _is_finite(value) or value <= 0:
-            raise SceneError(f"{path}: expected a positive number, got {_show(value)}")
-    elif not _is_finite(value):
-        raise SceneError(f"{path}: expected a finite number, got {_show(value)}")
+        if not is_finite(value) or value <= 0:
+            raise SceneError(f"{path}: expected a positive number, got {show(value)}")
+    elif not is_finite(value):
+        raise SceneError(f"{path}: expected a finite number, got {show(value)}")
     return float(value)
 
 
 def _check_points(value: Any, path: str) -> tuple[tuple[float, float], ...]:
     if not isinstance(value, list) or not value:
-        raise SceneError(f"{path}: expected a non-empty list of [t, v] pairs, got {_show(value)}")
+        raise SceneError(f"{path}: expected a non-empty list of [t, v] pairs, got {show(value)}")
     points = []
     for i, pair in enumerate(value):
         if (not isinstance(pair, list) or len(pair) != 2
-                or not all(_is_finite(x) for x in pair)):
+                or not all(is_finite(x) for x in pair)):
             raise SceneError(f"{path}[{i}]: expected a pair [t, v] of finite numbers, "
-                             f"got {_show(pair)}")
+                             f"got {show(pair)}")
         if points and pair[0] <= points[-1][0]:
             raise SceneError(f"{path}[{i}]: times must be strictly increasing, got "
-                             f"{_show(pair[0])} after {_show(points[-1][0])}")
+                             f"{show(pair[0])} after {show(points[-1][0])}")
         points.append((float(pair[0]), float(pair[1])))
     return tuple(points)
 
@@ -293,12 +252,12 @@ def parse_law(data: Any, path: str) -> Law:
     known = ", ".join(LAWS)
     if not isinstance(data, dict):
         raise SceneError(f'{path}: expected a table like {{type = "constant"}} (types: {known}), '
-                         f"got {_show(data)}")
+                         f"got {show(data)}")
     if "type" not in data:
         raise SceneError(f"{path}.type: missing required key; expected one of {known}")
     name = data["type"]
     if not isinstance(name, str) or name not in LAWS:
-        raise SceneError(f"{path}.type: unknown time law {_show(name)}; expected one of {known}")
+        raise SceneError(f"{path}.type: unknown time law {show(name)}; expected one of {known}")
     cls = LAWS[name]
     fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)}
     for key in data:

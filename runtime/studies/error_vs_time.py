@@ -59,7 +59,10 @@ from typing import Any
 import numpy as np
 
 from runtime.catalog import BACKENDS, INTEGRATORS, METHODS
-from runtime.model.scene import Scene, SceneError, Static, parse_scene, read_scene_file
+from runtime.model.errors import SceneError
+from runtime.model.scene import Scene, parse_scene
+from runtime.model.settings import Static
+from runtime.model.toml_io import read_scene_file
 from runtime.studies.sweep import SchedulerError, run_cases
 
 __all__ = [

@@ -40,9 +40,11 @@ import numpy as np
 
 from runtime.catalog import METHODS, generated_kinds
 from runtime.kernels.kind import element_kind
+from runtime.model.bodies import Body, Material
 from runtime.model.items.constraints import Clamp
 from runtime.model.items.loads import Gravity, PointForce
-from runtime.model.scene import Body, Material, Scene, Static
+from runtime.model.scene import Scene
+from runtime.model.settings import Static
 
 EPS = float(np.finfo(float).eps)
 
@@ -321,7 +323,7 @@ def integrator_case(integrator: str, step: float, rho_inf: float = 0.8, t_end: f
     fixed ``step`` (s).  Returns energy drift (max |E(t) - E0| / E0 and the final one),
     Newton iterations (mean and max per step), the largest first Newton correction of a step
     (m), the status (ok | diverged), its message, the time reached and the wall time (s)."""
-    from runtime.model.scene import Dynamic
+    from runtime.model.settings import Dynamic
     from runtime.solve.python_engine import INTEGRATORS, Divergence
 
     model, q_static = _slender_start()

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from runtime.model.errors import SceneError, show
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -27,7 +28,7 @@ from runtime.model.schema import (
     registry,
     unit_axis,
 )
-from runtime.model.time_laws import Law, SceneError, _show
+from runtime.model.time_laws import Law
 
 if TYPE_CHECKING:
     from runtime.model.model import Model
@@ -158,11 +159,11 @@ class Hub(NodeConstraint):
 def _nodes_key(value: Any, path: str, context: Context) -> tuple[NodeRef, NodeRef]:
     if not isinstance(value, list) or len(value) != 2:
         raise SceneError(f'{path}: expected two node references ["A:-1", "B:0"], got '
-                         f"{_show(value)}")
+                         f"{show(value)}")
     a, b = context.node(value[0], f"{path}[0]"), context.node(value[1], f"{path}[1]")
     if a == b:
         raise SceneError(f"{path}: expected two different nodes, got {a} twice "
-                         f"({_show(value[0])} and {_show(value[1])})")
+                         f"({show(value[0])} and {show(value[1])})")
     return a, b
 
 

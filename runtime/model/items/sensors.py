@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from runtime.model.errors import SceneError, show
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -26,7 +27,6 @@ from runtime.model.schema import (
     registry,
     string,
 )
-from runtime.model.time_laws import SceneError, _show
 
 if TYPE_CHECKING:
     from runtime.model.model import Model
@@ -49,11 +49,11 @@ def _name_key(value: Any, path: str, context: Context) -> str:
     if not SENSOR_NAME.fullmatch(name) or len(name) > NAME_LENGTH:
         raise SceneError(f"{path}: expected letters, digits, _ . and - starting with a "
                          f"letter, digit or _, at most {NAME_LENGTH} characters (it names a "
-                         f"CSV column and a PNG file), got {_show(name)}")
+                         f"CSV column and a PNG file), got {show(name)}")
     if name.split(".")[0].lower() in RESERVED_SENSOR_NAMES:
         raise SceneError(f"{path}: expected a name other than the reserved "
                          f"{', '.join(RESERVED_SENSOR_NAMES)} (in any case, also before a "
-                         f'"."), got {_show(name)}')
+                         f'"."), got {show(name)}')
     return name
 
 

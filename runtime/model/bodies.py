@@ -1,0 +1,140 @@
+"""The bodies and materials of a scene: ``[material.NAME]`` and ``[[body]]`` tables as frozen
+dataclasses.  A body is a mesh of elements of one kind, placed in space by its placement
+(``runtime.model.placements``); it writes its TOML table back (``to_dict``)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.kernels.kind import element_kind
+from runtime.model import mesh as meshing
+from runtime.model.placements import Arc, Line, Placement, Rectangle
+from runtime.model.schema import plain, table
+
+
+@dataclass(frozen=True)
+class Material:
+    """Elastic material ``name``: E (Pa) > 0, -1 < nu < 0.5, rho (kg/m^3) > 0.
+
+    law: ``svk`` (St. Venant-Kirchhoff) or ``ecm`` (elastic continuum mechanics with a shear
+    correction); shear_correction: the ecm shear correction factor (> 0), None for the default
+    (always None with svk); damping: Kelvin-Voigt coefficient alpha (s) >= 0, 0 for none.
+    In TOML the name is the key of the table ``[material.NAME]``.
+    """
+
+    name: str
+    E: float
+    nu: float
+    rho: float
+    law: str = "svk"
+    shear_correction: float | None = None
+    damping: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[material.NAME]`` (without the name)."""
+        return table(self, skip=("name",))
+
+
+@dataclass(frozen=True)
+class Spin:
+    """A rigid rotation at the angular velocity ``omega`` (rad/s: a number, about +z, in 2D;
+    a vector (3,) in 3D) about the point ``about`` (dim,) in m."""
+
+    omega: float | tuple[float, ...]
+    about: tuple[float, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``initial_angular_velocity = {...}``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Body:
+    """A mesh of elements of kind ``element`` sharing nodes (numbered by the kind's node layout:
+    ``n_nodes`` of them, see ``runtime.model.mesh.structured_mesh``).
+
+    Beam kinds (a line of ``elements`` elements): section ``height`` and ``width`` (m; TOML
+    ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or
+    ``arc``.  Plate kinds: ``rectangle`` (its grid sets ``elements``) and ``thickness`` (m;
+    TOML ``section = {thickness}``).  material: the name of a material of the scene;
+    quadrature: Gauss orders (dim,) or None for the kind's default.  Initial conditions
+    (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s, a uniform
+    translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
+    """
+
+    name: str
+    element: str
+    material: str
+    height: float | None = None
+    width: float | None = None
+    elements: int | None = None
+    start: tuple[float, ...] | None = None
+    end: tuple[float, ...] | None = None
+    arc: Arc | None = None
+    quadrature: tuple[int, ...] | None = None
+    initial_velocity: tuple[float, ...] | None = None
+    initial_angular_velocity: Spin | None = None
+    rectangle: Rectangle | None = None
+    thickness: float | None = None
+
+    @property
+    def dim(self) -> int:
+        """Spatial dimension of the element kind (2 or 3)."""
+        return element_kind(self.element).dim
+
+    @property
+    def placement(self) -> Placement:
+        """Where the body lies: its rectangle, its arc, or the line from start to end (the one
+        place that tells them apart)."""
+        if self.rectangle is not None:
+            return self.rectangle
+        return self.arc if self.arc is not None else Line(self.start, self.end)
+
+    @property
+    def counts(self) -> tuple[int, ...]:
+        """Elements along each meshed axis: (elements,) for a line, the grid for a rectangle."""
+        return self.placement.counts(self.elements)
+
+    @property
+    def grid_shape(self) -> tuple[int, ...]:
+        """Node points along each meshed axis: (nodes,) for a line, (columns along x, rows
+        along y) for a rectangle."""
+        return meshing.grid_shape(element_kind(self.element), self.counts)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
+        (nx + 1)(ny + 1) for 4-node plates."""
+        return meshing.node_count(element_kind(self.element), self.counts)
+
+    @property
+    def section(self) -> tuple[float, ...]:
+        """The section sizes (m) across the meshed axes: (height, width) of a beam, the
+        thickness of a plate."""
+        return (self.thickness,) if self.thickness is not None else (self.height, self.width)
+
+    @property
+    def geometry(self) -> tuple[float, float, float]:
+        """The element's (length, height, width) as ``runtime.Element`` takes them: the
+        element's sides a, b and the thickness for a plate."""
+        return (*self.placement.element_sides(self.counts), *self.section)
+
+    def node_position(self, index: int) -> tuple[float, ...]:
+        """Reference position (m) of node ``index``, as the model meshes the body."""
+        return self.placement.node_position(index, self.grid_shape)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[[body]]``."""
+        section = ({"thickness": self.thickness} if self.rectangle is not None
+                   else {"height": self.height, "width": self.width})
+        head = {"name": self.name, "element": self.element, "material": self.material,
+                "section": {k: v for k, v in section.items() if v is not None}}
+        # a rectangle's grid sets its elements (written only when they disagree: an error)
+        grid = getattr(self.rectangle, "grid", None)
+        if self.rectangle is None or (self.elements is not None
+                                      and (grid is None or self.elements != math.prod(grid))):
+            head["elements"] = self.elements
+        return {**plain(head),
+                **table(self, skip=(*head, "height", "width", "thickness", "elements"))}

@@ -1,0 +1,372 @@
+"""Reading a scene's TOML table into its validated parts: materials, bodies, items
+(constraints, loads, sensors through their registries), analyses, solver and output settings,
+each checked with an error naming its key path (``SceneError``), then the cross-checks
+(``runtime.model.checks``) and the size estimates (``runtime.model.sizes``).
+
+Names: body and material names printable, at most 64 characters; sensor names are file names
+(at most 64 characters, unique ignoring case, none reserved: ``runtime.model.items.sensors``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from runtime.catalog import (
+    BACKENDS,
+    DEFAULT_LAW,
+    ENGINES,
+    INTEGRATORS,
+    METHODS,
+    NEWTON_MODES,
+    generated_kinds,
+    material_laws,
+)
+from runtime.kernels.kind import element_kind
+from runtime.model.bodies import Body, Material, Spin
+from runtime.model.checks import check_constraints, check_frequency, check_loads
+from runtime.model.errors import SceneError, number_text, show
+from runtime.model.items.constraints import CONSTRAINTS
+from runtime.model.items.loads import LOADS
+from runtime.model.items.sensors import SENSORS, Sensor
+from runtime.model.placements import PLACEMENTS, Arc, Line, Rectangle
+from runtime.model.schema import (
+    Context,
+    Nodes,
+    boolean,
+    checked_name,
+    choice,
+    count,
+    keys,
+    number,
+    parse_record,
+    rotation_vector,
+    string,
+    vector,
+)
+from runtime.model.settings import (
+    MULTIPLE_TOLERANCE,
+    Dynamic,
+    Modal,
+    Output,
+    Solver,
+    Static,
+)
+from runtime.model.sizes import LIMITS, check_model_size, check_sizes
+
+MODAL_ABOUT = ("reference", "static")
+
+
+TITLE_LENGTH = 200
+
+
+# a relative Newton tolerance outside this range is never met or accepts unconverged steps
+TOLERANCE_RANGE = (1e-15, 1e-2)
+
+
+def _array_of_tables(data: dict, key: str) -> list:
+    value = data.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise SceneError(f"{key}: expected an array of tables ([[{key}]]), got {show(value)}")
+    return value
+
+
+def _material(name: str, data: Any) -> Material:
+    path = f"material.{name}" if name else 'material.""'
+    checked_name(name, path, "a material name")
+    keys(data, path, ("E", "nu", "rho"), ("law", "shear_correction", "damping"))
+    E = number(data["E"], f"{path}.E", positive=True)
+    nu = number(data["nu"], f"{path}.nu")
+    if not -1.0 < nu < 0.5:
+        raise SceneError(f"{path}.nu: expected a Poisson ratio in (-1, 0.5), got {show(nu)}")
+    rho = number(data["rho"], f"{path}.rho", positive=True)
+    law = choice(data.get("law", DEFAULT_LAW), f"{path}.law", material_laws(), "material law")
+    shear = None
+    if "shear_correction" in data:
+        shear = number(data["shear_correction"], f"{path}.shear_correction", positive=True)
+        if law != "ecm":
+            raise SceneError(f'{path}.shear_correction: only meaningful with law = "ecm", got '
+                             f'law = "{law}"; remove it or set law = "ecm"')
+    damping = number(data.get("damping", 0.0), f"{path}.damping")
+    if damping < 0:
+        raise SceneError(f"{path}.damping: expected a Kelvin-Voigt coefficient alpha >= 0 (s), "
+                         f"got {show(data['damping'])}")
+    return Material(name, E, nu, rho, law, shear, damping)
+
+
+def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
+    path = f"body[{i}]"
+    keys(data, path, ("name", "element", "material", "section"),
+         ("elements", *(key for placement in PLACEMENTS for key in placement.keys),
+          "quadrature", "initial_velocity", "initial_angular_velocity"))
+    name = checked_name(data["name"], f"{path}.name", "a body name")
+    if ":" in name:
+        raise SceneError(f'{path}.name: expected a name without ":", got {show(name)}')
+    kind = choice(data["element"], f"{path}.element", tuple(generated_kinds()), "element kind")
+    meta = element_kind(kind)
+    dim = meta.dim
+    why = f"{kind} is {dim}D"
+    material = string(data["material"], f"{path}.material")
+    if material not in materials:
+        defined = ", ".join(materials) or "none"
+        raise SceneError(f"{path}.material: material {show(material)} is not defined; "
+                         f"defined materials: {defined}")
+    law = materials[material].law
+    if (why := meta.law_not_applicable(law)) is not None:
+        raise SceneError(f"{path}.material: material {show(material)} has law = "
+                         f"{show(law)}, which does not apply to {kind} elements ({why}); "
+                         f"expected a material with one of the laws "
+                         f"{', '.join(meta.laws)}")
+    plate = len(meta.mesh_axes) == 2
+    shape = _plate_shape if plate else _line_shape
+    height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
+
+    quadrature = None
+    if "quadrature" in data:
+        q = data["quadrature"]
+        top = LIMITS["quadrature"]
+        if (not isinstance(q, list) or len(q) != dim or not all(
+                isinstance(n, int) and not isinstance(n, bool) and 0 < n <= top for n in q)):
+            raise SceneError(f"{path}.quadrature: expected a list of {dim} positive integers "
+                             f"of at most {top} (Gauss orders; {why}), got {show(q)}")
+        quadrature = tuple(q)
+    velocity = None
+    if "initial_velocity" in data:
+        velocity = vector(data["initial_velocity"], f"{path}.initial_velocity", dim,
+                          f"a velocity in m/s; {why}")
+    spin = None
+    if "initial_angular_velocity" in data:
+        spath = f"{path}.initial_angular_velocity"
+        s = keys(data["initial_angular_velocity"], spath, ("omega", "about"), (),
+                 "a table {omega = ..., about = [...]}")
+        spin = Spin(rotation_vector(s["omega"], f"{spath}.omega", dim, "the angular velocity "
+                                    "in rad/s"),
+                    vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
+    return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
+                velocity, spin, rectangle, thickness)
+
+
+def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Section, element count and placement (a ``Line`` or an ``Arc``) of a line body (beam
+    kinds)."""
+    why = f"{kind} is {dim}D"
+    if "rectangle" in data:
+        raise SceneError(f"{path}.rectangle: {kind} is a beam element; a beam body is a line "
+                         "(start and end) or an arc; rectangles are for plate elements")
+    if "elements" not in data:
+        raise SceneError(f"{path}.elements: missing required key; expected the number of "
+                         f"elements along the body")
+    section = keys(data["section"], f"{path}.section", ("height", "width"), (),
+                   "a table {height = H, width = W}")
+    height = number(section["height"], f"{path}.section.height", positive=True)
+    width = number(section["width"], f"{path}.section.width", positive=True)
+    elements = count(data["elements"], f"{path}.elements")
+    straight = any(key in data for key in Line.keys)
+    if straight and "arc" in data:
+        raise SceneError(f"{path}: expected either start and end or arc, got both")
+    if straight:
+        line = Line.parse(data, path, dim, why)
+        return height, width, None, elements, line.start, line.end, None, None
+    if "arc" in data:
+        arc = Arc.parse(data["arc"], f"{path}.arc", dim, why)
+        return height, width, None, elements, None, None, arc, None
+    raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
+
+
+def _plate_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Section, element count and placement (a ``Rectangle``) of a plate body."""
+    for key in (*Line.keys, *Arc.keys):
+        if key in data:
+            raise SceneError(f"{path}.{key}: {kind} is a plate element; a plate body is a "
+                             f"rectangle = {{corner = [x, y, z], size = [a, b], grid = "
+                             f"[nx, ny]}}")
+    if "elements" in data:
+        raise SceneError(f"{path}.elements: the rectangle's grid sets the elements of a plate "
+                         f"body; remove elements")
+    if "rectangle" not in data:
+        raise SceneError(f"{path}.rectangle: missing required key; expected {{corner = "
+                         f"[x, y, z], size = [a, b], grid = [nx, ny]}} ({kind} is a plate "
+                         f"element)")
+    section = keys(data["section"], f"{path}.section", ("thickness",), (),
+                   "a table {thickness = T}")
+    thickness = number(section["thickness"], f"{path}.section.thickness", positive=True)
+    rectangle = Rectangle.parse(data["rectangle"], f"{path}.rectangle", dim, f"{kind} is {dim}D")
+    return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle)
+
+
+def _table_fields(data: Any, path: str, spec: dict[str, Callable[[Any, str], Any]],
+                  required: tuple[str, ...] = ()) -> dict:
+    optional = tuple(k for k in spec if k not in required)
+    keys(data, path, required, optional)
+    return {key: check(data[key], f"{path}.{key}") for key, check in spec.items() if key in data}
+
+
+def _iterations(value: Any, path: str) -> int:
+    return count(value, path, LIMITS["iterations"], " Newton iterations")
+
+
+def _tolerance(value: Any, path: str) -> float:
+    low, high = TOLERANCE_RANGE
+    tolerance = number(value, path, positive=True)
+    if not low <= tolerance <= high:
+        raise SceneError(f"{path}: expected a relative Newton tolerance in [{low:g}, {high:g}] "
+                         f"(below, rounding never lets Newton meet it; above, unconverged "
+                         f"steps pass), got {show(value)}")
+    return tolerance
+
+
+def _static(data: Any) -> Static:
+    return Static(**_table_fields(data, "analysis.static", {
+        "max_iterations": _iterations, "tolerance": _tolerance,
+        "load_steps": lambda v, p: count(v, p, LIMITS["steps"], " load increments")}))
+
+
+def _modal(data: Any) -> Modal:
+    return Modal(**_table_fields(data, "analysis.modal", {
+        "modes": lambda v, p: count(v, p, LIMITS["modes"], " modes"),
+        "about": lambda v, p: choice(v, p, MODAL_ABOUT)}))
+
+
+def _multiple(value: float, step: float, path: str, key: str) -> None:
+    """``value`` (at key ``key``) must be an integer multiple of the time step."""
+    ratio = value / step
+    if not math.isfinite(ratio):
+        raise SceneError(f"{path}.{key}: {key} / step = {ratio} overflows; expected a {key} "
+                         f"of at most t_end, got {number_text(value)} s for step = "
+                         f"{number_text(step)} s")
+    n = round(ratio)
+    if abs(ratio - n) <= MULTIPLE_TOLERANCE * ratio:
+        return
+    low, high = math.floor(ratio), math.ceil(ratio)
+    values = " or ".join(number_text(k * step) for k in (low, high) if k >= 1)
+    text = (f"{path}.{key}: expected an integer multiple of {path}.step = "
+            f"{number_text(step)} s, got {key} = {number_text(value)} s ({key} / step = "
+            f"{number_text(ratio)}")
+    if key == "t_end":
+        steps = " or ".join(number_text(value / k) for k in (high, low))
+        raise SceneError(f"{text}: the run would stop at {number_text(n * step)} s); nearest "
+                         f"valid: t_end = {values} s, or step = {steps} s")
+    raise SceneError(f"{text}); nearest valid: {key} = {values} s")
+
+
+def _dynamic(data: Any) -> Dynamic:
+    path = "analysis.dynamic"
+    positive = lambda v, p: number(v, p, positive=True)  # noqa: E731
+    fields = _table_fields(data, path, {
+        "t_end": positive, "step": positive,
+        "integrator": lambda v, p: choice(v, p, INTEGRATORS, "integrator"),
+        "output_every": positive, "rho_inf": number, "tolerance": _tolerance,
+        "max_iterations": _iterations, "frequency_of": string,
+        "frequency_after": lambda v, p: number(v, p),
+        "newton": lambda v, p: choice(v, p, NEWTON_MODES, "Newton iteration")},
+        required=("t_end", "step"))
+    t_end, step = fields["t_end"], fields["step"]
+    if not 0.0 <= fields.get("frequency_after", 0.0) < t_end:
+        raise SceneError(f"{path}.frequency_after: expected a time in [0, t_end), got "
+                         f"{fields['frequency_after']!r}")
+    if step > t_end:
+        raise SceneError(f"{path}.step: expected a step of at most t_end = {t_end!r} s, got "
+                         f"{step!r}")
+    top = LIMITS["steps"]
+    if t_end / step > top:
+        raise SceneError(f"{path}.step: t_end / step = {t_end / step:.3g} time steps exceed "
+                         f"the limit of {top:.0e}; expected step >= "
+                         f"{number_text(t_end / top)} s for t_end = {number_text(t_end)} s")
+    _multiple(t_end, step, path, "t_end")
+    if "output_every" in fields:
+        if fields["output_every"] < step:
+            raise SceneError(f"{path}.output_every: expected an interval of at least step = "
+                             f"{step!r} s, got {fields['output_every']!r}")
+        _multiple(fields["output_every"], step, path, "output_every")
+    if "rho_inf" in fields and not 0.0 <= fields["rho_inf"] <= 1.0:
+        raise SceneError(f"{path}.rho_inf: expected a number in [0, 1], got "
+                         f"{fields['rho_inf']!r}")
+    return Dynamic(**fields)
+
+
+def _solver(data: Any) -> Solver:
+    return Solver(**_table_fields(data, "solver", {
+        "method": lambda v, p: choice(v, p, METHODS, "method"),
+        "backend": lambda v, p: choice(v, p, BACKENDS, "backend"),
+        "engine": lambda v, p: choice(v, p, ENGINES, "engine")}))
+
+
+def _output(data: Any) -> Output:
+    return Output(**_table_fields(data, "output", dict.fromkeys(
+        (f.name for f in dataclasses.fields(Output)), boolean)))
+
+
+def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
+    """The validated fields of the ``Scene`` of the parsed TOML ``data`` (``source`` names
+    it: a file path).
+
+    Raises SceneError (message: key path, what was expected, what was found).
+    """
+    if not isinstance(data, dict):
+        raise SceneError(f"{source}: expected a table of scene keys, got {show(data)}")
+    # [study] declares a work-precision sweep: read and validated by `ancf study
+    # error-vs-time` (runtime/studies/error_vs_time.py), ignored by runs
+    keys(data, "", (), ("title", "material", "body", "constraint", "load", "sensor",
+                        "analysis", "solver", "output", "study"))
+    default_title = Path(source).stem if source != "<scene>" else "untitled"
+    title = string(data.get("title", default_title), "title")
+    if len(title) > TITLE_LENGTH or not title.isprintable():
+        raise SceneError(f"title: expected one line of printable text of at most "
+                         f"{TITLE_LENGTH} characters, got {show(title)}")
+
+    raw_materials = data.get("material", {})
+    if not isinstance(raw_materials, dict):
+        raise SceneError(f"material: expected tables [material.NAME], got {show(raw_materials)}")
+    materials = {name: _material(name, m) for name, m in raw_materials.items()}
+
+    raw_bodies = _array_of_tables(data, "body")
+    if not raw_bodies:
+        raise SceneError("body: a scene needs at least one [[body]], got none")
+    bodies: list[Body] = []
+    for i, raw in enumerate(raw_bodies):
+        body = _body(i, raw, materials)
+        if any(b.name == body.name for b in bodies):
+            raise SceneError(f"body[{i}].name: duplicate body name {show(body.name)}")
+        if bodies and body.dim != bodies[0].dim:
+            raise SceneError(f"body[{i}].element: expected a {bodies[0].dim}D element kind like "
+                             f"body[0], got {body.element} ({body.dim}D)")
+        bodies.append(body)
+    check_model_size(tuple(bodies))
+    context = Context(bodies[0].dim, Nodes(tuple(bodies)))
+
+    constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)
+                        for i, c in enumerate(_array_of_tables(data, "constraint")))
+    check_constraints(constraints, tuple(bodies))
+    loads = tuple(parse_record(LOADS, "load", x, f"load[{i}]", context)
+                  for i, x in enumerate(_array_of_tables(data, "load")))
+    check_loads(loads, constraints)
+    raw_sensors = _array_of_tables(data, "sensor")
+    if len(raw_sensors) > LIMITS["sensors"]:
+        raise SceneError(f"sensor: expected at most {LIMITS['sensors']} sensors (one CSV "
+                         f"column and one PNG plot each), got {len(raw_sensors)}")
+    sensors: list[Sensor] = []
+    for i, raw in enumerate(raw_sensors):
+        sensor = parse_record(SENSORS, "sensor", raw, f"sensor[{i}]", context)
+        same_name = [s.name for s in sensors if s.name.lower() == sensor.name.lower()]
+        if same_name:
+            case = "" if same_name[0] == sensor.name else \
+                f" (as {show(same_name[0])}, ignoring case)"
+            raise SceneError(f"sensor[{i}].name: duplicate sensor name {show(sensor.name)}"
+                             f"{case}; sensor names name files, unique ignoring case")
+        sensors.append(sensor)
+
+    analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
+    static = _static(analysis["static"]) if "static" in analysis else None
+    modal = _modal(analysis["modal"]) if "modal" in analysis else None
+    dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
+    if dynamic is not None and dynamic.frequency_of is not None:
+        check_frequency(dynamic, sensors)
+    solver = _solver(data.get("solver", {}))
+    output = _output(data.get("output", {}))
+    check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic)
+    return dict(title=title, materials=materials, bodies=tuple(bodies),
+                constraints=constraints, loads=loads, sensors=tuple(sensors), static=static,
+                modal=modal, dynamic=dynamic, solver=solver, output=output, source=source)

@@ -1,0 +1,92 @@
+"""The analysis and run settings of a scene: ``[analysis.static]``, ``[analysis.modal]``,
+``[analysis.dynamic]``, ``[solver]`` and ``[output]`` as frozen dataclasses (units SI, times in
+s), each writing its TOML table back (``to_dict``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.model.schema import table
+
+# relative tolerance on t_end / step and output_every / step being integers
+MULTIPLE_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class Static:
+    """Static analysis: Newton-Raphson, at most ``max_iterations`` per load increment,
+    convergence ``tolerance`` (relative), loads applied in ``load_steps`` equal increments."""
+
+    max_iterations: int = 50
+    tolerance: float = 1e-10
+    load_steps: int = 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.static]``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Modal:
+    """Modal analysis: the ``modes`` lowest frequencies about the reference configuration or
+    the static solution."""
+
+    modes: int = 4
+    about: str = "reference"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.modal]``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Dynamic:
+    """Dynamic analysis from 0 to ``t_end`` (s) with time step ``step`` (s), ``t_end`` an integer
+    multiple of ``step``; outputs every ``output_every`` s (a multiple of ``step``; None: every
+    step); ``rho_inf`` in [0, 1] for generalized-alpha; ``newton``: ``full`` (a new Jacobian
+    at every iteration) or ``modified`` (Jacobian reused)."""
+
+    t_end: float
+    step: float
+    integrator: str = "trapezoidal"
+    output_every: float | None = None
+    rho_inf: float = 0.8
+    tolerance: float = 1e-10
+    max_iterations: int = 20
+    frequency_of: str | None = None    # sensor whose oscillation frequency is measured ...
+    frequency_after: float = 0.0       # ... from this time (s) to t_end
+    newton: str = "full"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[analysis.dynamic]``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Solver:
+    """Elastic force method (gram | cij | quadrature), kernel backend (c | numpy) and engine
+    (compiled | python; None: compiled when a C compiler is present and the backend is c, else
+    python)."""
+
+    method: str = "gram"
+    backend: str = "c"
+    engine: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[solver]``."""
+        return table(self)
+
+
+@dataclass(frozen=True)
+class Output:
+    """What a run writes beyond the summary and time series: ``vtk`` (VTU/PVD files of the
+    deformed bodies), ``animation`` (a GIF), ``states`` (keep the nodal states in memory)."""
+
+    vtk: bool = False
+    animation: bool = False
+    states: bool = False
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``[output]``."""
+        return table(self)
