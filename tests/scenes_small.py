@@ -29,6 +29,7 @@ from runtime import (
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.time_laws import Law
+from runtime.solve import modal
 from runtime.solve import static as analysis
 from runtime.solve.python_engine import INTEGRATORS
 
@@ -129,7 +130,7 @@ def simulate(scene_: Scene, method: str | None = None, backend: str | None = Non
         about = model.reference
         if scene_.modal.about == "static":
             about = out.static.q
-        out.frequencies = analysis.modal(model, about, scene_.modal.modes)
+        out.frequencies = modal.modal(model, about, scene_.modal.modes)
     if scene_.dynamic is not None:
         settings = scene_.dynamic
         integrator = INTEGRATORS[settings.integrator](model, settings, model.reference)

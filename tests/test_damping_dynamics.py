@@ -14,8 +14,7 @@ from scipy.signal import find_peaks
 from runtime import Material
 from runtime.model.model import Model
 from runtime.model.scene import parse_scene
-from runtime.solve import engines
-from runtime.solve import static as analysis
+from runtime.solve import engines, modal
 
 ALPHA = 2e-5   # s
 
@@ -63,7 +62,7 @@ def test_engines_agree_with_damping(integrator, newton):
 def test_free_vibration_decays_at_the_kelvin_voigt_rate():
     scene = parse_scene(_pulse())
     model = Model(scene)
-    omega = analysis.modal(model, model.reference, 1)[0]
+    omega = modal.modal(model, model.reference, 1)[0]
     rows, _ = _run(model, scene.dynamic, "compiled")
     t = np.array([r[0] for r in rows])
     tip = np.array([r[1][model.node_dofs(model.node_index(scene.sensors[1].node), "r")][1]

@@ -19,7 +19,7 @@ from runtime.app.simulation import Modes, Observer, Result, States, requested, r
 from runtime.model.errors import SceneError
 from runtime.model.scene import parse_scene
 from runtime.model.toml_io import toml_text
-from runtime.solve.static import modal_shapes
+from runtime.solve.modal import modal_shapes
 
 SENSORS = [
     {"name": "tip_y", "type": "displacement", "node": "beam:-1", "component": "y"},
@@ -155,7 +155,7 @@ def test_mode_shapes_with_a_joint_satisfy_it():
 
 
 def test_modal_shapes_match_the_frequencies_alone(full):
-    from runtime.solve.static import modal
+    from runtime.solve.modal import modal
 
     found = modal_shapes(full.model, full.model.reference, 3)
     assert found.frequencies.tolist() == pytest.approx(

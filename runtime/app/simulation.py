@@ -25,6 +25,7 @@ from runtime.model.settings import Static
 from runtime.progress import Bar, enabled
 from runtime.solve import engines
 from runtime.solve import static as analysis
+from runtime.solve.modal import modal_shapes
 from runtime.solve.python_engine import Divergence
 
 __all__ = ["Modes", "Observer", "Result", "Simulation", "States", "requested", "run_scene"]
@@ -208,7 +209,7 @@ class Simulation:
         if settings.about == "static":
             about = self.static_q if self.static_q is not None else \
                 analysis.solve_static(model, self.scene.static or Static()).q
-        found = analysis.modal_shapes(model, about, settings.modes)
+        found = modal_shapes(model, about, settings.modes)
         omega = found.frequencies
         self.modes = Modes(omega, found.shapes, np.array(about))
         self.summary["modal"] = {"about": settings.about, "frequencies_rad_s": omega.tolist(),

@@ -21,7 +21,6 @@ import scipy.linalg
 import scipy.sparse
 
 from runtime.model.model import Model
-from runtime.solve.static import length_scale
 
 
 @dataclass(frozen=True)
@@ -59,7 +58,7 @@ class DAESystem:
         self.dim, self.size = model.dim, model.size
         self.free, self.fixed, self.prescribed = model.free, model.fixed, model.prescribed
         self.fixed_values = np.array(q_full, dtype=float)
-        self.scale = length_scale(model)
+        self.scale = model.length_scale()
         self.mass_ff, self.mass_fp = model.mass_ff, model.mass_fp
         self.bandwidth = model.bandwidth
         self.mass_band = model.mass_banded          # (bandwidth + 1, nf), LAPACK upper

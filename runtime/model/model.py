@@ -27,7 +27,6 @@ from runtime.model import mesh as meshing
 from runtime.model.items.constraints import Built
 from runtime.model.scene import Scene
 from runtime.model.schema import NodeRef
-from runtime.solve.linear import DENSE_LIMIT, SaddleSolver, solve_symmetric_banded
 
 
 @dataclass
@@ -130,6 +129,10 @@ class Model:
         self._build_maps()
         self.timing["preprocess_s"] = time.perf_counter() - start - self.timing["compile_s"]
 
+    def length_scale(self) -> float:
+        """A characteristic length (m) for convergence tests: the largest reference extent."""
+        return float(max(np.ptp(self.reference), 1.0))
+
     # --- indexing ------------------------------------------------------------------------
 
     def node_index(self, ref: NodeRef) -> int:
@@ -208,10 +211,6 @@ class Model:
         self.joints_prescribed = self.joints[:, self.prescribed]
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
         self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
-        # operators applied at every Newton iteration: dense while small (no sparse overhead)
-        small = self.free.size <= DENSE_LIMIT
-        self.mass_ff_op = self.mass_ff.toarray() if small else self.mass_ff
-        self.mass_fp_op = self.mass_fp.toarray() if small else self.mass_fp
 
     def _build_maps(self) -> None:
         """Scatter maps from element Jacobians to the free-free CSR matrix.
@@ -321,21 +320,6 @@ class Model:
         """Free-free elastic Jacobian from ``internal_forces`` data."""
         return scipy.sparse.csr_matrix((data, self.pattern.indices, self.pattern.indptr),
                                        shape=self.pattern.shape)
-
-    def solve(self, mass_coef: float, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
-              rhs_constraints: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Solve [[c_m M + c_j J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free
-        coordinates (J from ``internal_forces`` data).  Without joints the matrix is banded
-        and symmetric: banded Cholesky, O(n b^2), linear in the number of elements."""
-        if self.joints.shape[0]:
-            matrix = jacobian_coef * self.jacobian_matrix(data)
-            if mass_coef:
-                matrix = matrix + mass_coef * self.mass_ff
-            return SaddleSolver(matrix, self.joints_free).solve(rhs, rhs_constraints)
-        band = jacobian_coef * self.banded(data)
-        if mass_coef:
-            band += mass_coef * self.mass_banded
-        return solve_symmetric_banded(band, rhs), np.zeros(0)
 
     def strain_energy(self, q: np.ndarray, body: str | None = None) -> float:
         """Strain energy (J) of one body or of the whole model."""

@@ -1,15 +1,13 @@
-"""Static equilibrium (Newton with load stepping) and modal analysis of a model."""
+"""Static equilibrium of a model: Newton with load stepping, joints through multipliers."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg
 
 from runtime.model.model import Model
-from runtime.solve.linear import DENSE_LIMIT, single_threaded_blas
+from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
 
 
 class ConvergenceError(RuntimeError):
@@ -40,16 +38,11 @@ class StaticResult:
     load_steps: int
 
 
-def length_scale(model: Model) -> float:
-    """A characteristic length (m) for convergence tests: the largest reference extent."""
-    return float(max(np.ptp(model.reference), 1.0))
-
-
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
                   multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Solve F_int(q) + load - A^T mu = 0, A q = 0 for the free coordinates from ``q``."""
     free, joints = model.free, model.joints_free
-    scale = length_scale(model)
+    scale = model.length_scale()
     q = q.copy()
     for iteration in range(1, settings.max_iterations + 1):
         force, data = model.internal_forces(q)
@@ -57,7 +50,7 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")
         # J dq - A^T dmu = -R and A dq = -A q, written with the positive definite -J
-        step, dual = model.solve(0.0, -1.0, data, residual, -(model.joints @ q))
+        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q))
         q[free] += step
         multipliers = multipliers + dual
         if np.abs(step).max() <= settings.tolerance * scale:
@@ -101,64 +94,12 @@ def _solve_static(model: Model, settings) -> StaticResult:
     return StaticResult(q, multipliers, iterations, steps)
 
 
-@dataclass
-class ModalResult:
-    """Lowest angular frequencies (rad/s), ascending, and their mode shapes (modes, size):
-    full coordinate vectors (fixed and prescribed coordinates zero), each scaled so that its
-    largest nodal position component is +1 (unitless)."""
-
-    frequencies: np.ndarray
-    shapes: np.ndarray
-
-
-def modal(model: Model, q: np.ndarray, modes: int) -> np.ndarray:
-    """Lowest ``modes`` angular frequencies (rad/s) linearised about ``q`` (fixed and
-    prescribed coordinates held, joints enforced through their null space)."""
-    with single_threaded_blas():
-        return _modal(model, q, modes, vectors=False)[0]
-
-
-def modal_shapes(model: Model, q: np.ndarray, modes: int) -> ModalResult:
-    """Frequencies and mode shapes of the ``modes`` lowest modes about ``q`` (see
-    :func:`modal`): eigenvectors mapped from the free coordinates (and the joints' null
-    space) back to full coordinate vectors."""
-    with single_threaded_blas():
-        omega, vectors = _modal(model, q, modes, vectors=True)
-    shapes = np.zeros((omega.size, model.size))
-    shapes[:, model.free] = vectors.T
-    positions = model.position_dofs().ravel()
-    for shape in shapes:
-        largest = shape[positions][np.argmax(np.abs(shape[positions]))]
-        if largest != 0:
-            shape /= largest
-    return ModalResult(omega, shapes)
-
-
-def _modal(model: Model, q: np.ndarray, modes: int,
-           vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """(frequencies (modes,), eigenvectors over the free coordinates (nf, modes) or None)."""
-    _, data = model.internal_forces(q)
-    stiffness = -model.jacobian_matrix(data)
-    mass = model.mass_ff
-    basis = None
-    if model.joints_free.shape[0]:
-        basis = scipy.linalg.null_space(model.joints_free.toarray())
-        stiffness = basis.T @ (stiffness @ basis)
-        mass = basis.T @ (mass @ basis)
-    n = stiffness.shape[0]
-    modes = min(modes, n)
-    if n <= DENSE_LIMIT:
-        dense = stiffness.toarray() if scipy.sparse.issparse(stiffness) else stiffness
-        dense_mass = mass.toarray() if scipy.sparse.issparse(mass) else mass
-        found = scipy.linalg.eigh((dense + dense.T) / 2, dense_mass, eigvals_only=not vectors,
-                                  subset_by_index=[0, modes - 1])
-    else:
-        found = scipy.sparse.linalg.eigsh(stiffness, k=modes, M=mass, sigma=0.0,
-                                          return_eigenvectors=vectors)
-    values, eigenvectors = found if vectors else (found, None)
-    order = np.argsort(values)
-    omega = np.sqrt(np.clip(values[order], 0.0, None))
-    if eigenvectors is None:
-        return omega, None
-    eigenvectors = eigenvectors[:, order]
-    return omega, eigenvectors if basis is None else basis @ eigenvectors
+def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
+           rhs_constraints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Solve [[c J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free coordinates
+    (J from ``Model.internal_forces`` data).  Without joints the matrix is banded and
+    symmetric: banded Cholesky, O(n b^2), linear in the number of elements."""
+    if model.joints.shape[0]:
+        matrix = jacobian_coef * model.jacobian_matrix(data)
+        return SaddleSolver(matrix, model.joints_free).solve(rhs, rhs_constraints)
+    return solve_symmetric_banded(jacobian_coef * model.banded(data), rhs), np.zeros(0)

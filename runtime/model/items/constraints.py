@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from runtime.model.errors import SceneError, show
+from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -29,9 +30,6 @@ from runtime.model.schema import (
     unit_axis,
 )
 from runtime.model.time_laws import Law
-
-if TYPE_CHECKING:
-    from runtime.model.model import Model
 
 __all__ = ["CONSTRAINTS", "Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
            "Pin", "Revolute", "Spherical", "Weld"]
@@ -59,7 +57,7 @@ class Built:
 class Constraint(Record):
     """Base of the constraints."""
 
-    def apply(self, model: Model, built: Built) -> None:
+    def apply(self, model: ModelView, built: Built) -> None:
         """Record the effect of this constraint on ``model``'s coordinates in ``built``."""
         raise NotImplementedError
 
@@ -111,7 +109,7 @@ class HeldNodes(NodeConstraint):
     def target_key(self) -> str:
         return "node" if self.edge is None else "edge"
 
-    def apply(self, model: Model, built: Built) -> None:
+    def apply(self, model: ModelView, built: Built) -> None:
         vector = None if self.holds_gradients else "r"
         for node in self.targets():
             built.fixed[model.node_dofs(model.node_index(node), vector)] = True
@@ -151,7 +149,7 @@ class Hub(NodeConstraint):
             return dataclasses.replace(self, axis=(0.0, 0.0, 1.0))
         return self
 
-    def apply(self, model: Model, built: Built) -> None:
+    def apply(self, model: ModelView, built: Built) -> None:
         built.hubs.append((model.node_index(self.node), self.angle,
                            np.asarray(self.axis or (0.0, 0.0, 1.0), float)))
 
@@ -178,7 +176,7 @@ class Joint(Constraint):
         """Number of joint rows (multipliers) it adds."""
         return dim
 
-    def apply(self, model: Model, built: Built) -> None:
+    def apply(self, model: ModelView, built: Built) -> None:
         a, b = (model.node_dofs(model.node_index(n), "r") for n in self.nodes)
         built.rows.extend({i: 1.0, j: -1.0} for i, j in zip(a, b, strict=True))
 
@@ -221,7 +219,7 @@ class Weld(Joint):
     def rows(self, dim: int, per_node: int) -> int:
         return per_node
 
-    def apply(self, model: Model, built: Built) -> None:
+    def apply(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
         dim = model.dim
         a, b = (model.node_index(n) for n in self.nodes)

@@ -9,12 +9,13 @@ keys as fields (``runtime.model.schema.Record``); adding one is one class here a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from runtime.element import invariants
 from runtime.kernels.loader import kernel_family
+from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -29,9 +30,6 @@ from runtime.model.schema import (
     vector,
 )
 from runtime.model.time_laws import Constant, Law
-
-if TYPE_CHECKING:
-    from runtime.model.model import Model
 
 __all__ = ["LOADS", "Gravity", "LineForce", "Load", "NodeLoad", "PointForce", "PointMoment"]
 
@@ -48,7 +46,7 @@ class Load(Record):
     potential: ClassVar[bool] = False
     time_law: Law | dict = key(law_key, Constant(), kw_only=True)
 
-    def nominal(self, model: Model) -> np.ndarray:
+    def nominal(self, model: ModelView) -> np.ndarray:
         """Generalised force (size,) in N (per coordinate) at a time-law value of 1."""
         raise NotImplementedError
 
@@ -85,7 +83,7 @@ class PointForce(NodeLoad):
     type: ClassVar[str] = "point_force"
     force: tuple[float, ...] = key(_vector_key)
 
-    def nominal(self, model: Model) -> np.ndarray:
+    def nominal(self, model: ModelView) -> np.ndarray:
         out = np.zeros(model.size)
         out[model.node_dofs(model.node_index(self.node), "r")] = self.force
         return out
@@ -123,7 +121,7 @@ class PointMoment(NodeLoad):
     noun: ClassVar[str] = "moment"
     moment: float | tuple[float, ...] = key(_moment_key)
 
-    def nominal(self, model: Model) -> np.ndarray:
+    def nominal(self, model: ModelView) -> np.ndarray:
         node = model.node_index(self.node)
         frame = model.node_frame(model.reference, node)
         out = np.zeros(model.size)
@@ -146,7 +144,7 @@ class Gravity(Load):
     potential: ClassVar[bool] = True
     acceleration: tuple[float, ...] = key(_vector_key)
 
-    def nominal(self, model: Model) -> np.ndarray:
+    def nominal(self, model: ModelView) -> np.ndarray:
         return model.mass @ model.rigid_field(translation=self.acceleration)
 
 
@@ -168,7 +166,7 @@ class LineForce(Load):
     def targets(self) -> list[NodeRef]:
         return self.edge.refs()
 
-    def nominal(self, model: Model) -> np.ndarray:
+    def nominal(self, model: ModelView) -> np.ndarray:
         body = model.bodies[self.edge.body]
         kind, element = body.kind, body.element
         axis = "xy".index(self.edge.axis)     # the side lies at fixed local x (or y) ...

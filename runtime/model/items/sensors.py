@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from runtime.model.errors import SceneError, show
+from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -27,9 +28,6 @@ from runtime.model.schema import (
     registry,
     string,
 )
-
-if TYPE_CHECKING:
-    from runtime.model.model import Model
 
 __all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
            "KineticEnergy", "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy",
@@ -66,7 +64,7 @@ class Sensor(Record):
     energy: ClassVar[bool] = True
     name: str = key(_name_key)
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         """The sensor at coordinates q, velocities v (size,) and time t (s; None: the loads
         at their nominal value, as in the static analysis)."""
         raise NotImplementedError
@@ -96,7 +94,7 @@ class NodeSensor(Sensor):
         """The vector this sensor reports from the node's position and reference (m)."""
         raise NotImplementedError
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         node = model.node_index(self.node)
         position = q[model.node_dofs(node, "r")]
         reference = model.reference[model.node_dofs(node, "r")]
@@ -143,7 +141,7 @@ class StrainEnergy(Sensor):
     type: ClassVar[str] = "strain_energy"
     body: str | None = key(_body_key, None)
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         return model.strain_energy(q, self.body)
 
 
@@ -154,7 +152,7 @@ class KineticEnergy(Sensor):
     type: ClassVar[str] = "kinetic_energy"
     body: str | None = key(_body_key, None)
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         return model.kinetic_energy(v, self.body)
 
 
@@ -164,7 +162,7 @@ class PotentialEnergy(Sensor):
 
     type: ClassVar[str] = "potential_energy"
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         return model.gravity_potential(q, t)
 
 
@@ -174,7 +172,7 @@ class TotalEnergy(Sensor):
 
     type: ClassVar[str] = "total_energy"
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         return model.strain_energy(q) + model.kinetic_energy(v) + model.gravity_potential(q, t)
 
 
@@ -186,7 +184,7 @@ class DissipatedEnergy(Sensor):
 
     type: ClassVar[str] = "dissipated_energy"
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         return model.dissipated_energy if t is not None else 0.0
 
 
@@ -198,7 +196,7 @@ class ConstraintViolation(Sensor):
     unit: ClassVar[str] = "m"
     energy: ClassVar[bool] = False
 
-    def value(self, model: Model, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
         if model.joints.shape[0] == 0:
             return 0.0
         return float(np.abs(model.joints @ q).max())
@@ -213,7 +211,7 @@ ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 class Sensors:
     """Evaluates every sensor of a model's scene on global states (q, v)."""
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: ModelView) -> None:
         self.model = model
         self.sensors = model.scene.sensors
         self.names = [s.name for s in self.sensors]

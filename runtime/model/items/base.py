@@ -1,0 +1,71 @@
+"""The narrow interface between the items of a scene (constraints, loads, sensors) and the model
+they contribute to.  Items receive a ``ModelView`` and ask it only what is declared here
+(node indices and coordinates, frames, the reference, mass, energies); ``runtime.model.model``
+implements it.  Items never import the model.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+import scipy.sparse
+
+from runtime.element.element import Element
+from runtime.kernels.kind import ElementKind
+from runtime.model.mesh import Mesh
+from runtime.model.schema import NodeRef
+
+
+class BodyView(Protocol):
+    """One meshed body of the model: its kind, its element group, its mesh, and per element
+    the reference coordinates ``element_e0`` (elements, ndof) and global coordinate indices
+    ``element_dofs`` (elements, ndof)."""
+
+    element: Element
+    mesh: Mesh
+    element_e0: np.ndarray
+    element_dofs: np.ndarray
+
+    @property
+    def kind(self) -> ElementKind: ...
+
+
+class ModelView(Protocol):
+    """What an item may ask of the model: sizes (``dim``, ``size`` coordinates), the reference
+    coordinates (size,), the mass matrix (size, size) in kg, the joint rows ``A`` of
+    ``A q = 0`` (rows, size), the bodies by name, the scene it was built from, and the
+    queries below.  Units SI."""
+
+    dim: int
+    size: int
+    reference: np.ndarray
+    mass: scipy.sparse.csr_matrix
+    joints: scipy.sparse.csr_matrix
+    bodies: dict[str, BodyView]
+    scene: Any
+    dissipated_energy: float
+
+    def node_index(self, ref: NodeRef) -> int:
+        """Global node index of a scene node reference."""
+
+    def node_vectors(self, node: int) -> tuple[str, ...]:
+        """Names of the nodal vectors of a global node (``("r", "r_x", ...)``)."""
+
+    def node_dofs(self, node: int, vector: str | None = None) -> np.ndarray:
+        """Coordinates of a node (all, or one nodal vector such as "r")."""
+
+    def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
+        """Orthonormal frame (dim, dim) of a node's gradients at coordinates ``q``."""
+
+    def rigid_field(self, translation=None, rotation=None, about=None) -> np.ndarray:
+        """Coordinates (size,) of a rigid motion field (see ``Model.rigid_field``)."""
+
+    def strain_energy(self, q: np.ndarray, body: str | None = None) -> float:
+        """Strain energy (J) of the model (or of one body) at ``q``."""
+
+    def kinetic_energy(self, v: np.ndarray, body: str | None = None) -> float:
+        """Kinetic energy (J) of the model (or of one body) at velocities ``v``."""
+
+    def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
+        """Potential energy (J) of the gravity loads at ``q`` and time ``t``."""
