@@ -21,6 +21,7 @@ from runtime.model.items.sensors import (
     Sensor,
     StrainEnergy,
     TotalEnergy,
+    Velocity,
 )
 from runtime.model.placements import Arc, Rectangle
 from runtime.model.scene import Scene, load_scene
@@ -42,5 +43,5 @@ __all__ = [
     "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
     "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
     "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static",
-    "StrainEnergy", "Table", "TotalEnergy", "Weld", "load_scene", "run_scene",
+    "StrainEnergy", "Table", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
 ]

@@ -21,14 +21,11 @@ from runtime.app import writers as output
 from runtime.app.simulation import TIMING_KEYS, Observer, Simulation, requested
 from runtime.kernels.jit import CacheError, JitEnvironmentError
 from runtime.model.errors import SceneError
-from runtime.model.items.sensors import ENERGY_TYPES
 from runtime.model.scene import Scene, load_scene
 
 CSV = "timeseries.csv"
 SUMMARY = "summary.json"
 # y-axis units of the plots, by sensor type
-UNITS = {"displacement": "m", "position": "m", "constraint_violation": "m",
-         **dict.fromkeys(ENERGY_TYPES, "J")}
 
 
 class ExitCode(IntEnum):
@@ -215,7 +212,7 @@ class _Job:
         if not history.get("t"):
             return False
         sensors = simulation.sensors
-        units = {s.name: UNITS[s.type] for s in scene.sensors}
+        units = {s.name: s.unit for s in scene.sensors}
         series = {name: history[name] for name in sensors.names}
         written, warnings = output.plot_series(history["t"], series, self.out, units,
                                                sensors.energy_names)

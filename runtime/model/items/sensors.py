@@ -31,7 +31,7 @@ from runtime.model.schema import (
 
 __all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
            "KineticEnergy", "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy",
-           "TotalEnergy"]
+           "TotalEnergy", "Velocity"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -130,6 +130,23 @@ class Position(NodeSensor):
         return position
 
 
+@dataclass(frozen=True)
+class Velocity(Sensor):
+    """Velocity of ``node`` (m/s): one ``component`` (x | y | z | norm) in global axes."""
+
+    type: ClassVar[str] = "velocity"
+    unit: ClassVar[str] = "m/s"
+    energy: ClassVar[bool] = False
+    node: NodeRef | str = key(node_key)
+    component: str = key(_component_key)
+
+    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+        velocity = v[model.node_dofs(model.node_index(self.node), "r")]
+        if self.component == "norm":
+            return float(np.linalg.norm(velocity))
+        return float(velocity["xyz".index(self.component)])
+
+
 def _body_key(value: Any, path: str, context: Context) -> str:
     return choice(value, path, context.body_names, "body")
 
@@ -203,7 +220,7 @@ class ConstraintViolation(Sensor):
 
 
 SENSORS: dict[str, type[Sensor]] = registry(
-    Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
+    Displacement, Position, Velocity, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
