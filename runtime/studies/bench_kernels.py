@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from runtime.catalog import BACKENDS, METHODS, generated_kinds
+from runtime.catalog import BACKENDS, DEFAULT_LAW, METHODS, family_name, generated_kinds
 from runtime.element.element import Element
 from runtime.kernels.kind import element_kind
 from runtime.progress import Bar
@@ -84,8 +84,8 @@ def _measure_one(kind: str, method: str, backend: str, batches, budget_s: float)
 
 
 def family_of(method: str) -> str:
-    """Kernel family of a method for straight elements."""
-    return {"gram": "gram_straight"}.get(method, method)
+    """Kernel family of a method for straight elements of the default law."""
+    return family_name(method, DEFAULT_LAW, "straight")
 
 
 def table(kind: str, rows: list[dict]) -> str:
@@ -113,17 +113,16 @@ def table(kind: str, rows: list[dict]) -> str:
                 ratios = ", ".join(f"{q} {quad[f'{q}_us'] / gram[f'{q}_us']:.1f}x"
                                    for q in QUANTITIES)
                 lines.append(f"- quadrature/gram time ratio, {backend}, batch {batch}: {ratios}")
-    for backend in ("numpy",):
-        for batch in sorted({r["batch"] for r in rows}):
-            slow, fast = by_key.get(("gram", backend, batch)), by_key.get(("gram", "c", batch))
-            if slow and fast:
-                lines.append(f"- numpy/C time ratio for gram force, batch {batch}: "
-                             f"{slow['force_us'] / fast['force_us']:.1f}x")
+    for batch in sorted({r["batch"] for r in rows}):
+        slow, fast = by_key.get(("gram", "numpy", batch)), by_key.get(("gram", "c", batch))
+        if slow and fast:
+            lines.append(f"- numpy/C time ratio for gram force, batch {batch}: "
+                         f"{slow['force_us'] / fast['force_us']:.1f}x")
     lines.append(f"- operations per element force: paper with invariants "
                  f"{PAPER_OPERATIONS['cij']:.3g}, without {PAPER_OPERATIONS['quadrature']:.3g}; "
-                 f"here cij {meta.operations('cij', 'force')}, gram "
-                 f"{meta.operations('gram_straight', 'force')}, quadrature "
-                 f"{meta.operations('quadrature', 'force')}")
+                 f"here cij {meta.operations(family_of('cij'), 'force')}, gram "
+                 f"{meta.operations(family_of('gram'), 'force')}, quadrature "
+                 f"{meta.operations(family_of('quadrature'), 'force')}")
     return "\n".join(lines) + "\n"
 
 

@@ -20,12 +20,14 @@ built and the stepper compiled before; sensors are not evaluated), as Exudyn's s
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import scenes
+from runtime.catalog import ENGINES, NEWTON_MODES
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
@@ -122,19 +124,18 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
             cases.append(Case(table, f"{engine} {newton} {method}",
                               _ours(scene, engine, newton, method, "tip_y")))
         if with_peer:
-            for newton in ("modified", "full"):
+            for newton in peers.NEWTON:
                 cases.append(Case(table, f"Exudyn ANCFBeam {newton}", _exudyn(
                     peers.exudyn_cantilever, elements=elements, t_end=t_cantilever,
                     step=1e-3, newton=newton)))
     table = f"rotating beam, 10 beam2d, {t_rotating:g} s, generalized-alpha, h = 1e-3"
     scene = _scene("rotating_beam", t_end=t_rotating, step=1e-3, integrator="generalized_alpha",
                   rho_inf=0.8)
-    for engine, newton in (("compiled", "full"), ("compiled", "modified"),
-                           ("python", "full"), ("python", "modified")):
+    for engine, newton in itertools.product(ENGINES, NEWTON_MODES):
         cases.append(Case(table, f"{engine} {newton} gram",
                           _ours(scene, engine, newton, tip="tip_transverse")))
     if with_peer:
-        for newton in ("modified", "full"):
+        for newton in peers.NEWTON:
             cases.append(Case(table, f"Exudyn ANCFCable2D {newton}", _exudyn(
                 peers.exudyn_rotating_beam, elements=10, t_end=t_rotating, step=1e-3,
                 newton=newton, integrator="generalized_alpha", rho_inf=0.8)))
@@ -199,7 +200,7 @@ def step_table(sizes=(10, 100, 1000, 10_000, 100_000), python_limit: int = 10_00
     lines = ["| beam3d elements | engine | free coordinates | us per step | "
              "us per element-step | Newton per step | kernel share | factorisation share |",
              "|---:|---|---:|---:|---:|---:|---:|---:|"]
-    runs = [(size, engine) for size in sizes for engine in ("compiled", "python")
+    runs = [(size, engine) for size in sizes for engine in ENGINES
             if engine == "compiled" or size <= python_limit]
     with enabled(progress), Bar("step cost", len(runs), "cases") as bar:
         rows = []

@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 
 import scenes
-from runtime.catalog import METHODS
+from runtime.catalog import DEFAULT_LAW, METHODS, family_name
 from runtime.kernels.kind import element_kind
 from runtime.model.scene import Scene, load_scene
 
@@ -76,7 +76,7 @@ def paper_case(table: str, elements: int, t_end: float, method: str, backend: st
         raise RuntimeError(f"paper row {table}/{elements}/{t_end}/{method}: "
                            f"{summary['message']}")
     timing = summary["timing"]
-    family = {"gram": "gram_straight"}.get(method, method)
+    family = family_name(method, DEFAULT_LAW, "straight")
     return {
         "table": table, "elements": elements, "t_end": t_end, "method": method,
         "backend": backend, "step": scene.dynamic.step,

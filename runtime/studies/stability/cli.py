@@ -1,0 +1,41 @@
+"""``ancf study stability``: the command's options and its handler (run the study, write the
+files, print the Markdown).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from runtime.studies.stability.measure import stability_study
+from runtime.studies.stability.report import markdown, write
+
+
+def cmd_stability(args: argparse.Namespace) -> int:
+    """``ancf study stability``: run, print the Markdown, write the files; exit code 0 even
+    when rows fail (the table reports them)."""
+    start = time.perf_counter()
+    rows = stability_study(scheduler=args.scheduler, workers=args.workers, quick=args.quick,
+                           serial=args.serial)
+    wall = time.perf_counter() - start
+    paths = write(rows, args.out, wall)
+    print(markdown(rows, wall))
+    print(f"written: {', '.join(str(p) for p in paths.values())}")
+    return 0
+
+
+def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register ``stability`` in the ``study`` sub-command group ``subparsers`` (the object
+    returned by ``add_subparsers``); the handler is set as ``run`` (``args.run(args)``)."""
+    parser = subparsers.add_parser(
+        "stability", help="extreme cases: kernel accuracy, integrators, Newton, locking")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="address of a running dask scheduler (default: a local cluster)")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="processes of the local cluster (default: one per core)")
+    parser.add_argument("--out", default="results/stability", help="results folder")
+    parser.add_argument("--quick", action="store_true", help="a small subset (seconds)")
+    parser.add_argument("--serial", action="store_true",
+                        help="run the cases in this process (no dask)")
+    parser.set_defaults(run=cmd_stability)
+    return parser
