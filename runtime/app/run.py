@@ -18,7 +18,8 @@ import numpy as np
 from runtime import progress
 from runtime.app import shapes
 from runtime.app import writers as output
-from runtime.app.simulation import Observer, Simulation, requested
+from runtime.app.result import Observer
+from runtime.app.simulation import Simulation, requested
 from runtime.app.summary import Summary
 from runtime.kernels.jit import CacheError, JitEnvironmentError
 from runtime.model.items.sensors import ENERGY_TYPES
