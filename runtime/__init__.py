@@ -5,7 +5,8 @@ validation and messages as TOML files, ``Scene.to_toml()``, ``load_scene(path)``
 ``run_scene(scene) -> Result`` (every analysis in memory, no file written).
 """
 
-from runtime.app.simulation import Result, run_scene
+from runtime.app.result import Result
+from runtime.app.simulation import run_scene
 from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError

@@ -53,6 +53,7 @@ from runtime import (
     StrainEnergy,
     Table,
     TotalEnergy,
+    Velocity,
     Weld,
     load_scene,
 )
@@ -234,7 +235,7 @@ def test_registries_are_keyed_by_type():
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
-                             "constraint_violation"]
+                             "constraint_violation", "velocity"]
 
 
 def test_output_table():
@@ -430,7 +431,7 @@ def random_scene(rng: random.Random) -> Scene:
             StrainEnergy(name, rng.choice([None, body.name])),
             KineticEnergy(name, rng.choice([None, body.name])),
             PotentialEnergy(name), TotalEnergy(name), DissipatedEnergy(name),
-            ConstraintViolation(name)]
+            ConstraintViolation(name), Velocity(name, node, rng.choice(components))]
         sensors.append(rng.choice(options))
 
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \

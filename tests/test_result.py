@@ -14,8 +14,9 @@ import pytest
 import scipy.linalg
 from scenes_small import body, cantilever, scene
 
+from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.run import run
-from runtime.app.simulation import Modes, Observer, Result, States, requested, run_scene
+from runtime.app.simulation import requested, run_scene
 from runtime.model.errors import SceneError
 from runtime.model.scene import parse_scene
 from runtime.model.toml_io import toml_text

@@ -18,7 +18,9 @@ import numpy as np
 from runtime import progress
 from runtime.app import shapes
 from runtime.app import writers as output
-from runtime.app.simulation import TIMING_KEYS, Observer, Simulation, requested
+from runtime.app.result import Observer
+from runtime.app.simulation import Simulation, requested
+from runtime.app.summary import Summary
 from runtime.kernels.jit import CacheError, JitEnvironmentError
 from runtime.model.errors import SceneError
 from runtime.model.scene import Scene, load_scene
@@ -49,11 +51,11 @@ class RunInterrupted(KeyboardInterrupt):
 
 
 class _Stop(Exception):
-    """Ends a run early: exit code, status and message."""
+    """Ends a run early (status "failed"): exit code and message."""
 
-    def __init__(self, code: ExitCode, message: str, status: str = "failed") -> None:
+    def __init__(self, code: ExitCode, message: str) -> None:
         super().__init__(message)
-        self.code, self.status = code, status
+        self.code = code
 
 
 def run(scene_path, out_dir: str | Path, method: str | None = None,
@@ -84,21 +86,20 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
         with progress.enabled(not quiet):
             code = job.execute(method, backend, plots, engine, vtk, animation, plane)
     except _Stop as stop:
-        job.summary.update(status=stop.status, message=str(stop))
+        job.summary.failed(str(stop))
         code = job.save(stop.code)
     except KeyboardInterrupt as interrupt:
-        job.summary.update(status="interrupted", message=job.interrupted(interrupt))
+        job.summary.interrupted(job.interrupted(interrupt))
         job.save(ExitCode.INTERRUPTED)
-        raise RunInterrupted(job.summary) from None
+        raise RunInterrupted(job.summary.to_dict()) from None
     except MemoryError:
-        job.summary.update(status="failed", message=f"out of memory during the {job.phase}")
+        job.summary.failed(f"out of memory during the {job.phase}")
         code = job.save(ExitCode.ENVIRONMENT)
     except Exception as error:  # a bug: still leave a summary that says what happened
-        job.summary.update(status="failed", traceback=traceback.format_exc(),
-                           message=f"internal error during the {job.phase}: "
-                                   f"{type(error).__name__}: {error}")
+        job.summary.failed(f"internal error during the {job.phase}: "
+                           f"{type(error).__name__}: {error}", traceback.format_exc())
         code = job.save(ExitCode.INTERNAL)
-    return job.summary, code
+    return job.summary.to_dict(), code
 
 
 class _CsvWriter(Observer):
@@ -128,10 +129,7 @@ class _Job:
         self.start = time.perf_counter()
         self.scene_path, self.out = scene_path, out
         given = isinstance(scene_path, Scene)
-        self.summary: dict = {"scene": scene_path.source if given else str(scene_path),
-                              "status": "ok", "message": "", "warnings": []}
-        self.timing = dict.fromkeys(TIMING_KEYS, 0.0)
-        self.summary["timing"] = self.timing
+        self.summary = Summary(scene_path.source if given else str(scene_path))
         self.folder_error: str | None = "the output folder is not ready"
         self.files: set[str] = set()
         self.simulation: Simulation | None = None
@@ -202,7 +200,7 @@ class _Job:
             if animation:
                 drawn = self._shapes(scene, simulation, frames, plane) or drawn
             if drawn:
-                self.timing["postprocess_s"] += time.perf_counter() - post_start
+                self.summary.timing.postprocess_s += time.perf_counter() - post_start
                 code = self.save(code)
         return code
 
@@ -217,7 +215,8 @@ class _Job:
         written, warnings = output.plot_series(history["t"], series, self.out, units,
                                                sensors.energy_names)
         self.files.update(path.name for path in written)
-        self.summary["warnings"] += warnings
+        for text in warnings:
+            self.summary.warn(text)
         return True
 
     def _shapes(self, scene: Scene, simulation: Simulation, frames: shapes.Frames | None,
@@ -238,34 +237,29 @@ class _Job:
                 draw(self.out / name)
                 self.files.add(name)
             except Exception as error:
-                self.summary["warnings"].append(
-                    f"{name}: not written ({type(error).__name__}: {error})")
+                self.summary.warn(f"{name}: not written ({type(error).__name__}: {error})")
         return bool(drawn)
 
     def save(self, code: ExitCode) -> ExitCode:
         """Write summary.json (total time and files updated); returns ``code``, or 3
         (environment) if the summary cannot be written and the code was not 2 or 130."""
         summary = self.summary
-        self.timing["total_s"] = time.perf_counter() - self.start
+        summary.timing.total_s = time.perf_counter() - self.start
         problem = None
         if self.folder_error is not None:
             problem = f"no {SUMMARY} written"
-            if summary["message"] != self.folder_error:
+            if summary.message != self.folder_error:
                 problem = f"{self.folder_error}; {problem}"
         else:
-            summary["files"] = sorted(self.files | {SUMMARY})
+            summary.record_files(sorted(self.files | {SUMMARY}))
             try:
-                output.write_json_atomic(self.out / SUMMARY, summary)
+                output.write_json_atomic(self.out / SUMMARY, summary.to_dict())
             except OSError as error:
-                summary["files"] = sorted(self.files)
+                summary.record_files(sorted(self.files))
                 problem = f"{SUMMARY} not written ({error.strerror or error})"
         if problem is None:
             return code
-        if summary["status"] == "ok":
-            summary.update(status="failed", message=problem)
-        else:
-            first, *rest = summary["message"].split("\n", 1)
-            summary["message"] = "\n".join([f"{first}; {problem}", *rest])
+        summary.add_problem(problem)
         if code in (ExitCode.INVALID, ExitCode.INTERRUPTED):
             return code
         return ExitCode.ENVIRONMENT
@@ -276,9 +270,9 @@ class _Job:
         if self.phase == "plots":
             return f"interrupted{by} while drawing the plots; the results are complete"
         message = f"interrupted{by} during the {self.phase}"
-        dynamic = self.summary.get("dynamic")
+        dynamic = self.summary.dynamic
         if self.phase == "dynamic analysis" and dynamic is not None:
-            message += (f" at t = {dynamic['t_reached']:.6g} s; {CSV} keeps the rows up to "
+            message += (f" at t = {dynamic.t_reached:.6g} s; {CSV} keeps the rows up to "
                         f"then")
         return message
 

@@ -31,7 +31,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from runtime.app import writers as output
-from runtime.app.simulation import Modes, Observer
+from runtime.app.result import Modes, Observer
 from runtime.kernels.kind import ElementKind
 from runtime.kernels.loader import kernel_family
 from runtime.model.model import BodyMesh, Model

@@ -1,6 +1,7 @@
-"""``run_scene``: every analysis of a scene in memory, with no file I/O, into a ``Result``.
+"""``run_scene``: every analysis of a scene in memory, with no file I/O, into a ``Result``
+(``runtime.app.result``), what it did recorded in a ``Summary`` (``runtime.app.summary``).
 
-``ancf run`` (``runtime.app.run``) is ``run_scene`` plus writers: they are :class:`Observer`
+``ancf run`` (``runtime.app.run``) is ``run_scene`` plus writers: they are ``Observer``
 objects that receive the results as they are computed (the time-series CSV and the VTU
 series stream rows and files while the dynamic analysis goes on).
 """
@@ -10,13 +11,14 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from runtime import progress
+from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.signal import dominant_frequency
+from runtime.app.summary import DynamicSummary, Summary
 from runtime.kernels.kind import element_kind
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
@@ -28,86 +30,7 @@ from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
 from runtime.solve.python_engine import Divergence
 
-__all__ = ["Modes", "Observer", "Result", "Simulation", "States", "requested", "run_scene"]
-
-TIMING_KEYS = ("generate_s", "compile_s", "preprocess_s", "simulate_s", "postprocess_s",
-               "total_s")
-
-
-@dataclass
-class States:
-    """Coordinates and velocities of the whole model at the dynamic output times:
-    ``t`` (n,) s, ``q`` (n, size) m (gradients unitless), ``v`` (n, size) m/s (1/s)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-
-
-@dataclass
-class Modes:
-    """Modal analysis: ``frequencies_rad_s`` (k,) ascending, ``shapes`` (k, size) full
-    coordinate vectors (fixed and prescribed coordinates zero) normalised to a largest nodal
-    position component of +1, ``about`` (size,) the linearisation point."""
-
-    frequencies_rad_s: np.ndarray
-    shapes: np.ndarray
-    about: np.ndarray
-
-
-@dataclass
-class Result:
-    """What ``run_scene`` computed.
-
-    summary: what ``summary.json`` holds, less what the writers add (``files``, the plots'
-    ``timing.postprocess_s`` and warnings); sensors: {"t": output times (n,) s, sensor
-    name: values (n,)} of the dynamic analysis ({} without one; static values are in
-    ``summary["static"]["sensors"]``); static: equilibrium coordinates (size,) or None;
-    modes: :class:`Modes` or None; states: :class:`States` when asked, else None; model:
-    the ``Model`` (indexing, reference, sampling of shapes); exit_code: 0 ok, 1 diverged
-    (results kept up to then).
-    """
-
-    summary: dict
-    sensors: dict[str, np.ndarray]
-    static: np.ndarray | None
-    modes: Modes | None
-    states: States | None
-    model: Model
-    exit_code: int
-
-    @property
-    def status(self) -> str:
-        """``ok`` or ``diverged``."""
-        return self.summary["status"]
-
-
-class Observer:
-    """Receives a run's results as they are computed; every hook does nothing by default.
-
-    Order: ``begin`` once the model is built; ``static``, ``modal`` after those analyses;
-    ``dynamic_start``, ``sample`` at every output time (t = 0 included), then
-    ``dynamic_end`` however the dynamic analysis ends (when it ends by an exception, errors
-    of ``dynamic_end`` are ignored).  An exception of a hook stops the run.
-    """
-
-    def begin(self, model: Model) -> None:
-        """The model is built (kernels compiled); analyses follow."""
-
-    def static(self, q: np.ndarray) -> None:
-        """Static equilibrium coordinates (size,)."""
-
-    def modal(self, modes: Modes) -> None:
-        """Frequencies and mode shapes."""
-
-    def dynamic_start(self, names: list[str]) -> None:
-        """The dynamic analysis starts; ``names``: sensors in scene order."""
-
-    def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
-        """Output time t (s): coordinates, velocities (size,) and sensor values."""
-
-    def dynamic_end(self) -> None:
-        """The dynamic analysis ended (completed, diverged, interrupted or failed)."""
+__all__ = ["Simulation", "requested", "run_scene"]
 
 
 def requested(scene: Scene, name: str) -> bool:
@@ -118,8 +41,9 @@ def requested(scene: Scene, name: str) -> bool:
 
 class Simulation:
     """One in-memory run of ``scene``: :meth:`build`, then :meth:`analyses`, then
-    :meth:`result`.  ``summary`` (the dict given, or a new one) is filled as the run goes,
-    so it says what was done when an exception stops it; ``phase`` names the current step.
+    :meth:`result`.  ``summary`` (the :class:`Summary` given, or a new one) is filled as the
+    run goes, so it says what was done when an exception stops it; ``phase`` names the
+    current step.
 
     method, backend, engine: overrides of the scene's ``[solver]``; store_states: keep
     :class:`States`; observers: :class:`Observer` objects, called in order.
@@ -127,15 +51,13 @@ class Simulation:
 
     def __init__(self, scene: Scene, method: str | None = None, backend: str | None = None,
                  engine: str | None = None, store_states: bool = False,
-                 observers: Sequence[Observer] = (), summary: dict | None = None) -> None:
+                 observers: Sequence[Observer] = (), summary: Summary | None = None) -> None:
         self.scene, self.method, self.backend = scene, method, backend
         self.engine_name = engine
         self.store_states = store_states
         self.observers = list(observers)
-        self.summary = summary if summary is not None else {
-            "scene": scene.source, "status": "ok", "message": "", "warnings": []}
-        self.timing = self.summary.setdefault("timing", dict.fromkeys(TIMING_KEYS, 0.0))
-        self.summary["title"] = scene.title
+        self.summary = summary if summary is not None else Summary(scene.source)
+        self.summary.record_title(scene.title)
         self.phase = "model build"
         self.model: Model | None = None
         self.static_q: np.ndarray | None = None
@@ -151,16 +73,15 @@ class Simulation:
         model = Model(self.scene, self.method, self.backend)
         self.engine_name = engines.choose(self.engine_name or self.scene.solver.engine,
                                           model.backend)
-        self.summary["method"], self.summary["backend"] = model.method, model.backend
-        self.timing["compile_s"] = model.timing["compile_s"]
-        self.timing["preprocess_s"] = model.timing["preprocess_s"]
+        self.summary.record_build(model.method, model.backend, model.timing["compile_s"],
+                                  model.timing["preprocess_s"])
         self.sensors = Sensors(model)
         self.model = model
         if self.scene.static is not None or (self.scene.modal is not None
                                              and self.scene.modal.about == "static"):
             analysis.check_held(model)   # before any work: a free body has no equilibrium
         for text in locking_warnings(self.scene):
-            self.summary["warnings"].append(text)
+            self.summary.warn(text)
             progress.warn(text)
         for observer in self.observers:
             observer.begin(model)
@@ -171,15 +92,15 @@ class Simulation:
         Returns 0, or 1 when one diverged (status "diverged"; the later ones do not run).
         Other exceptions propagate (``summary`` keeps what was done)."""
         scene, model, summary = self.scene, self.model, self.summary
+        timing = summary.timing
         start = time.perf_counter()
         try:
             if scene.static is not None:
                 self.phase = "static analysis"
                 found = analysis.solve_static(model, scene.static)
                 self.static_q = found.q
-                summary["static"] = {"sensors": self.sensors.values(found.q, t=None),
-                                     "iterations": found.iterations,
-                                     "load_steps": found.load_steps}
+                summary.record_static(self.sensors.values(found.q, t=None), found.iterations,
+                                      found.load_steps)
                 for observer in self.observers:
                     observer.static(found.q)
             if scene.modal is not None:
@@ -188,19 +109,19 @@ class Simulation:
             if scene.dynamic is not None:
                 return self._dynamic(scene.dynamic)
         except analysis.ConvergenceError as error:
-            summary.update(status="diverged", message=str(error))
+            summary.diverged(str(error))
             return 1
         finally:
             # post-processing (frequency fit) is timed apart from the simulation
-            self.timing["simulate_s"] = (time.perf_counter() - start
-                                         - self.timing["postprocess_s"])
+            timing.simulate_s = time.perf_counter() - start - timing.postprocess_s
             # the Python engine's kernel calls go through the model, the compiled one's not
-            compiled = summary.get("dynamic", {}).get("engine") == "compiled"
-            summary["kernel_s"] = model.kernel_seconds + (
-                summary["dynamic"]["kernel_s"] if compiled else 0.0)
-            summary["kernels"] = sorted(self._built | {
-                f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
-                for f in b.element.loaded_families})
+            dynamic = summary.dynamic
+            compiled = dynamic is not None and dynamic.engine == "compiled"
+            summary.record_kernels(
+                model.kernel_seconds + (dynamic.kernel_s if compiled else 0.0),
+                sorted(self._built | {
+                    f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
+                    for f in b.element.loaded_families}))
         return 0
 
     def _modal(self) -> None:
@@ -210,14 +131,8 @@ class Simulation:
             about = self.static_q if self.static_q is not None else \
                 analysis.solve_static(model, self.scene.static or Static()).q
         found = modal_shapes(model, about, settings.modes)
-        omega = found.frequencies
-        self.modes = Modes(omega, found.shapes, np.array(about))
-        self.summary["modal"] = {"about": settings.about, "frequencies_rad_s": omega.tolist(),
-                                 "frequencies_hz": (omega / (2 * np.pi)).tolist()}
-        if model.damped:
-            self.summary["modal"]["damping"] = (
-                "ignored: undamped natural frequencies (Kelvin-Voigt damping gives mode k the "
-                "damping ratio alpha omega_k / 2)")
+        self.modes = Modes(found.frequencies, found.shapes, np.array(about))
+        self.summary.record_modal(settings.about, found.frequencies, model.damped)
         for observer in self.observers:
             observer.modal(self.modes)
 
@@ -234,11 +149,11 @@ class Simulation:
 
     def _dynamic(self, settings) -> int:
         """The dynamic analysis with the chosen engine (``runtime.solve.engines``); fills
-        summary["dynamic"] however it ends."""
+        the summary's ``dynamic`` however it ends."""
         self.phase = "dynamic analysis"
-        summary, names = self.summary, self.sensors.names
+        names = self.sensors.names
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
-        self.timing["compile_s"] += engine.compile_s
+        self.summary.timing.compile_s += engine.compile_s
         self._built.update(engine.modules)
         self.history = {name: [] for name in ["t", *names]}
         for observer in self.observers:
@@ -249,25 +164,14 @@ class Simulation:
             engine.run(settings.t_end, settings.step, self._observe, bar)
             failed = False
         except Divergence as error:
-            summary.update(status="diverged", message=str(error))
+            self.summary.diverged(str(error))
             code, failed = 1, False
         finally:
             bar.close()
-            history, counters = self.history, engine.counters
-            summary["dynamic"] = {
-                "t_end": settings.t_end, "step": settings.step,
-                "integrator": settings.integrator, "engine": engine.engine,
-                "newton": engine.newton,
-                "t_reached": history["t"][-1] if history["t"] else 0.0,
-                "steps": counters.steps, "newton_iterations": counters.newton_iterations,
-                "force_evaluations": counters.force_evaluations,
-                "jacobian_evaluations": counters.jacobian_evaluations,
-                "factorisations": counters.factorisations,
-                "kernel_s": engine.timing["kernel_s"],
-                "steps_s": engine.timing["steps_s"],
-                "sensors_final": {name: history[name][-1] for name in names
-                                  if history[name]},
-            }
+            history = self.history
+            self.summary.record_dynamic(DynamicSummary.of(
+                settings, engine, history["t"][-1] if history["t"] else 0.0,
+                {name: history[name][-1] for name in names if history[name]}))
             for observer in self.observers:
                 with contextlib.suppress(Exception) if failed else contextlib.nullcontext():
                     observer.dynamic_end()
@@ -281,13 +185,12 @@ class Simulation:
         t = np.asarray(self.history["t"])
         keep = t >= settings.frequency_after
         try:
-            frequency = dominant_frequency(
-                t[keep], np.asarray(self.history[settings.frequency_of])[keep])
+            frequency, warning = dominant_frequency(
+                t[keep], np.asarray(self.history[settings.frequency_of])[keep]), None
         except ValueError as error:  # too few samples, a constant signal
-            frequency = None
-            self.summary["warnings"].append(f"analysis.dynamic.frequency_of: {error}")
-        self.summary["dynamic"]["response_frequency_rad_s"] = frequency
-        self.timing["postprocess_s"] += time.perf_counter() - start
+            frequency, warning = None, f"analysis.dynamic.frequency_of: {error}"
+        self.summary.record_frequency(frequency, warning)
+        self.summary.timing.postprocess_s += time.perf_counter() - start
 
     def result(self, exit_code: int) -> Result:
         """The :class:`Result` of the run so far."""
@@ -297,8 +200,8 @@ class Simulation:
             size = self.model.size
             q, v = (np.array(x).reshape(-1, size) for x in self._states)
             states = States(np.asarray(self.history["t"], float), q, v)
-        return Result(self.summary, sensors, self.static_q, self.modes, states, self.model,
-                      exit_code)
+        return Result(self.summary.to_dict(), sensors, self.static_q, self.modes, states,
+                      self.model, exit_code)
 
 
 def locking_warnings(scene: Scene) -> list[str]:
@@ -350,5 +253,5 @@ def run_scene(scene: Scene | str | Path, method: str | None = None,
     with enabled(progress):
         simulation.build()
         code = simulation.analyses()
-    simulation.timing["total_s"] = time.perf_counter() - start
+    simulation.summary.timing.total_s = time.perf_counter() - start
     return simulation.result(code)

@@ -220,8 +220,8 @@ class ConstraintViolation(Sensor):
 
 
 SENSORS: dict[str, type[Sensor]] = registry(
-    Displacement, Position, Velocity, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
-    DissipatedEnergy, ConstraintViolation)
+    Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
+    DissipatedEnergy, ConstraintViolation, Velocity)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
