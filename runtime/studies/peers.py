@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from runtime.catalog import INTEGRATORS
+from runtime.catalog import INTEGRATORS, NEWTON_MODES
 
 # paper cantilever (DESIGN.md section 6, scenes/cantilever.toml)
 CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 8245.2,
@@ -48,7 +48,8 @@ CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 824
 ROTATING_BEAM = {"length": 8.0, "area": 7.299e-5, "inertia": 8.215e-9, "E": 68.95e9,
                  "rho": 2766.67, "omega": 4.0, "t_ramp": 15.0}
 TOLERANCE = 1e-10           # Newton, relative to the model size, as the project's default
-NEWTON = ("modified", "full")
+#: Newton modes run with Exudyn, its default (modified Newton) first
+NEWTON = tuple(sorted(NEWTON_MODES, key=lambda mode: mode != "modified"))
 
 
 @dataclass
