@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.kernels.jit import JitEnvironmentError
+from runtime.kernels.errors import JitEnvironmentError
 
 METHOD_FAMILIES = {
     "invariants": ["invariants", "invariants_general"],

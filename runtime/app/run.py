@@ -19,7 +19,7 @@ from runtime import progress
 from runtime.app import shapes
 from runtime.app import writers as output
 from runtime.app.simulation import TIMING_KEYS, Observer, Simulation, requested
-from runtime.kernels.jit import CacheError, JitEnvironmentError
+from runtime.kernels.errors import CacheError, JitEnvironmentError
 from runtime.model.items.sensors import ENERGY_TYPES
 from runtime.model.scene import Scene, SceneError, load_scene
 
