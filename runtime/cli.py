@@ -17,13 +17,6 @@ from typing import NoReturn
 from runtime import progress
 from runtime.kernels.errors import JitEnvironmentError
 
-METHOD_FAMILIES = {
-    "invariants": ["invariants", "invariants_general"],
-    "quadrature": ["quadrature"],
-    "cij": ["cij"],
-    "gram": ["gram_straight", "gram_general"],
-}
-
 
 def _orders(text: str) -> tuple[int, ...]:
     try:
@@ -37,6 +30,7 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
                    out: Path) -> list[Path]:
     from symgen import emit
     from symgen.elements import get
+    from symgen.methods import METHOD_FAMILIES
 
     families = None
     if methods:
@@ -231,6 +225,7 @@ def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.app.shapes import AUTO_PLANE, PLANES
     from runtime.catalog import BACKENDS, ENGINES, METHODS
+    from symgen.methods import METHOD_FAMILIES
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)

@@ -16,9 +16,11 @@ from pathlib import Path
 import jinja2
 import sympy as sp
 
-from symgen import derive, kernels, laws
+from symgen import derive, laws, methods
 from symgen.element import ElementSpec
 from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
+from symgen.methods.cij import cij_sizes
+from symgen.methods.common import closed_as_data
 from symgen.printing import code
 
 BACKENDS = ("c", "numpy")
@@ -222,11 +224,11 @@ def render_family(spec: ElementSpec, family: str, backend: str,
     """Source files of one family for one backend: {file name: text}."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    built = built if built is not None else kernels.build_family(spec, family)
+    built = built if built is not None else methods.build_family(spec, family)
     tables = next((k.loop_tables for k in built if k.loop_tables), None)
     context = {"banner": banner(spec, family), "element": spec.name, "family": family,
                "prefix": f"{spec.name}_{family}", "lanes": LOOPED_LANES if tables else LANES,
-               "kernels": [_template_kernel(k, kernels.optimization(family) > 0) for k in built],
+               "kernels": [_template_kernel(k, methods.optimization(family) > 0) for k in built],
                "loop_tables": tables}
     env = _environment()
     if backend == "c":
@@ -299,8 +301,8 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                 "cij": [list(x) for x in p.cij]}
             for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
         },
-        "cij_sizes": {v: kernels.cij_sizes(spec, v) for v in derive.VARIANTS},
-        "closed_tables": "closed.json" if kernels.closed_as_data(spec) else None,
+        "cij_sizes": {v: cij_sizes(spec, v) for v in derive.VARIANTS},
+        "closed_tables": "closed.json" if closed_as_data(spec) else None,
         "laws": {
             law.name: {"description": law.description,
                        "parts": [{"name": part.name, "domain": part.domain}
@@ -315,7 +317,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
         "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
-        "optimization": {family: kernels.optimization(family) for family in built},
+        "optimization": {family: methods.optimization(family) for family in built},
         "generator": {"version": GENERATOR_VERSION, "sympy": sp.__version__},
     }
 
@@ -354,13 +356,13 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
     """Write the chosen families and backends of ``spec`` (and its metadata) under ``out``."""
     folder = Path(out) / spec.name
     folder.mkdir(parents=True, exist_ok=True)
-    chosen = families or kernels.families(spec)
-    unknown = sorted(set(chosen) - set(kernels.families(spec)))
+    chosen = families or methods.families(spec)
+    unknown = sorted(set(chosen) - set(methods.families(spec)))
     if unknown:
         raise ValueError(f"unknown kernel families {unknown}; known: "
-                         f"{', '.join(kernels.families(spec))}")
+                         f"{', '.join(methods.families(spec))}")
     written = []
-    built = {family: kernels.build_family(spec, family) for family in kernels.families(spec)
+    built = {family: methods.build_family(spec, family) for family in methods.families(spec)
              if family in chosen or families is None}
     for family in chosen:
         for backend in backends:
@@ -368,7 +370,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                 path = folder / name
                 path.write_text(text)
                 written.append(path)
-    if families is None and kernels.closed_as_data(spec):
+    if families is None and closed_as_data(spec):
         path = folder / "closed.json"
         path.write_text(json.dumps(closed_tables(spec), sort_keys=True, separators=(",", ":"))
                         + "\n")
