@@ -15,14 +15,8 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.kernels.jit import JitEnvironmentError
-
-METHOD_FAMILIES = {
-    "invariants": ["invariants", "invariants_general"],
-    "quadrature": ["quadrature"],
-    "cij": ["cij"],
-    "gram": ["gram_straight", "gram_general"],
-}
+from runtime.catalog import BACKENDS, ENGINES, METHODS
+from runtime.kernels.errors import JitEnvironmentError
 
 
 def _orders(text: str) -> tuple[int, ...]:
@@ -37,6 +31,7 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
                    out: Path) -> list[Path]:
     from symgen import emit
     from symgen.elements import get
+    from symgen.methods import METHOD_FAMILIES
 
     families = None
     if methods:
@@ -56,7 +51,7 @@ def generation_diff(elements: list[str] | None = None, folder: Path | None = Non
     folder = folder or generated_dir()
     elements = elements or list(registry())
     with tempfile.TemporaryDirectory() as tmp:
-        fresh = _generate_into(elements, ["c", "numpy"], None, Path(tmp))
+        fresh = _generate_into(elements, list(BACKENDS), None, Path(tmp))
         chunks = []
         for path in sorted(fresh):
             relative = path.relative_to(tmp)
@@ -93,7 +88,7 @@ def cmd_generate(args) -> int:
         print(f"generated kernels in {out} are up to date")
         return 0
     start = time.perf_counter()
-    written = _generate_into(elements, args.backend or ["c", "numpy"], args.method, out)
+    written = _generate_into(elements, args.backend or list(BACKENDS), args.method, out)
     for path in written:
         print(path)
     print(f"generated {len(written)} files in {time.perf_counter() - start:.1f} s")
@@ -110,8 +105,8 @@ def cmd_invariants(args) -> int:
 def cmd_bench(args) -> int:
     from runtime.studies import bench_kernels as bench
 
-    print(bench.run(args.element, batch=args.batch, methods=args.method or bench.METHODS,
-                    backends=args.backend or bench.BACKENDS))
+    print(bench.run(args.element, batch=args.batch, methods=args.method or METHODS,
+                    backends=args.backend or BACKENDS))
     return 0
 
 
@@ -230,14 +225,14 @@ class _Parser(argparse.ArgumentParser):
 def parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf``."""
     from runtime.app.shapes import AUTO_PLANE, PLANES
-    from runtime.catalog import BACKENDS, ENGINES, METHODS
+    from symgen.methods import METHOD_FAMILIES
 
     main = _Parser(prog="ancf", description=__doc__)
     sub = main.add_subparsers(dest="command", required=True)
 
     gen = sub.add_parser("generate", help="regenerate kernels from symgen into generated/")
     gen.add_argument("--element", action="append", help="element kind (repeatable; default all)")
-    gen.add_argument("--backend", action="append", choices=["c", "numpy"])
+    gen.add_argument("--backend", action="append", choices=list(BACKENDS))
     gen.add_argument("--method", action="append", choices=list(METHOD_FAMILIES))
     gen.add_argument("--out", help="output folder (default: the package's generated/)")
     gen.add_argument("--check", action="store_true",

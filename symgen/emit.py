@@ -10,16 +10,17 @@ from __future__ import annotations
 
 import json
 import sys
-from importlib import resources
 from pathlib import Path
 
-import jinja2
 import sympy as sp
 
-from symgen import derive, kernels, laws
+from symgen import derive, laws, methods
 from symgen.element import ElementSpec
 from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
+from symgen.methods.cij import cij_sizes
+from symgen.methods.common import closed_as_data
 from symgen.printing import code
+from templates import environment
 
 BACKENDS = ("c", "numpy")
 #: Elements per SIMD batch of the C kernels (GCC vector extensions: vectors of LANES doubles)
@@ -39,16 +40,6 @@ LOOPED_LANES = 8
 #: (``SV`` vector, ``SD`` scalar).
 C_PART_CHARS = 50_000
 GENERATOR_VERSION = "1"
-
-
-def _environment() -> jinja2.Environment:
-    loader = jinja2.FunctionLoader(
-        lambda name: resources.files("templates").joinpath(name).read_text()
-    )
-    env = jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined,
-                             trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True)
-    env.filters["append_suffix"] = lambda text, suffix: f"{text}{suffix}"
-    return env
 
 
 def banner(spec: ElementSpec, family: str) -> str:
@@ -173,21 +164,30 @@ def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
         for i, part in enumerate(parts)]}
 
 
-def _c_signature(kernel: Kernel) -> str:
-    parts = ["long m"]
+def c_parameters(kernel: Kernel) -> list[dict]:
+    """The C parameters of ``kernel`` in order (its calling convention, which element.json
+    records for the runtime), each {type, name, part, array}: ``long m`` (part ``count``, no
+    array), then per array by role: batch -> its values and row stride (``const double *``,
+    ``long``; stride 0 shares one row), shared -> its values, csr -> indptr, indices (``const
+    int *``) and data, table -> its number of points (``long``) and values, output -> its
+    values (``double *``); local arrays are not parameters."""
+    parameters = [{"type": "long", "name": "m", "part": "count"}]
+    layout = {"batch": [("const double *", "{}_in", "values"), ("long", "{}_stride", "stride")],
+              "shared": [("const double *", "{}", "values")],
+              "csr": [("const int *", "{}_indptr", "indptr"),
+                      ("const int *", "{}_indices", "indices"),
+                      ("const double *", "{}_data", "data")],
+              "table": [("long", "npoints", "points"), ("const double *", "{}_in", "values")],
+              "output": [("double *", "{}_out", "values")], "local": []}
     for a in kernel.arrays:
-        if a.role == "batch":
-            parts += [f"const double *{a.name}_in", f"long {a.name}_stride"]
-        elif a.role == "shared":
-            parts.append(f"const double *{a.name}")
-        elif a.role == "csr":
-            parts += [f"const int *{a.name}_indptr", f"const int *{a.name}_indices",
-                      f"const double *{a.name}_data"]
-        elif a.role == "table":
-            parts += ["long npoints", f"const double *{a.name}_in"]
-        elif a.role == "output":
-            parts.append(f"double *{a.name}_out")
-    return ", ".join(parts)
+        parameters += [{"type": ctype, "name": name.format(a.name), "part": part,
+                        "array": a.name} for ctype, name, part in layout[a.role]]
+    return parameters
+
+
+def _c_signature(kernel: Kernel) -> str:
+    return ", ".join(f"{p['type']}{'' if p['type'].endswith('*') else ' '}{p['name']}"
+                     for p in c_parameters(kernel))
 
 
 def _py_signature(kernel: Kernel) -> str:
@@ -222,13 +222,13 @@ def render_family(spec: ElementSpec, family: str, backend: str,
     """Source files of one family for one backend: {file name: text}."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    built = built if built is not None else kernels.build_family(spec, family)
+    built = built if built is not None else methods.build_family(spec, family)
     tables = next((k.loop_tables for k in built if k.loop_tables), None)
     context = {"banner": banner(spec, family), "element": spec.name, "family": family,
                "prefix": f"{spec.name}_{family}", "lanes": LOOPED_LANES if tables else LANES,
-               "kernels": [_template_kernel(k, kernels.optimization(family) > 0) for k in built],
+               "kernels": [_template_kernel(k, methods.optimization(family) > 0) for k in built],
                "loop_tables": tables}
-    env = _environment()
+    env = environment()
     if backend == "c":
         return {f"{family}.c": env.get_template("c_kernels.c.j2").render(context),
                 f"{family}.h": env.get_template("c_header.h.j2").render(context)}
@@ -275,6 +275,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
             k.name: {
                 "arrays": [{"name": a.name, "size": a.size, "role": a.role}
                            for a in k.arrays],
+                "parameters": c_parameters(k),
                 "operations": kernel_operations(k),
             }
             for k in family_kernels
@@ -299,8 +300,8 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                 "cij": [list(x) for x in p.cij]}
             for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
         },
-        "cij_sizes": {v: kernels.cij_sizes(spec, v) for v in derive.VARIANTS},
-        "closed_tables": "closed.json" if kernels.closed_as_data(spec) else None,
+        "cij_sizes": {v: cij_sizes(spec, v) for v in derive.VARIANTS},
+        "closed_tables": "closed.json" if closed_as_data(spec) else None,
         "laws": {
             law.name: {"description": law.description,
                        "parts": [{"name": part.name, "domain": part.domain}
@@ -315,7 +316,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
         "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
-        "optimization": {family: kernels.optimization(family) for family in built},
+        "optimization": {family: methods.optimization(family) for family in built},
         "generator": {"version": GENERATOR_VERSION, "sympy": sp.__version__},
     }
 
@@ -354,13 +355,13 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
     """Write the chosen families and backends of ``spec`` (and its metadata) under ``out``."""
     folder = Path(out) / spec.name
     folder.mkdir(parents=True, exist_ok=True)
-    chosen = families or kernels.families(spec)
-    unknown = sorted(set(chosen) - set(kernels.families(spec)))
+    chosen = families or methods.families(spec)
+    unknown = sorted(set(chosen) - set(methods.families(spec)))
     if unknown:
         raise ValueError(f"unknown kernel families {unknown}; known: "
-                         f"{', '.join(kernels.families(spec))}")
+                         f"{', '.join(methods.families(spec))}")
     written = []
-    built = {family: kernels.build_family(spec, family) for family in kernels.families(spec)
+    built = {family: methods.build_family(spec, family) for family in methods.families(spec)
              if family in chosen or families is None}
     for family in chosen:
         for backend in backends:
@@ -368,7 +369,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                 path = folder / name
                 path.write_text(text)
                 written.append(path)
-    if families is None and kernels.closed_as_data(spec):
+    if families is None and closed_as_data(spec):
         path = folder / "closed.json"
         path.write_text(json.dumps(closed_tables(spec), sort_keys=True, separators=(",", ":"))
                         + "\n")

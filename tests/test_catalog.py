@@ -75,3 +75,11 @@ def test_family_name_rejects_unknown_names():
         family_name("fem", "svk", "straight")
     with pytest.raises(ValueError, match="variant: expected one of straight, general"):
         family_name("gram", "svk", "bent")
+
+
+def test_the_generator_names_what_the_catalog_names():
+    # symgen cannot import the runtime (data flows one way): its own lists must agree
+    from symgen import derive, emit
+
+    assert emit.BACKENDS == catalog.BACKENDS
+    assert derive.VARIANTS == catalog.VARIANTS

@@ -19,7 +19,7 @@ from scenes_small import cantilever
 
 from runtime import cli
 from runtime.cli import main
-from runtime.kernels import jit
+from runtime.kernels import errors
 from runtime.model.toml_io import toml_text
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -119,7 +119,7 @@ def test_keyboard_interrupt_anywhere_is_exit_130_in_one_line(tmp_path, monkeypat
 
 def test_environment_error_of_any_command_is_exit_3_in_one_line(monkeypatch, capsys):
     def no_compiler(args):
-        raise jit.CompilerNotFoundError("no C compiler\nmore detail")
+        raise errors.CompilerNotFoundError("no C compiler\nmore detail")
 
     monkeypatch.setattr(cli, "cmd_bench", no_compiler)
     assert main(["bench", "kernels"]) == 3

@@ -11,6 +11,7 @@ from runtime import Element, cli
 from runtime.catalog import generated_dir
 from runtime.kernels import jit
 from runtime.kernels import loader as kernels
+from runtime.kernels.errors import CompilerNotFoundError
 from runtime.kernels.loader import kernel_family
 from symgen import emit
 
@@ -74,7 +75,7 @@ def test_missing_compiler_is_one_clear_sentence(tmp_path, monkeypatch):
     try:
         from runtime import Element
 
-        with pytest.raises(jit.CompilerNotFoundError, match="install gcc or use backend='numpy'"):
+        with pytest.raises(CompilerNotFoundError, match="install gcc or use backend='numpy'"):
             Element("beam2d", 1.0, 0.1, 0.1, 2e11, 0.3, 7800, backend="c")
     finally:
         kernel_family.cache_clear()

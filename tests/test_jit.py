@@ -15,11 +15,12 @@ from pathlib import Path
 
 import pytest
 
-from runtime.kernels import jit
+from runtime.kernels import errors, jit, naming
+from runtime.kernels.cache import cache_dir
 
 CDEF = "double axpy(double a, double x, double y);"
 # Where `runtime` was imported from (the source tree or site-packages), for subprocesses.
-IMPORT_ROOT = str(Path(jit.__file__).resolve().parents[1])
+IMPORT_ROOT = str(Path(jit.__file__).resolve().parents[2])
 
 
 def unique_source(tag: str) -> str:
@@ -54,8 +55,8 @@ def leftovers(folder: Path, modname: str) -> list[str]:
 
 def test_optimization_level_is_part_of_the_module_and_checked(cache: Path) -> None:
     src = unique_source("levels")
-    assert jit.compile_flags(0)[0] == "-O0" and jit.compile_flags() == jit.COMPILE_FLAGS
-    assert "-g0" in jit.COMPILE_FLAGS  # no debug information for generated code
+    assert naming.compile_flags(0)[0] == "-O0" and naming.compile_flags() == naming.COMPILE_FLAGS
+    assert "-g0" in naming.COMPILE_FLAGS  # no debug information for generated code
     fast = jit.compile_module("axpy", src, CDEF, optimization=0)
     default = jit.compile_module("axpy", src, CDEF)
     assert fast.compiled and default.compiled and fast.path != default.path
@@ -75,7 +76,7 @@ def test_compile_then_load_from_cache_in_fresh_process(
     assert first.compiled is True and first.waited is False
     assert first.module.lib.axpy(2.0, 3.0, 4.0) == 10.0
     assert first.path.parent == cache and first.path.exists()
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     assert first.module.__name__ == modname
     assert (cache / f"{modname}.ready").exists()
     assert leftovers(cache, modname) == []
@@ -85,7 +86,7 @@ def test_compile_then_load_from_cache_in_fresh_process(
 
     script = (
         "import json, sys\n"
-        "from runtime import jit\n"
+        "from runtime.kernels import jit\n"
         "r = jit.compile_module('axpy', sys.argv[1], sys.argv[2])\n"
         "print(json.dumps({'compiled': r.compiled, 'seconds': r.seconds,"
         " 'value': r.module.lib.axpy(2.0, 3.0, 4.0), 'path': str(r.path)}))\n"
@@ -111,10 +112,10 @@ WORKER = """
 import json, os, sys, time
 from pathlib import Path
 import cffi  # noqa: F401  (import before the start signal, so all start compiling together)
-from runtime.kernels import jit
+from runtime.kernels import jit, naming
 
 src, cdef, sync, i = sys.argv[1], sys.argv[2], Path(sys.argv[3]), sys.argv[4]
-jit.module_name("axpy", src, cdef)  # warm the compiler-identity memo
+naming.module_name("axpy", src, cdef)  # warm the compiler-identity memo
 (sync / f"ready-{i}").touch()
 while not (sync / "go").exists():
     time.sleep(0.001)
@@ -157,7 +158,7 @@ def test_four_processes_compile_the_same_module_once(cache: Path, tmp_path: Path
     results = [json.loads(out) for out, _ in outputs]
     assert [r["value"] for r in results] == [10.0] * 4
     assert sum(r["compiled"] for r in results) == 1
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     assert {r["name"] for r in results} == {modname}
     assert len(list(cache.glob(f"{modname}*.so"))) == 1
     assert leftovers(cache, modname) == []
@@ -166,11 +167,11 @@ def test_four_processes_compile_the_same_module_once(cache: Path, tmp_path: Path
 
 def test_compile_error_reports_compiler_output_and_leaves_failed_marker(cache: Path) -> None:
     src = f"/* {uuid.uuid4().hex} */\ndouble axpy(double a, double x, double y) {{ return q; }}\n"
-    with pytest.raises(jit.CompilationError) as info:
+    with pytest.raises(errors.CompilationError) as info:
         jit.compile_module("broken", src, CDEF)
     msg = str(info.value)
     assert "error" in msg and "'q' undeclared" in msg.replace("‘", "'").replace("’", "'")
-    modname = jit.module_name("broken", src, CDEF)
+    modname = naming.module_name("broken", src, CDEF)
     failed = cache / f"{modname}.failed"
     assert failed.exists()
     assert "undeclared" in failed.read_text()
@@ -180,14 +181,14 @@ def test_compile_error_reports_compiler_output_and_leaves_failed_marker(cache: P
 
     # A later call does not trust the old marker: it tries again (and fails again).
     failed.write_text("old failure")
-    with pytest.raises(jit.CompilationError, match="undeclared"):
+    with pytest.raises(errors.CompilationError, match="undeclared"):
         jit.compile_module("broken", src, CDEF)
     assert "undeclared" in failed.read_text()
 
 
 def test_waiter_raises_when_lock_owner_fails(cache: Path) -> None:
     src = unique_source("waiter-fails")
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     cache.mkdir(parents=True, exist_ok=True)
     lock = cache / f"{modname}.lock"
     lock.write_text(f"{os.getpid()} {socket.gethostname()} {time.time()}\n")
@@ -200,7 +201,7 @@ def test_waiter_raises_when_lock_owner_fails(cache: Path) -> None:
     thread = threading.Thread(target=owner_fails)
     thread.start()
     try:
-        with pytest.raises(jit.CompilationError, match="boom"):
+        with pytest.raises(errors.CompilationError, match="boom"):
             jit.compile_module("axpy", src, CDEF)
     finally:
         thread.join()
@@ -208,7 +209,7 @@ def test_waiter_raises_when_lock_owner_fails(cache: Path) -> None:
 
 def test_stale_lock_is_broken(cache: Path) -> None:
     src = unique_source("stale-lock")
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     cache.mkdir(parents=True, exist_ok=True)
     lock = cache / f"{modname}.lock"
     lock.write_text(f"{os.getpid()} {socket.gethostname()} 0\n")
@@ -221,7 +222,7 @@ def test_stale_lock_is_broken(cache: Path) -> None:
 
 def test_lock_of_dead_process_is_broken(cache: Path) -> None:
     src = unique_source("dead-owner")
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     cache.mkdir(parents=True, exist_ok=True)
     dead = subprocess.run(
         [sys.executable, "-c", "import os; print(os.getpid())"],
@@ -247,7 +248,7 @@ def test_no_compiler_gives_one_clear_sentence(
     monkeypatch.setenv("CC", str(missing))
     monkeypatch.setenv("PATH", str(empty))
     src = unique_source("no-compiler")
-    with pytest.raises(jit.CompilerNotFoundError) as info:
+    with pytest.raises(errors.CompilerNotFoundError) as info:
         jit.compile_module("axpy", src, CDEF)
     msg = str(info.value)
     assert "install gcc" in msg and "backend='numpy'" in msg and "--backend numpy" in msg
@@ -260,29 +261,29 @@ def test_module_name_tracks_everything_that_changes_the_binary(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     src = unique_source("key")
-    name = jit.module_name("axpy", src, CDEF)
+    name = naming.module_name("axpy", src, CDEF)
     assert re.fullmatch(r"_ancf_axpy_[0-9a-f]{16}", name)
-    assert jit.module_name("axpy", src, CDEF) == name  # deterministic
-    assert jit.module_name("axpy", src + "\n", CDEF) != name
-    assert jit.module_name("axpy", src, CDEF + " ") != name
-    assert jit.module_name("other", src, CDEF) != name
-    assert jit.module_name("axpy", src, CDEF, flags=("-O2",)) != name
-    monkeypatch.setattr(jit, "COMPILE_FLAGS", (*jit.COMPILE_FLAGS, "-fno-math-errno"))
-    assert jit.module_name("axpy", src, CDEF) != name
+    assert naming.module_name("axpy", src, CDEF) == name  # deterministic
+    assert naming.module_name("axpy", src + "\n", CDEF) != name
+    assert naming.module_name("axpy", src, CDEF + " ") != name
+    assert naming.module_name("other", src, CDEF) != name
+    assert naming.module_name("axpy", src, CDEF, flags=("-O2",)) != name
+    monkeypatch.setattr(naming, "COMPILE_FLAGS", (*naming.COMPILE_FLAGS, "-fno-math-errno"))
+    assert naming.module_name("axpy", src, CDEF) != name
     monkeypatch.undo()
     monkeypatch.setenv("CFLAGS", "-DSOMETHING")
-    assert jit.module_name("axpy", src, CDEF) != name
-    assert len(jit.cache_key(src, CDEF)) == 64
+    assert naming.module_name("axpy", src, CDEF) != name
+    assert len(naming.cache_key(src, CDEF)) == 64
     with pytest.raises(ValueError):
-        jit.module_name("bad name", src, CDEF)
+        naming.module_name("bad name", src, CDEF)
 
 
 def test_cache_dir_location(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ANCF_CACHE_DIR", str(tmp_path / "a" / "b"))
-    assert jit.cache_dir() == tmp_path / "a" / "b"
+    assert cache_dir() == tmp_path / "a" / "b"
     assert (tmp_path / "a" / "b").is_dir()
     if sys.platform.startswith("linux"):
         monkeypatch.delenv("ANCF_CACHE_DIR")
         monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-        assert jit.cache_dir() == tmp_path / "xdg" / "ancf"
+        assert cache_dir() == tmp_path / "xdg" / "ancf"
         assert (tmp_path / "xdg" / "ancf").is_dir()

@@ -19,10 +19,11 @@ from pathlib import Path
 
 import pytest
 
-from runtime.kernels import jit
+from runtime.kernels import errors, jit, naming
+from runtime.kernels.cache import cache_dir
 
 CDEF = "double axpy(double a, double x, double y);"
-IMPORT_ROOT = str(Path(jit.__file__).resolve().parents[1])
+IMPORT_ROOT = str(Path(jit.__file__).resolve().parents[2])
 CC = shutil.which("gcc") or shutil.which("cc")
 needs_cc = pytest.mark.skipif(CC is None, reason="needs a C compiler")
 
@@ -80,9 +81,9 @@ def test_compiler_that_fails_on_everything_is_one_clear_sentence(
     if false is None:
         pytest.skip("no false program")
     monkeypatch.setenv("CC", false)
-    with pytest.raises(jit.CompilerNotWorkingError) as info:
+    with pytest.raises(errors.CompilerNotWorkingError) as info:
         jit.compile_module("axpy", unique_source("cc-false"), CDEF)
-    assert isinstance(info.value, jit.CompilerNotFoundError)  # "no usable compiler"
+    assert isinstance(info.value, errors.CompilerNotFoundError)  # "no usable compiler"
     msg = one_sentence(info.value)
     assert f"the C compiler {false} does not work" in msg
     assert "backend='numpy'" in msg and "--backend numpy" in msg
@@ -94,7 +95,7 @@ def test_compiler_without_python_headers_is_one_clear_sentence(
     cache: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setenv("CC", f"{CC} -nostdinc")  # compiles plain C, not Python.h
-    with pytest.raises(jit.CompilerNotWorkingError) as info:
+    with pytest.raises(errors.CompilerNotWorkingError) as info:
         jit.compile_module("axpy", unique_source("no-headers"), CDEF)
     msg = one_sentence(info.value)
     assert "Python's headers" in msg and "python3-dev" in msg and "--backend numpy" in msg
@@ -106,26 +107,26 @@ def test_cache_path_that_is_a_file_is_one_clear_sentence(
     afile = tmp_path / "afile"
     afile.write_text("")
     monkeypatch.setenv("ANCF_CACHE_DIR", str(afile))
-    with pytest.raises(jit.CacheError) as info:
+    with pytest.raises(errors.CacheError) as info:
         jit.compile_module("axpy", unique_source("file"), CDEF)
     msg = one_sentence(info.value)
     assert str(afile) in msg and "not a folder" in msg and "ANCF_CACHE_DIR" in msg
 
     monkeypatch.setenv("ANCF_CACHE_DIR", str(afile / "cache"))
-    with pytest.raises(jit.CacheError) as info:
-        jit.cache_dir()
+    with pytest.raises(errors.CacheError) as info:
+        cache_dir()
     msg = one_sentence(info.value)
     assert str(afile / "cache") in msg and "ANCF_CACHE_DIR" in msg
 
 
 READ_ONLY = """
 import json, sys
-from runtime.kernels import jit
+from runtime.kernels import errors, jit
 r = jit.compile_module('axpy', sys.argv[1], sys.argv[2])
 out = {'cached': [r.compiled, r.module.lib.axpy(2.0, 3.0, 4.0)]}
 try:
     jit.compile_module('axpy', sys.argv[3], sys.argv[2])
-except jit.JitEnvironmentError as exc:
+except errors.JitEnvironmentError as exc:
     out['error'] = [type(exc).__name__, str(exc)]
 print(json.dumps(out))
 """
@@ -202,12 +203,12 @@ def test_planted_module_in_a_cache_folder_others_can_write_is_never_loaded(
     cache.mkdir()
     os.chmod(cache, 0o777)
     src = unique_source("planted")
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     so = cache / so_name(modname)
     shutil.copy(planted_so, so)
     digest = hashlib.sha256(so.read_bytes()).hexdigest()
     (cache / f"{modname}.ready").write_text(f"{digest}  {so.name}\n")  # even a right hash
-    with pytest.raises(jit.CacheError) as info:
+    with pytest.raises(errors.CacheError) as info:
         jit.compile_module("axpy", src, CDEF)
     msg = one_sentence(info.value)
     assert str(cache) in msg and "writable by group or others" in msg
@@ -259,7 +260,7 @@ def test_cached_files_others_can_write_or_that_are_links_are_refused(
 
     monkeypatch.setattr(jit, "_MEMO", {})
     os.chmod(first.path, 0o777)
-    with pytest.raises(jit.CacheError) as info:
+    with pytest.raises(errors.CacheError) as info:
         jit.compile_module("axpy", src, CDEF)
     msg = one_sentence(info.value)
     assert str(first.path) in msg and "writable by group or others" in msg
@@ -269,7 +270,7 @@ def test_cached_files_others_can_write_or_that_are_links_are_refused(
     moved = ready.with_name("elsewhere")
     os.replace(ready, moved)
     ready.symlink_to(moved)
-    with pytest.raises(jit.CacheError, match="symbolic link") as info:
+    with pytest.raises(errors.CacheError, match="symbolic link") as info:
         jit.compile_module("axpy", src, CDEF)
     assert str(ready) in one_sentence(info.value)
     os.replace(moved, ready)
@@ -278,7 +279,7 @@ def test_cached_files_others_can_write_or_that_are_links_are_refused(
     if os.geteuid() == 0:
         monkeypatch.setattr(jit, "_MEMO", {})
         os.chown(first.path, 65534, 65534)
-        with pytest.raises(jit.CacheError, match="belongs to another user"):
+        with pytest.raises(errors.CacheError, match="belongs to another user"):
             jit.compile_module("axpy", src, CDEF)
 
 
@@ -287,16 +288,16 @@ def test_cache_folder_of_another_user_or_open_to_others_is_refused(
 ) -> None:
     cache.mkdir()
     os.chmod(cache, 0o775)
-    with pytest.raises(jit.CacheError) as info:
-        jit.cache_dir()
+    with pytest.raises(errors.CacheError) as info:
+        cache_dir()
     msg = one_sentence(info.value)
     assert str(cache) in msg and "chmod go-w" in msg and "ANCF_CACHE_DIR" in msg
     os.chmod(cache, 0o700)
-    assert jit.cache_dir() == cache
+    assert cache_dir() == cache
 
     other_user(cache, monkeypatch)
-    with pytest.raises(jit.CacheError) as info:
-        jit.cache_dir()
+    with pytest.raises(errors.CacheError) as info:
+        cache_dir()
     msg = one_sentence(info.value)
     assert str(cache) in msg and "belongs to another user" in msg and "ANCF_CACHE_DIR" in msg
 
@@ -308,7 +309,7 @@ def test_cache_folders_are_private_whatever_the_umask(
     monkeypatch.setenv("ANCF_CACHE_DIR", str(folder))
     old = os.umask(0)
     try:
-        assert jit.cache_dir() == folder
+        assert cache_dir() == folder
         jit.compile_module("axpy", unique_source("umask"), CDEF)
     finally:
         os.umask(old)
@@ -325,12 +326,12 @@ def test_cache_below_a_folder_others_can_write_is_refused(
     shared.mkdir()
     os.chmod(shared, 0o777)
     monkeypatch.setenv("ANCF_CACHE_DIR", str(shared / "cache"))
-    with pytest.raises(jit.CacheError) as info:
-        jit.cache_dir()
+    with pytest.raises(errors.CacheError) as info:
+        cache_dir()
     msg = one_sentence(info.value)
     assert str(shared) in msg and "sticky" in msg and "ANCF_CACHE_DIR" in msg
     os.chmod(shared, 0o1777)  # like /tmp: others cannot rename what is ours
-    assert jit.cache_dir() == shared / "cache"
+    assert cache_dir() == shared / "cache"
 
 
 # --------------------------------------------------------------------------- waiting
@@ -360,7 +361,7 @@ def test_waiter_reports_its_wait_and_says_once_whom_it_waits_for(
     cache: Path, capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     src = unique_source("waiter")
-    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    lock = cache / f"{naming.module_name('axpy', src, CDEF)}.lock"
     owner = subprocess.Popen(
         [sys.executable, "-c", SLOW_OWNER, src, CDEF, "2.0"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=child_env(),
@@ -371,7 +372,7 @@ def test_waiter_reports_its_wait_and_says_once_whom_it_waits_for(
             assert owner.poll() is None, owner.communicate()
             assert time.monotonic() < deadline, "the owner never took the lock"
             time.sleep(0.01)
-        monkeypatch.setattr(jit, "_NOTICE_S", 0.3)
+        monkeypatch.setattr("runtime.kernels.lock._NOTICE_S", 0.3)
         r = jit.compile_module("axpy", src, CDEF)
         out, err = owner.communicate(timeout=60)
     finally:
@@ -389,7 +390,7 @@ def test_waiter_reports_its_wait_and_says_once_whom_it_waits_for(
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
 def test_lock_naming_a_reused_pid_is_broken_at_once(cache: Path) -> None:
     src = unique_source("reused-pid")
-    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    lock = cache / f"{naming.module_name('axpy', src, CDEF)}.lock"
     cache.mkdir()
     newcomer = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     # The lock was written a minute before the process now holding its PID started.
@@ -411,16 +412,16 @@ def test_wait_is_bounded_by_an_error_naming_the_lock_file(
     cache: Path, capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     src = unique_source("bounded-wait")
-    lock = cache / f"{jit.module_name('axpy', src, CDEF)}.lock"
+    lock = cache / f"{naming.module_name('axpy', src, CDEF)}.lock"
     cache.mkdir()
     lock.write_text(f"{os.getpid()} {socket.gethostname()} {time.time():.3f}\n")
     future = time.time() + 3600  # e.g. a clock skewed file server: never old enough
     os.utime(lock, (future, future))
-    monkeypatch.setattr(jit, "_NOTICE_S", 0.2)
+    monkeypatch.setattr("runtime.kernels.lock._NOTICE_S", 0.2)
     timer = release_after(10, lock)
     try:
         start = time.perf_counter()
-        with pytest.raises(jit.CacheError) as info:
+        with pytest.raises(errors.CacheError) as info:
             jit.compile_module("axpy", src, CDEF, timeout_s=1.0)
         elapsed = time.perf_counter() - start
     finally:
@@ -436,7 +437,7 @@ def test_wait_is_bounded_by_an_error_naming_the_lock_file(
 
 def test_build_folders_of_killed_compiles_are_swept(cache: Path) -> None:
     src = unique_source("sweep")
-    modname = jit.module_name("axpy", src, CDEF)
+    modname = naming.module_name("axpy", src, CDEF)
     cache.mkdir()
     gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
@@ -481,13 +482,13 @@ def test_owner_whose_lock_was_broken_leaves_the_new_lock_alone(
 
     monkeypatch.setattr(jit, "_build", build_while_lock_is_taken_over)
     good = unique_source("taken-over")
-    lock.append(cache / f"{jit.module_name('axpy', good, CDEF)}.lock")
+    lock.append(cache / f"{naming.module_name('axpy', good, CDEF)}.lock")
     assert jit.compile_module("axpy", good, CDEF).compiled
     assert lock[0].exists()
 
     bad = f"/* {uuid.uuid4().hex} */\ndouble axpy(double a, double x, double y) {{ return q; }}\n"
-    modname = jit.module_name("axpy", bad, CDEF)
+    modname = naming.module_name("axpy", bad, CDEF)
     lock[0] = cache / f"{modname}.lock"
-    with pytest.raises(jit.CompilationError):
+    with pytest.raises(errors.CompilationError):
         jit.compile_module("axpy", bad, CDEF)
     assert lock[0].exists() and not (cache / f"{modname}.failed").exists()

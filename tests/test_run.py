@@ -452,10 +452,10 @@ def test_full_disk_during_the_run_is_exit_3_with_whole_csv_rows(tmp_path, monkey
     ("CacheError", "ANCF_CACHE_DIR"),
 ])
 def test_jit_environment_errors_are_exit_3_with_a_hint(error, hint, tmp_path, monkeypatch):
-    from runtime.kernels import jit
+    from runtime.kernels import errors
 
     def broken(*args, **kwargs):
-        raise getattr(jit, error)(f"{error} first line\ndetails: compiler output")
+        raise getattr(errors, error)(f"{error} first line\ndetails: compiler output")
 
     monkeypatch.setattr("runtime.app.simulation.Model", broken)
     out = tmp_path / "out"
@@ -604,11 +604,11 @@ def test_summary_that_cannot_be_written_is_exit_3(tmp_path, monkeypatch):
 
 
 def test_compiler_fault_when_the_dynamic_engine_is_built_is_exit_3(tmp_path, monkeypatch):
-    from runtime.kernels import jit
+    from runtime.kernels import errors
     from runtime.solve import engines
 
     def no_compiler(*args, **kwargs):
-        raise jit.CompilerNotFoundError("no C compiler for the stepper")
+        raise errors.CompilerNotFoundError("no C compiler for the stepper")
 
     monkeypatch.setitem(engines.ENGINES, "compiled", no_compiler)
     summary, code = run(write(tmp_path, small_scene()), tmp_path / "out", quiet=True)

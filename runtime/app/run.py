@@ -21,7 +21,7 @@ from runtime.app import writers as output
 from runtime.app.result import Observer
 from runtime.app.simulation import Simulation, requested
 from runtime.app.summary import Summary
-from runtime.kernels.jit import CacheError, JitEnvironmentError
+from runtime.kernels.errors import CacheError, JitEnvironmentError
 from runtime.model.errors import SceneError
 from runtime.model.scene import Scene, load_scene
 

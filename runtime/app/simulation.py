@@ -241,7 +241,7 @@ def run_scene(scene: Scene | str | Path, method: str | None = None,
 
     Returns a :class:`Result` with exit code 0 (ok) or 1 (a diverged analysis: the results
     up to then are kept).  Raises SceneError / ValueError for an invalid scene or option,
-    ``runtime.kernels.jit.JitEnvironmentError`` or OSError when the kernels cannot be built, and
+    ``runtime.kernels.errors.JitEnvironmentError`` or OSError when the kernels cannot be built, and
     KeyboardInterrupt as it comes.
     """
     start = time.perf_counter()

@@ -11,6 +11,7 @@ from typing import Any, Protocol
 import numpy as np
 import scipy.sparse
 
+from runtime.kernels import abi
 from runtime.kernels.kind import ElementKind
 
 _FLOAT = np.dtype(np.float64)
@@ -78,24 +79,18 @@ class BoundKernel:
         ffi = family._module.ffi
         self._function = getattr(family._module.lib, f"{family.kind.name}_{family.family}_"
                                  f"{kernel}")
-        self._slots: list = []  # fixed cffi arguments, or the name of a per-call input
-        for a in self.arrays:
-            name, role, value = a["name"], a["role"], self._fixed.get(a["name"])
-            if role == "batch" and name in self._fixed:
-                self._slots += [ffi.from_buffer("double[]", value),
-                                0 if value.shape[0] == 1 else a["size"]]
-            elif role == "batch":
-                self._slots += [("batch", name, a["size"])]
-            elif role == "shared":
-                self._slots.append(ffi.from_buffer("double[]", value))
-            elif role == "csr":
-                self._slots += [ffi.from_buffer("int[]", value.indptr),
-                                ffi.from_buffer("int[]", value.indices),
-                                ffi.from_buffer("double[]", value.data)]
-            elif role == "table":
-                self._slots += [value.shape[0], ffi.from_buffer("double[]", value)]
-            elif role == "output":
-                self._slots.append(("output", name, a["size"]))
+        self._slots: list = []  # fixed cffi arguments, or (part, name, size) of a per-call one
+        for p in abi.parameters(family.signatures[kernel])[1:]:  # after the count m
+            value = self._fixed.get(p.array)
+            if p.role == "output" or (p.role == "batch" and value is None):
+                self._slots.append((p.role if p.part == "values" else p.part, p.array, p.size))
+            elif p.part == "stride":
+                self._slots.append(0 if value.shape[0] == 1 else p.size)
+            elif p.part == "points":
+                self._slots.append(value.shape[0])
+            else:
+                self._slots.append(ffi.from_buffer(
+                    p.buffer, getattr(value, p.part) if p.role == "csr" else value))
 
     def _prepared(self, name: str, role: str, size: int, value):
         """A fixed input checked and converted once (C-contiguous float64 / int32 CSR)."""
@@ -181,11 +176,11 @@ class BoundKernel:
         args = [m]
         for slot in self._slots:
             if isinstance(slot, tuple):
-                role, name, size = slot
-                if role == "batch":
-                    value = batch[name]
-                    args += [ffi.from_buffer("double[]", value),
-                             0 if value.shape[0] == 1 else size]
+                part, name, size = slot
+                if part == "batch":
+                    args.append(ffi.from_buffer("double[]", batch[name]))
+                elif part == "stride":
+                    args.append(0 if batch[name].shape[0] == 1 else size)
                 else:
                     args.append(ffi.from_buffer("double[]", outputs[name]))
             else:

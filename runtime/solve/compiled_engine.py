@@ -14,12 +14,10 @@ those of the Python engine (``runtime.solve.python_engine``), which stays the re
 from __future__ import annotations
 
 import time
-from importlib import resources
 
-import jinja2
 import numpy as np
 
-from runtime.kernels import jit
+from runtime.kernels import abi, jit
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.solve.linear import single_threaded_blas
@@ -35,56 +33,44 @@ from runtime.solve.python_engine import (
     newton_mode,
     newton_not_converged,
 )
+from templates import environment
 
 STEPPER_VERSION = "1"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
-_C_TYPES = {"batch": "const double *, long", "shared": "const double *",
-            "csr": "const int *, const int *, const double *", "table": "long, const double *",
-            "output": "double *"}
 
 
-def _environment() -> jinja2.Environment:
-    return jinja2.Environment(
-        loader=jinja2.FunctionLoader(
-            lambda name: resources.files("templates").joinpath(name).read_text()),
-        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined)
-
-
-def _kernel_call(arrays: list[dict], slots: dict[str, int], inputs: str = "",
+def _kernel_call(signature: dict, slots: dict[str, int], inputs: str = "",
                  outputs: dict[str, str] | None = None) -> tuple[str, str]:
-    """(C parameter types, C arguments) of a generated kernel, from its signature.  Invariant
-    inputs come from the group's ``{inputs}real``/``ints``/``count`` slots, outputs from the
-    group buffers named by ``outputs`` (default: the output's own name)."""
-    params, args = ["long"], ["count"]
-    batch = {"e": "g->e, n", "e0": "g->e0 + first * n, n", "e_dot": "g->e_dot, n"}
-    for a in arrays:
-        role, name = a["role"], a["name"]
-        if role == "local":
-            continue
-        params.append(_C_TYPES[role])
-        if role == "batch":
-            args.append(batch[name])
-        elif role == "shared":
-            args.append(f"g->{inputs}real[{slots[name]}]")
-        elif role == "csr":
-            args.append(f"g->{inputs}ints[{2 * slots[name]}], "
-                        f"g->{inputs}ints[{2 * slots[name] + 1}], g->{inputs}real[{slots[name]}]")
-        elif role == "table":
-            args.append(f"g->{inputs}count, g->{inputs}real[{slots[name]}]")
+    """(C parameter types, C arguments) of a generated kernel, from its element.json entry
+    (``runtime.kernels.abi``).  Invariant inputs come from the group's
+    ``{inputs}real``/``ints``/``count`` slots, outputs from the group buffers named by
+    ``outputs`` (default: the output's own name)."""
+    batch = {"e": ("g->e", "n"), "e0": ("g->e0 + first * n", "n"), "e_dot": ("g->e_dot", "n")}
+    args = []
+    for p in abi.parameters(signature):
+        if p.part == "count":
+            args.append("count")
+        elif p.role == "batch":
+            values, stride = batch[p.array]
+            args.append(stride if p.part == "stride" else values)
+        elif p.role == "output":
+            args.append(f"g->{(outputs or {}).get(p.array, p.array)}")
+        elif p.part == "indptr":
+            args.append(f"g->{inputs}ints[{2 * slots[p.array]}]")
+        elif p.part == "indices":
+            args.append(f"g->{inputs}ints[{2 * slots[p.array] + 1}]")
+        elif p.part == "points":
+            args.append(f"g->{inputs}count")
         else:
-            args.append(f"g->{(outputs or {}).get(name, name)}")
-    return ", ".join(params), ", ".join(args)
+            args.append(f"g->{inputs}real[{slots[p.array]}]")
+    return abi.c_types(signature), ", ".join(args)
 
 
 def _input_slots(signatures: dict, kernels: tuple[str, ...]) -> dict[str, int]:
     """Slot of every invariant input of ``kernels`` of one family."""
-    names: list[str] = []
-    for kernel in kernels:
-        for a in signatures[kernel]["arrays"]:
-            if a["role"] in ("shared", "csr", "table") and a["name"] not in names:
-                names.append(a["name"])
+    names = dict.fromkeys(name for kernel in kernels
+                          for name in abi.invariant_inputs(signatures[kernel]))
     return {name: i for i, name in enumerate(names)}
 
 
@@ -94,14 +80,14 @@ DAMPING = ("damping_force", "damped_force_jacobians")
 
 def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
     """(C source, cffi declarations) of the stepper of ``dae`` with ``integrator``."""
-    env = _environment()
+    env = environment()
     groups, slots_needed = [], 1
     for group in dae.groups:
         signatures = group.element.kind.families[group.family]
         slots = _input_slots(signatures, ELASTIC)
         slots_needed = max(slots_needed, 2 * len(slots))
-        force_params, force_args = _kernel_call(signatures["force"]["arrays"], slots)
-        fj_params, fj_args = _kernel_call(signatures["force_jacobian"]["arrays"], slots)
+        force_params, force_args = _kernel_call(signatures["force"], slots)
+        fj_params, fj_args = _kernel_call(signatures["force_jacobian"], slots)
         entry = {"ndof": group.dofs.shape[1], "force_params": force_params,
                  "force_args": force_args, "force_jacobian_params": fj_params,
                  "force_jacobian_args": fj_args, "damped": group.element.damping > 0}
@@ -110,10 +96,10 @@ def render(dae: DAESystem, integrator: str) -> tuple[str, str]:
             slots = _input_slots(damping, DAMPING)
             slots_needed = max(slots_needed, 2 * len(slots))
             entry["damping_params"], entry["damping_args"] = _kernel_call(
-                damping["damping_force"]["arrays"], slots, "damping_",
+                damping["damping_force"], slots, "damping_",
                 {"force": "force_damping"})
             entry["damped_params"], entry["damped_args"] = _kernel_call(
-                damping["damped_force_jacobians"]["arrays"], slots, "damping_")
+                damping["damped_force_jacobians"], slots, "damping_")
         entry["index"] = len(groups)
         groups.append(entry)
     kinds = ", ".join(sorted({f"{g.kind}/{g.family}" for g in dae.groups}))

@@ -42,7 +42,7 @@ def _symbolic_derivation_s(kind: str) -> float | None:
     for cached in (derive.straight_integrals, closed.straight_tables, closed.domain_tables,
                    closed.factored):
         cached.cache_clear()
-    from symgen.kernels import closed_as_data
+    from symgen.methods.common import closed_as_data
 
     if closed.factored(spec) is not None and closed_as_data(spec):
         # large elements: the exact tables only (what the generator emits for them)

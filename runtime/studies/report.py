@@ -24,7 +24,7 @@ import sympy
 import scenes
 from runtime.app.run import run
 from runtime.catalog import METHODS, generated_kinds
-from runtime.kernels import jit
+from runtime.kernels import naming
 from runtime.studies import bench_kernels as bench
 from runtime.studies import bench_solvers, error_vs_time, paper, stability
 from runtime.studies import invariant_comparison as invariant_report
@@ -55,8 +55,8 @@ def machine() -> str:
     return (f"{cpu}, {os.cpu_count()} cores{memory}; {platform.system()} {platform.release()}; "
             f"Python {platform.python_version()}, NumPy {np.__version__}, SciPy "
             f"{scipy.__version__}, SymPy {sympy.__version__}; {compiler} with "
-            f"`{' '.join(jit.COMPILE_FLAGS)}` (pre-processing families at "
-            f"`{jit.compile_flags(0)[0]}`: element.json `optimization`).")
+            f"`{' '.join(naming.COMPILE_FLAGS)}` (pre-processing families at "
+            f"`{naming.compile_flags(0)[0]}`: element.json `optimization`).")
 
 
 def _scenes(out: Path, figures: Path, warm: bool = True) -> str:

@@ -1,0 +1,105 @@
+"""The invariant builders of the ``invariants`` families: shape-function tables, the
+closed-form straight integrals, and the map from integrals to stored invariants (straight and
+general storage patterns)."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from symgen import derive
+from symgen.element import ElementSpec
+from symgen.ir import Array, Kernel, Temporaries, emit_cse, ref, refs
+from symgen.methods.common import closed_as_data, geometry_doc, geometry_subs, invariant_outputs
+
+
+def build(spec: ElementSpec, variant: str) -> list[Kernel]:
+    """The kernels of the invariants family of storage ``variant``: for the straight one the
+    shape tables, closed-form straight integrals and the straight integrals -> invariants
+    (only the shape tables where the closed forms are data, closed.json, for the runtime);
+    for the general one the integrals -> invariants map."""
+    if variant != "straight":
+        return [_invariants_kernel(spec, variant)]
+    if closed_as_data(spec):
+        return [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
+    return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
+            _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
+
+
+def _shape_values_kernel(spec: ElementSpec) -> Kernel:
+    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
+              Array("geometry", 3, "shared", geometry_doc(spec)),
+              Array("values", spec.n_shape, "output", "shape functions s_k")]
+    subs = {**geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
+    body: list = []
+    emit_cse(body, [(f"values[{k}]", s.subs(subs), False)
+                    for k, s in enumerate(spec.shape_functions)], Temporaries())
+    return Kernel("shape_values", "Shape functions at local points.", arrays, body)
+
+
+def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
+    pattern = derive.gradient_pattern(spec)
+    grads = derive.shape_gradients(spec)
+    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
+              Array("geometry", 3, "shared", geometry_doc(spec)),
+              Array("gradients", len(pattern), "output",
+                    "structurally nonzero ds_k/dx_alpha, in gradient-pattern order")]
+    subs = {**geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
+    body: list = []
+    emit_cse(body, [(f"gradients[{j}]", grads[k, c].subs(subs), False)
+                    for j, (k, c) in enumerate(pattern)], Temporaries())
+    return Kernel("shape_gradients", "Local shape-function gradients at local points.",
+                  arrays, body)
+
+
+def _integral_arrays(spec: ElementSpec, pattern: derive.Patterns, role: str) -> list[Array]:
+    npairs = len(derive.pairs(spec.n_shape))
+    return [Array("i4", len(pattern.i4), role, "int P_kl P_mn dV0 in i4-pattern order"),
+            Array("i2", npairs, role, "int P dV0, upper triangle"),
+            Array("mass_shape", npairs, role, "int s s^T dV0 (m^3), upper triangle"),
+            Array("volume", 1, role, "int dV0 (m^3)")]
+
+
+def _straight_integrals_kernel(spec: ElementSpec) -> Kernel:
+    pattern = derive.patterns(spec, "straight")
+    integrals = derive.straight_integrals(spec)
+    subs = geometry_subs(spec, "geometry")
+    arrays = [Array("geometry", 3, "batch", geometry_doc(spec)),
+              *_integral_arrays(spec, pattern, "output")]
+    pairs = derive.pairs(spec.n_shape)
+    outputs = [(f"i4[{j}]", integrals.i4(key), False) for j, key in enumerate(pattern.i4)]
+    outputs += [(f"i2[{a}]", integrals.i2[k, m], False) for a, (k, m) in enumerate(pairs)]
+    outputs += [(f"mass_shape[{a}]", integrals.mass[k, m], False)
+                for a, (k, m) in enumerate(pairs)]
+    outputs += [("volume[0]", integrals.volume, False)]
+    body: list = []
+    emit_cse(body, [(t, sp.sympify(x).subs(subs), acc) for t, x, acc in outputs],
+             Temporaries())
+    return Kernel("integrals_straight",
+                  "Closed-form integrals of the straight element (exact polynomial integration).",
+                  arrays, body)
+
+
+def _invariants_kernel(spec: ElementSpec, variant: str) -> Kernel:
+    pattern = derive.patterns(spec, variant)
+    n = spec.n_shape
+    i4_of = dict(zip(pattern.i4, refs("i4", len(pattern.i4)), strict=True))
+    i2 = sp.Matrix(n, n, lambda k, m: ref("i2", derive.pair_index(n)[(k, m)]))
+    mass = sp.Matrix(n, n, lambda k, m: ref("mass_shape", derive.pair_index(n)[(k, m)]))
+    integrals = derive.Integrals(ref("volume", 0), mass, i2,
+                                 lambda key: i4_of.get(key, sp.Integer(0)))
+    values = derive.invariant_values(spec, pattern, integrals)
+    material = dict(zip((derive.lam, derive.shear, derive.rho), refs("material", 3),
+                        strict=True))
+    arrays = [*_integral_arrays(spec, pattern, "batch"),
+              Array("material", 3, "shared", "Lame lambda (Pa), shear modulus G (Pa), "
+                    "density rho (kg/m^3)"),
+              *invariant_outputs(spec, pattern, "shape-level K1 of eq. 29 (N/m), upper triangle",
+                                 "U0 of eqs. 40-41 (J)")]
+    outputs = [(f"{name}[{i}]", sp.sympify(v).subs(material), False)
+               for name, vals in values.items() for i, v in enumerate(vals)]
+    body: list = []
+    emit_cse(body, outputs, Temporaries())
+    return Kernel(f"invariants_{variant}",
+                  f"Stored invariants from integrals ({variant} storage pattern).", arrays, body)

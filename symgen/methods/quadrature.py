@@ -1,0 +1,352 @@
+"""Gauss quadrature at every call: the ``quadrature`` family (eq. 23, St. Venant-Kirchhoff,
+the paper's baseline) and the ``quadrature_law`` family (any material law of ``symgen.laws``,
+with Kelvin-Voigt damping), and the looped point Jacobian of large elements."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from symgen import derive, laws
+from symgen.element import ElementSpec
+from symgen.ir import Array, Assign, Kernel, Loop, PointLoop, Temporaries, ref, refs
+from symgen.methods.common import (
+    DAMPING_KERNELS,
+    KERNELS,
+    coordinate_arrays,
+    kernel_name,
+    loop_tables,
+    looped,
+    materialize,
+    quantity_output,
+    relative_velocities,
+    store,
+    store_symmetric,
+    translate,
+)
+from symgen.methods.damping import damping_arrays
+
+
+def quadrature_table_width(spec: ElementSpec) -> int:
+    """Doubles per quadrature point: nonzero shape gradients, then the weight."""
+    return len(derive.gradient_pattern(spec)) + 1
+
+
+def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kernel:
+    """Gauss quadrature of the St. Venant-Kirchhoff energy, force or Jacobian at every call.
+
+    Per point: J0 = Q0^T dS, B = dS J0^-1, H = dQ^T B, E = (H + H^T + H^T H)/2 (exact at the
+    reference), S = lambda tr(E) I + 2 G E, F = I + H.
+    """
+    d, n = spec.dim, spec.n_shape
+    pattern = derive.gradient_pattern(spec)
+    width_ = quadrature_table_width(spec)
+    arrays = [*coordinate_arrays(spec, True),
+              Array("material", 2, "shared", "Lame lambda and shear modulus G (Pa)"),
+              Array("table", width_, "table",
+                    "per Gauss point: nonzero ds/dx (gradient-pattern order), then weight (m^3)"),
+              *[quantity_output(spec, quantity) for quantity in quantities]]
+    temps = Temporaries()
+    body: list = []
+    _, q0, dq = translate(spec, body, temps, with_reference=True)
+    lam_, g_ = refs("material", 2)
+    tab = refs("tab", width_)
+    ds = sp.zeros(n, d)
+    for j, (k, c) in enumerate(pattern):
+        ds[k, c] = tab[j]
+    Q0 = sp.Matrix(n, d, q0)
+    dQ = sp.Matrix(n, d, dq)
+    point: list = []
+    j0 = sp.Matrix(d, d, materialize(point, temps, list(Q0.T * ds)))
+    det = materialize(point, temps, [j0.det(method="berkowitz")])[0]
+    inv_det = materialize(point, temps, [1 / det])[0]
+    j0_inv = sp.Matrix(d, d, materialize(point, temps, list(j0.adjugate() * inv_det)))
+    b = sp.Matrix(n, d, materialize(point, temps, list(ds * j0_inv)))
+    h = sp.Matrix(d, d, materialize(point, temps, list(dQ.T * b)))
+    strain = sp.Matrix(d, d, materialize(point, temps, list((h + h.T + h.T * h) / 2)))
+    trace = materialize(point, temps, [strain.trace()])[0]
+    wdet = materialize(point, temps, [tab[-1] * det])[0]
+    if "energy" in quantities:
+        energy = wdet * (lam_ / 2 * trace**2 + g_ * sum(x * x for x in strain))
+        store(point, "energy", [energy], accumulate=True)
+    if "force" in quantities or "jacobian" in quantities:
+        stress = sp.Matrix(d, d, materialize(
+            point, temps, list(lam_ * trace * sp.eye(d) + 2 * g_ * strain)))
+        f = sp.eye(d) + h
+        if "force" in quantities:
+            bs = sp.Matrix(n, d, materialize(point, temps, list(b * stress)))
+            force = -wdet * (bs * f.T)
+            store(point, "force", list(force), accumulate=True)
+        if "jacobian" in quantities and looped(spec, "quadrature"):
+            dn = sp.Matrix(d, d, lambda x_, y_: lam_ + (2 * g_ if x_ == y_ else 0))
+            _looped_point_jacobian(spec, point, b, f, stress, dn,
+                                   [g_] * len(laws.shear_pairs(d)), -wdet)
+        elif "jacobian" in quantities:
+            a = sp.Matrix(n, d, materialize(point, temps, list(b * f.T)))
+            bsb = materialize(point, temps, [(b[k, :] * stress * b[p, :].T)[0]
+                                              for k, p in derive.pairs(n)])
+            bb = materialize(point, temps, [(b[k, :] * b[p, :].T)[0]
+                                             for k, p in derive.pairs(n)])
+            ff = materialize(point, temps, [(f[x, :] * f[yy, :].T)[0]
+                                             for x, yy in derive.pairs(d)])
+            pidx, didx = derive.pair_index(n), derive.pair_index(d)
+            upper = {}
+            for i, j in derive.pairs(spec.ndof):
+                (k, ca), (p, cb) = divmod(i, d), divmod(j, d)
+                value = (lam_ * a[k, ca] * a[p, cb] + g_ * a[k, cb] * a[p, ca]
+                         + g_ * bb[pidx[(k, p)]] * ff[didx[(ca, cb)]])
+                if ca == cb:
+                    value += bsb[pidx[(k, p)]]
+                upper[(i, j)] = -wdet * value
+            names = materialize(point, temps, list(upper.values()))
+            store_symmetric(point, "jacobian", spec.ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+    body.append(PointLoop("table", tuple(point), _default_points(spec)))
+    if looped(spec, "quadrature") and "jacobian" in quantities:
+        arrays += _point_locals(spec, damped=False)
+    return Kernel(kernel_name(quantities), f"Elastic {' and '.join(quantities)} by Gauss "
+                  "quadrature at every call (no invariants).", arrays, body,
+                  loop_tables(spec, "straight") if looped(spec, "quadrature") else None)
+
+
+def _default_points(spec: ElementSpec) -> int:
+    total = 1
+    for order in spec.quadrature:
+        total *= order
+    return total
+
+
+def quadrature_law_table_width(spec: ElementSpec) -> int:
+    """Doubles per point of the quadrature_law table: nonzero ds/dx, U^-1 upper, coefficients."""
+    return (len(derive.gradient_pattern(spec)) + laws.voigt_size(spec.dim)
+            + len(laws.coefficient_layout(spec.dim)))
+
+
+def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
+    """Gauss quadrature of any law (symgen/laws.py) at every call, with Kelvin-Voigt damping.
+
+    Each table row is a point of a domain's rule (volume points, then axis points): the local
+    shape gradients ds/dx, the inverse of U (J0 = R0 U, R0 the local frame, U upper
+    triangular), and the point's law coefficients times weight and det J0.  With b = ds U^-1
+    (gradients in the local frame), F0 = Q0^T b, dF = dQ^T b, F = F0 + dF, the local strain is
+    E = (F0^T dF + dF^T F0 + dF^T dF)/2, eps its Voigt form, sigma = D eps, and (Z_I the
+    derivative of eps_I with respect to the coordinates)
+      force = -b S F^T,  Jacobian = -(sum_IJ D_IJ Z_I Z_J + b S b^T kron I).
+    Damping: eps_dot = Z edot, sigma_d = alpha D eps_dot; its force is -b S_d F^T,
+    d/de_dot = -alpha sum D Z Z and d/de = -(alpha sum_J Y_J Zdot_J + b S_d b^T kron I) with
+    Y_J = sum_I D_IJ Z_I and Zdot = Z with Fdot = Qdot^T b in place of F.
+    """
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    pattern = derive.gradient_pattern(spec)
+    layout = laws.coefficient_layout(d)
+    shears = laws.shear_pairs(d)
+    upper_d = derive.pairs(d)
+    width_ = quadrature_law_table_width(spec)
+    damped = name in DAMPING_KERNELS
+    quantities = {"damping_force": ("force",), "damping_jacobians": ("jacobian", "jacobian_dot"),
+                  "damped_force_jacobians": ("force", "jacobian", "jacobian_dot")}.get(
+        name, tuple(name.split("_")))
+    arrays = [*coordinate_arrays(spec, True)]
+    if damped:
+        e_dot, tail = damping_arrays(spec, name)
+        arrays.append(e_dot)
+    table = Array("table", width_, "table",
+                  "per point: nonzero ds/dx (gradient-pattern order), U^-1 upper triangle, "
+                  "law coefficients times weight and det J0 (N m)")
+    arrays.append(table)
+    if damped:
+        arrays += tail
+    else:
+        arrays += [quantity_output(spec, quantity) for quantity in quantities]
+    temps = Temporaries()
+    body: list = []
+    _, q0, dq = translate(spec, body, temps, with_reference=True)
+    qd = relative_velocities(spec) if damped else None
+    alpha = ref("alpha", 0)
+    tab = refs("tab", width_)
+    ds = sp.zeros(n, d)
+    for j, (k, c) in enumerate(pattern):
+        ds[k, c] = tab[j]
+    offset = len(pattern)
+    u_inv = sp.zeros(d, d)
+    for j, (a, b) in enumerate(upper_d):
+        u_inv[a, b] = tab[offset + j]
+    offset += len(upper_d)
+    coefficient = dict(zip(layout, tab[offset:], strict=True))
+    dn = sp.Matrix(d, d, lambda a, b: coefficient[(min(a, b), max(a, b))])
+    dshear = [coefficient[(d + s, d + s)] for s in range(len(shears))]
+    point: list = []
+    bmat = sp.Matrix(n, d, materialize(point, temps, list(ds * u_inv)))
+    f0 = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, q0).T * bmat)))
+    df = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, dq).T * bmat)))
+    strain = (f0.T * df + df.T * f0 + df.T * df) / 2
+    f = sp.Matrix(d, d, materialize(point, temps, list(f0 + df)))
+    eps = materialize(point, temps, [strain[a, a] for a in range(d)]
+                       + [2 * strain[a, b] for a, b in shears])
+
+    def stress_of(voigt):
+        normal = [sum(dn[a, b] * voigt[b] for b in range(d)) for a in range(d)]
+        return normal + [dshear[s] * voigt[d + s] for s in range(len(shears))]
+
+    def tensor(voigt):
+        s_mat = sp.zeros(d, d)
+        for a in range(d):
+            s_mat[a, a] = voigt[a]
+        for s, (a, b) in enumerate(shears):
+            s_mat[a, b] = s_mat[b, a] = voigt[d + s]
+        return s_mat
+
+    def z_of(fmat):
+        """Z_I(k, c) = d eps_I / d Q_kc with the deformation gradient ``fmat``."""
+        rows = [[bmat[k, a] * fmat[c, a] for k in range(n) for c in range(d)] for a in range(d)]
+        rows += [[bmat[k, a] * fmat[c, b] + bmat[k, b] * fmat[c, a] for k in range(n)
+                  for c in range(d)] for a, b in shears]
+        return rows
+
+    sigma = stress_of(eps) if not name.startswith("damping") else None
+    if name == "energy":
+        store(point, "energy", [sum(x * y for x, y in zip(eps, sigma, strict=True)) / 2],
+               accumulate=True)
+    if damped:
+        fdot = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, qd).T * bmat)))
+        eps_dot = materialize(point, temps, [
+            sum(f[c, a] * fdot[c, a] for c in range(d)) for a in range(d)] + [
+            sum(f[c, a] * fdot[c, b] + fdot[c, a] * f[c, b] for c in range(d))
+            for a, b in shears])
+        sigma_d = [alpha * x for x in stress_of(eps_dot)]
+        total = sigma_d if sigma is None else [x + y for x, y in zip(sigma, sigma_d, strict=True)]
+    else:
+        total = sigma
+    if "force" in quantities or "jacobian" in quantities:
+        s_total = sp.Matrix(d, d, materialize(point, temps, list(tensor(total))))
+    if "force" in quantities:
+        bs = sp.Matrix(n, d, materialize(point, temps, list(bmat * s_total)))
+        store(point, "force", list(-(bs * f.T)), accumulate=True)
+    if "jacobian" in quantities and looped(spec, "quadrature_law"):
+        if not damped:
+            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1)
+        else:
+            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
+                                   material=name == "damped_force_jacobians", fdot=fdot)
+    elif "jacobian" in quantities:
+        z = [materialize(point, temps, row) for row in z_of(f)]
+        y = [materialize(point, temps, row) for row in _law_rows(dn, dshear, z, d)]
+        geometric = materialize(point, temps, [(bmat[k, :] * s_total * bmat[p, :].T)[0]
+                                                for k, p in derive.pairs(n)])
+        pidx = derive.pair_index(n)
+
+        def geo(i: int, j: int):
+            (k, a), (p, b) = divmod(i, d), divmod(j, d)
+            return geometric[pidx[(k, p)]] if a == b else 0
+
+        if not damped:
+            upper = {(i, j): -(sum(zi[i] * yi[j] for zi, yi in zip(z, y, strict=True))
+                               + geo(i, j)) for i, j in derive.pairs(ndof)}
+            names = materialize(point, temps, list(upper.values()))
+            store_symmetric(point, "jacobian", ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+        else:
+            zdot = [materialize(point, temps, row) for row in z_of(fdot)]
+            material = dict(zip(derive.pairs(ndof), materialize(point, temps, [
+                sum(zi[i] * yi[j] for zi, yi in zip(z, y, strict=True))
+                for i, j in derive.pairs(ndof)]), strict=True))
+            full = []
+            for i in range(ndof):
+                for j in range(ndof):
+                    value = alpha * sum(yi[i] * zd[j] for yi, zd in zip(y, zdot, strict=True))
+                    if name == "damped_force_jacobians":
+                        value += material[(min(i, j), max(i, j))]
+                    full.append(-(value + geo(i, j)))
+            store(point, "jacobian", materialize(point, temps, full), accumulate=True)
+            upper = {ij: -alpha * value for ij, value in material.items()}
+            names = materialize(point, temps, list(upper.values()))
+            store_symmetric(point, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)),
+                             accumulate=True)
+    body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
+    if looped(spec, "quadrature_law") and "jacobian" in quantities:
+        arrays += _point_locals(spec, damped)
+    doc = {"force": "elastic force", "jacobian": "elastic Jacobian", "energy": "strain energy",
+           "force_jacobian": "elastic force and Jacobian",
+           "damping_force": "Kelvin-Voigt damping force",
+           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
+           "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
+           "respect to e and e_dot"}[name]
+    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
+                  "call (volume and axis rules).", arrays, body,
+                  loop_tables(spec, "straight") if looped(spec, "quadrature_law") else None)
+
+
+def _law_rows(dn, dshear, z, d: int) -> list:
+    """Y_J = sum_I D_IJ Z_I for rows Z_I of an orthotropic-form law (normal block, shear
+    diagonal)."""
+    rows = [[sum(dn[a, b] * z[b][i] for b in range(d)) for i in range(len(z[0]))]
+            for a in range(d)]
+    rows += [[dshear[s] * x for x in z[d + s]] for s in range(len(dshear))]
+    return rows
+
+
+def _default_law_points(spec: ElementSpec) -> int:
+    """Volume points plus axis points of the default rule."""
+    return _default_points(spec) + spec.quadrature[0]
+
+
+def _z_rows(bmat, fmat, n: int, d: int) -> list:
+    """Z_I(k, c) = d eps_I / d Q_kc (Voigt rows) with gradients ``bmat`` and the deformation
+    gradient ``fmat``."""
+    rows = [[bmat[k, a] * fmat[c, a] for k in range(n) for c in range(d)] for a in range(d)]
+    rows += [[bmat[k, a] * fmat[c, b] + bmat[k, b] * fmat[c, a] for k in range(n)
+              for c in range(d)] for a, b in laws.shear_pairs(d)]
+    return rows
+
+
+def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
+    size = laws.voigt_size(spec.dim) * spec.ndof
+    arrays = [Array("Z", size, "local", "d eps / d e per Voigt row"),
+              Array("Y", size, "local", "D Z"),
+              Array("GEO", spec.n_shape**2, "local", "b S b^T")]
+    if damped:
+        arrays.append(Array("ZD", size, "local", "d eps_dot / d e_dot per Voigt row"))
+    return arrays
+
+
+def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn, dshear,
+                           scale, material: bool = True, fdot=None) -> None:
+    """The Jacobian at one point as loops (large elements): Z and Y = D Z stored (unrolled,
+    small), then jacobian += scale (sum_I Z_I Y_I^T + (b S b^T) kron I); with ``fdot``
+    (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric [+ material]) and
+    jacobian_dot += scale alpha sum_I Z_I Y_I^T."""
+    n, d, ndof = spec.n_shape, spec.dim, spec.ndof
+    rows = laws.voigt_size(d)
+    for r, row in enumerate(_z_rows(bmat, fmat, n, d)):
+        for i, value in enumerate(row):
+            point.append(Assign(f"Z[{r * ndof + i}]", sp.sympify(value)))
+    zref = [[ref("Z", r * ndof + i) for i in range(ndof)] for r in range(rows)]
+    for r, row in enumerate(_law_rows(dn, dshear, zref, d)):
+        for i, value in enumerate(row):
+            point.append(Assign(f"Y[{r * ndof + i}]", sp.sympify(value)))
+    for k in range(n):
+        for p in range(n):
+            point.append(Assign(f"GEO[{k * n + p}]",
+                                sp.sympify((bmat[k, :] * smat * bmat[p, :].T)[0])))
+    if fdot is None:
+        point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
+    else:
+        alpha = ref("alpha", 0)
+        for r, row in enumerate(_z_rows(bmat, fdot, n, d)):
+            for i, value in enumerate(row):
+                point.append(Assign(f"ZD[{r * ndof + i}]", sp.sympify(value)))
+        point.append(Loop("rows_product", "jacobian", ("Y", "ZD", rows), scale * alpha))
+        if material:
+            point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
+        point.append(Loop("rows_product", "jacobian_dot", ("Z", "Y", rows), scale * alpha))
+    point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
+
+
+def build(spec: ElementSpec) -> list[Kernel]:
+    """The kernels of the ``quadrature`` family."""
+    return [quadrature_kernel(spec, quantities, "straight") for quantities in KERNELS]
+
+
+def build_law(spec: ElementSpec) -> list[Kernel]:
+    """The kernels of the ``quadrature_law`` family (elastic and damping)."""
+    return [quadrature_law_kernel(spec, name)
+            for name in [kernel_name(q) for q in KERNELS] + list(DAMPING_KERNELS)]
