@@ -27,7 +27,8 @@ def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
     """Orthonormal frame (dim, dim) from a node's gradient vectors {"r_x": (dim,), ...}:
     orthonormalised with r_x kept as the first axis.  A missing gradient (r_x of a 3-node
     beam) is completed from the others: r_x = r_y x r_z in 3D, r_y turned by -90 degrees in
-    2D (so the frame stays right-handed)."""
+    2D (so the frame stays right-handed).  Gradients of shape (k, dim) give k frames
+    (k, dim, dim)."""
     axes = "xyz"[:dim]
     columns = {name[-1]: np.asarray(value, float) for name, value in gradients.items()}
     missing = [a for a in axes if a not in columns]
@@ -40,9 +41,9 @@ def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
     elif missing:
         other = columns["y" if missing[0] == "x" else "x"]
         sign = 1.0 if missing[0] == "x" else -1.0
-        columns[missing[0]] = sign * np.array([other[1], -other[0]])
-    basis, upper = np.linalg.qr(np.column_stack([columns[a] for a in axes]))
-    return basis * np.sign(np.diag(upper))
+        columns[missing[0]] = sign * np.stack([other[..., 1], -other[..., 0]], axis=-1)
+    basis, upper = np.linalg.qr(np.stack([columns[a] for a in axes], axis=-1))
+    return basis * np.sign(np.diagonal(upper, axis1=-2, axis2=-1))[..., None, :]
 
 
 def straight_reference(kind: ElementKind, start, end) -> np.ndarray:

@@ -321,23 +321,31 @@ class Model:
         return scipy.sparse.csr_matrix((data, self.pattern.indices, self.pattern.indptr),
                                        shape=self.pattern.shape)
 
-    def strain_energy(self, q: np.ndarray, body: str | None = None) -> float:
-        """Strain energy (J) of one body or of the whole model."""
-        total = 0.0
+    def strain_energy(self, q: np.ndarray, body: str | None = None):
+        """Strain energy (J) of one body or of the whole model at coordinates q: (size,)
+        gives a float, a block (k, size) an array (k,) (one batched kernel call per body)."""
+        rows = np.atleast_2d(q)
+        total = np.zeros(rows.shape[0])
         for mesh in self.bodies.values():
             if body is None or mesh.name == body:
-                e = np.ascontiguousarray(q[mesh.element_dofs])
-                out = mesh.kernel("energy")({"e": e, "e0": mesh.element_e0})
-                total += float(out["energy"].sum())
-        return total
+                elements, ndof = mesh.element_dofs.shape
+                e = np.ascontiguousarray(rows[:, mesh.element_dofs].reshape(-1, ndof))
+                e0 = mesh.element_e0 if rows.shape[0] == 1 else \
+                    np.tile(mesh.element_e0, (rows.shape[0], 1))
+                out = mesh.kernel("energy")({"e": e, "e0": e0})
+                total += out["energy"].reshape(rows.shape[0], elements).sum(axis=1)
+        return float(total[0]) if q.ndim == 1 else total
 
-    def kinetic_energy(self, v: np.ndarray, body: str | None = None) -> float:
-        """Kinetic energy 1/2 v^T M v (J) of one body or of the whole model."""
+    def kinetic_energy(self, v: np.ndarray, body: str | None = None):
+        """Kinetic energy 1/2 v^T M v (J) of one body or of the whole model: velocities (size,)
+        give a float, a block (k, size) an array (k,)."""
         if body is not None:
             mask = np.zeros(self.size)
             mask[self.bodies[body].coordinates] = 1.0
             v = v * mask
-        return 0.5 * float(v @ (self.mass @ v))
+        if v.ndim == 1:
+            return 0.5 * float(v @ (self.mass @ v))
+        return 0.5 * np.einsum("ij,ij->i", v, (self.mass @ v.T).T)
 
     def nominal_loads(self) -> list[tuple[object, np.ndarray]]:
         """(time law, generalised force (size,) at unit law value) of every load."""
@@ -357,23 +365,25 @@ class Model:
             force += law.value(t) * vector
         return force
 
-    def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
+    def gravity_potential(self, q: np.ndarray, t=0.0):
         """Potential energy (J) of the gravity loads relative to the reference: -F_g . (q - q0),
-        at time t, or at the loads' nominal value when t is None (static analysis)."""
-        total = 0.0
+        at time t (s), or at the loads' nominal value when t is None (static analysis).  A
+        block q (k, size) with times t (k,) gives an array (k,)."""
+        total = np.zeros(np.atleast_2d(q).shape[0])
         for load, (law, force) in zip(self.scene.loads, self.nominal_loads(), strict=True):
             if load.potential:
-                scale = 1.0 if t is None else law.value(t)
-                total -= scale * float(force @ (q - self.reference))
-        return total
+                scale = 1.0 if t is None else law.sample(np.atleast_1d(np.asarray(t, float)))[0]
+                total -= scale * ((q - self.reference) @ force)
+        return float(total[0]) if q.ndim == 1 else total
 
     # --- frames and rigid motions --------------------------------------------------------
 
     def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
-        """Orthonormal frame (dim, dim) of a node at coordinates q: its gradient vectors
-        (``geometry.gradient_frame``: r_x kept as the first axis, a gradient the node does not
+        """Orthonormal frame (dim, dim) of a node at coordinates q (size,), or its frames
+        (k, dim, dim) along a block q (k, size): its gradient vectors
+        (``reference.gradient_frame``: r_x kept as the first axis, a gradient the node does not
         carry completed from the others; exact for a rigidly rotated node such as a hub)."""
-        return geometry.gradient_frame({name: q[self.node_dofs(node, name)] for name in
+        return geometry.gradient_frame({name: q[..., self.node_dofs(node, name)] for name in
                                         self.node_vectors(node) if name != "r"}, self.dim)
 
     def rigid_field(self, translation: Sequence[float] | None = None,

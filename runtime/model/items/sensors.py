@@ -2,9 +2,10 @@
 ``SENSORS``.
 
 Each class declares its TOML keys as fields (``runtime.model.schema.Record``), its ``unit`` and
-whether it is an ``energy`` (plotted together), and computes its value from (model, q, v, t);
-adding one is one class here and one entry in ``SENSORS``.  ``Sensors`` evaluates all the
-sensors of a model's scene.
+whether it is an ``energy`` (plotted together), and computes its values over a block of
+``Samples`` (k output times at once, vectorised: one output time is a block of one); adding
+one is one class here and one entry in ``SENSORS``.  ``Sensors`` evaluates all the sensors of
+a model's scene, at one state or over a block.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ from runtime.model.schema import (
 )
 
 __all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
-           "KineticEnergy", "Position", "PotentialEnergy", "Sensor", "Sensors", "StrainEnergy",
-           "TotalEnergy", "Velocity"]
+           "KineticEnergy", "Position", "PotentialEnergy", "Samples", "Sensor", "Sensors",
+           "StrainEnergy", "TotalEnergy", "Velocity"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -56,6 +57,18 @@ def _name_key(value: Any, path: str, context: Context) -> str:
 
 
 @dataclass(frozen=True)
+class Samples:
+    """States at k output times: ``t`` (k,) in s (None: a static state, loads at their
+    nominal value), coordinates ``q`` and velocities ``v`` (k, size), and the energy
+    ``dissipated`` (k,) in J by damping since the start of the dynamic run."""
+
+    t: np.ndarray | None
+    q: np.ndarray
+    v: np.ndarray
+    dissipated: np.ndarray
+
+
+@dataclass(frozen=True)
 class Sensor(Record):
     """Base of the sensors: ``name`` names a CSV column and a PNG plot; ``unit`` of the value;
     ``energy``: plotted with the other energies."""
@@ -64,9 +77,8 @@ class Sensor(Record):
     energy: ClassVar[bool] = True
     name: str = key(_name_key)
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        """The sensor at coordinates q, velocities v (size,) and time t (s; None: the loads
-        at their nominal value, as in the static analysis)."""
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        """The sensor at every state of ``samples``, (k,)."""
         raise NotImplementedError
 
     def to_dict(self) -> dict[str, Any]:
@@ -91,23 +103,30 @@ class NodeSensor(Sensor):
     frame: NodeRef | str | None = key(node_key, None)
 
     def _vector(self, position: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The vector this sensor reports from the node's position and reference (m)."""
+        """The vectors (k, dim) this sensor reports from the node's positions (k, dim) and
+        reference (dim,) (m)."""
         raise NotImplementedError
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        q = samples.q
         node = model.node_index(self.node)
-        position = q[model.node_dofs(node, "r")]
+        position = q[:, model.node_dofs(node, "r")]
         reference = model.reference[model.node_dofs(node, "r")]
         if self.frame is not None:
             frame_node = model.node_index(self.frame)
-            origin = q[model.node_dofs(frame_node, "r")]
+            origin = q[:, model.node_dofs(frame_node, "r")]
             origin0 = model.reference[model.node_dofs(frame_node, "r")]
-            position = model.node_frame(q, frame_node).T @ (position - origin)
+            position = np.einsum("kji,kj->ki", model.node_frame(q, frame_node),
+                                 position - origin)
             reference = model.node_frame(model.reference, frame_node).T @ (reference - origin0)
-        vector = self._vector(position, reference)
-        if self.component == "norm":
-            return float(np.linalg.norm(vector))
-        return float(vector["xyz".index(self.component)])
+        return _component(self._vector(position, reference), self.component)
+
+
+def _component(vectors: np.ndarray, component: str) -> np.ndarray:
+    """One component (x, y, z) or the norm of vectors (k, dim), (k,)."""
+    if component == "norm":
+        return np.linalg.norm(vectors, axis=1)
+    return vectors[:, "xyz".index(component)].copy()
 
 
 @dataclass(frozen=True)
@@ -140,11 +159,9 @@ class Velocity(Sensor):
     node: NodeRef | str = key(node_key)
     component: str = key(_component_key)
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        velocity = v[model.node_dofs(model.node_index(self.node), "r")]
-        if self.component == "norm":
-            return float(np.linalg.norm(velocity))
-        return float(velocity["xyz".index(self.component)])
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        velocity = samples.v[:, model.node_dofs(model.node_index(self.node), "r")]
+        return _component(velocity, self.component)
 
 
 def _body_key(value: Any, path: str, context: Context) -> str:
@@ -158,8 +175,8 @@ class StrainEnergy(Sensor):
     type: ClassVar[str] = "strain_energy"
     body: str | None = key(_body_key, None)
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return model.strain_energy(q, self.body)
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return model.strain_energy(samples.q, self.body)
 
 
 @dataclass(frozen=True)
@@ -169,8 +186,8 @@ class KineticEnergy(Sensor):
     type: ClassVar[str] = "kinetic_energy"
     body: str | None = key(_body_key, None)
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return model.kinetic_energy(v, self.body)
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return model.kinetic_energy(samples.v, self.body)
 
 
 @dataclass(frozen=True)
@@ -179,8 +196,8 @@ class PotentialEnergy(Sensor):
 
     type: ClassVar[str] = "potential_energy"
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return model.gravity_potential(q, t)
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return model.gravity_potential(samples.q, samples.t)
 
 
 @dataclass(frozen=True)
@@ -189,8 +206,9 @@ class TotalEnergy(Sensor):
 
     type: ClassVar[str] = "total_energy"
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return model.strain_energy(q) + model.kinetic_energy(v) + model.gravity_potential(q, t)
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return (model.strain_energy(samples.q) + model.kinetic_energy(samples.v)
+                + model.gravity_potential(samples.q, samples.t))
 
 
 @dataclass(frozen=True)
@@ -201,8 +219,9 @@ class DissipatedEnergy(Sensor):
 
     type: ClassVar[str] = "dissipated_energy"
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
-        return model.dissipated_energy if t is not None else 0.0
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return samples.dissipated.copy() if samples.t is not None else \
+            np.zeros(len(samples.q))
 
 
 @dataclass(frozen=True)
@@ -213,10 +232,10 @@ class ConstraintViolation(Sensor):
     unit: ClassVar[str] = "m"
     energy: ClassVar[bool] = False
 
-    def value(self, model: ModelView, q: np.ndarray, v: np.ndarray, t: float | None) -> float:
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         if model.joints.shape[0] == 0:
-            return 0.0
-        return float(np.abs(model.joints @ q).max())
+            return np.zeros(len(samples.q))
+        return np.abs(model.joints @ samples.q.T).max(axis=0)
 
 
 SENSORS: dict[str, type[Sensor]] = registry(
@@ -237,6 +256,13 @@ class Sensors:
     def values(self, q: np.ndarray, v: np.ndarray | None = None,
                t: float | None = 0.0) -> dict[str, float]:
         """{sensor name: value} at coordinates q (and velocities v, zero if None), time t
-        (None: loads at their nominal value, as in the static analysis)."""
+        (None: loads at their nominal value, as in the static analysis); the energy
+        dissipated so far is the model's ``dissipated_energy``."""
         v = np.zeros_like(q) if v is None else v
-        return {s.name: s.value(self.model, q, v, t) for s in self.sensors}
+        samples = Samples(None if t is None else np.array([t], float), q[None, :], v[None, :],
+                          np.array([self.model.dissipated_energy]))
+        return {name: float(value[0]) for name, value in self.block(samples).items()}
+
+    def block(self, samples: Samples) -> dict[str, np.ndarray]:
+        """{sensor name: values (k,)} over a block of output states."""
+        return {s.name: s.values(self.model, samples) for s in self.sensors}
