@@ -326,15 +326,10 @@ def _dynamic(data: Any) -> Dynamic:
 
 
 def _solver(data: Any) -> Solver:
-    solver = Solver(**_table_fields(data, "solver", {
+    return Solver(**_table_fields(data, "solver", {
         "method": lambda v, p: choice(v, p, METHODS, "method"),
         "backend": lambda v, p: choice(v, p, BACKENDS, "backend"),
         "engine": lambda v, p: choice(v, p, ENGINES, "engine")}))
-    if solver.engine == "compiled" and solver.backend != "c":
-        raise SceneError(f'solver.engine: the compiled engine needs solver.backend = "c", got '
-                         f'solver.backend = "{solver.backend}"; use engine = "python" or '
-                         f'backend = "c"')
-    return solver
 
 
 def _output(data: Any) -> Output:
