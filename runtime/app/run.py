@@ -8,6 +8,7 @@ Exit codes (:class:`ExitCode`): 0 ok, 1 diverged, 2 invalid scene or options, 3 
 
 from __future__ import annotations
 
+import contextlib
 import time
 import traceback
 from enum import IntEnum
@@ -91,6 +92,8 @@ def run(scene_path, out_dir: str | Path, method: str | None = None,
     except KeyboardInterrupt as interrupt:
         job.summary.interrupted(job.interrupted(interrupt))
         job.save(ExitCode.INTERRUPTED)
+        if plots:
+            job.plots_of_kept_rows()
         raise RunInterrupted(job.summary.to_dict()) from None
     except MemoryError:
         job.summary.failed(f"out of memory during the {job.phase}")
@@ -132,6 +135,8 @@ class _Job:
         self.summary = Summary(scene_path.source if given else str(scene_path))
         self.folder_error: str | None = "the output folder is not ready"
         self.files: set[str] = set()
+        self.unwritten: list[str] = []   # outputs asked for that the environment kept out
+        self.csv = _CsvWriter(self)
         self.simulation: Simulation | None = None
         self._phase: str | None = "scene validation"
 
@@ -166,7 +171,7 @@ class _Job:
                                           f"{', '.join(shapes.PLANES)}, got {plane!r}")
         vtk = requested(scene, "vtk") if vtk is None else vtk
         animation = requested(scene, "animation") if animation is None else animation
-        observers: list[Observer] = [_CsvWriter(self)]
+        observers: list[Observer] = [self.csv]
         series = shapes.VtkSeries(self.out / output.VTK_FOLDER) if vtk else None
         frames = shapes.Frames() if animation else None
         observers += [o for o in (series, frames) if o is not None]
@@ -191,6 +196,8 @@ class _Job:
         finally:
             if series is not None:
                 self.files.update(series.files)
+            if self.csv.writer is not None:   # the summary says what the CSV holds
+                simulation.keep_outputs(self.csv.writer.rows)
         self._phase = "summary writing"
         code = self.save(code)
         if code in (ExitCode.OK, ExitCode.DIVERGED):
@@ -201,8 +208,21 @@ class _Job:
                 drawn = self._shapes(scene, simulation, frames, plane) or drawn
             if drawn:
                 self.summary.timing.postprocess_s += time.perf_counter() - post_start
+                if self.unwritten:
+                    self.summary.add_problem(f"not written: {'; '.join(self.unwritten)}")
+                    code = ExitCode.ENVIRONMENT
                 code = self.save(code)
         return code
+
+    def plots_of_kept_rows(self) -> None:
+        """After an interrupt of the dynamic analysis, the plots of the rows it kept, and the
+        summary again with their files (a second interrupt leaves them undrawn)."""
+        simulation = self.simulation
+        if self.phase != "dynamic analysis" or self.folder_error is not None:
+            return
+        with contextlib.suppress(KeyboardInterrupt):
+            if self._plots(simulation.scene, simulation):
+                self.save(ExitCode.INTERRUPTED)
 
     def _plots(self, scene: Scene, simulation: Simulation) -> bool:
         """The sensor plots of the dynamic analysis; whether any was attempted."""
@@ -212,11 +232,14 @@ class _Job:
         sensors = simulation.sensors
         units = {s.name: s.unit for s in scene.sensors}
         series = {name: history[name] for name in sensors.names}
+        unwritten: list[str] = []
         written, warnings = output.plot_series(history["t"], series, self.out, units,
-                                               sensors.energy_names)
+                                               sensors.energy_names, unwritten=unwritten)
         self.files.update(path.name for path in written)
+        self.unwritten += unwritten
         for text in warnings:
-            self.summary.warn(text)
+            if text not in unwritten:
+                self.summary.warn(text)
         return True
 
     def _shapes(self, scene: Scene, simulation: Simulation, frames: shapes.Frames | None,
@@ -237,7 +260,11 @@ class _Job:
                 draw(self.out / name)
                 self.files.add(name)
             except Exception as error:
-                self.summary.warn(f"{name}: not written ({type(error).__name__}: {error})")
+                text = f"{name}: not written ({type(error).__name__}: {error})"
+                if isinstance(error, OSError):   # a full disk: exit 3, not a warning
+                    self.unwritten.append(text)
+                else:
+                    self.summary.warn(text)
         return bool(drawn)
 
     def save(self, code: ExitCode) -> ExitCode:

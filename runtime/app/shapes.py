@@ -12,7 +12,8 @@ and mode shapes (all linear in the coordinates) are sampled the same way.
 Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
 * :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates,
-  point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given;
+  point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given (points at
+  the reference configuration: Warp By Vector applies the displacement once);
 * :func:`write_pvd` - a ParaView collection of VTU files with their times;
 * :class:`VtkSeries` - a run observer writing ``vtk/dynamic_NNNNNN.vtu`` at every output time
   and ``vtk/dynamic.pvd``, plus ``vtk/static.vtu`` and ``vtk/mode_K.vtu`` / ``vtk/modes.pvd``;
@@ -24,6 +25,7 @@ Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -198,9 +200,10 @@ def _sample_points(body: BodyMesh, axes: list[int],
 
 def write_vtu(path: str | Path, shape: Shape, q: np.ndarray,
               vectors: dict[str, np.ndarray]) -> Path:
-    """The shape at coordinates ``q`` (size,) into the VTU file ``path`` (points in m, the
-    cells of ``shape``), with point data ``{name: (points, 3)}`` (e.g. displacement in m,
-    velocity in m/s)."""
+    """The shape at coordinates ``q`` (size,; the reference configuration for a state, as
+    :class:`VtkSeries` writes them) into the VTU file ``path`` (points in m, the cells of
+    ``shape``), with point data ``{name: (points, 3)}`` (e.g. displacement in m, velocity in
+    m/s)."""
     import meshio
 
     mesh = meshio.Mesh(shape.sample(q), shape.cells, point_data=vectors)
@@ -229,16 +232,24 @@ def write_pvd(path: str | Path, entries: Sequence[tuple[float, str]]) -> Path:
 
 class VtkSeries(Observer):
     """Writes a run's shapes into ``folder`` (``vtk/`` of the run folder) as they are
-    computed: ``static.vtu``, ``mode_K.vtu`` (point data ``mode``, the mode shape normalised
-    to a largest nodal displacement of 1, at the linearisation point) with ``modes.pvd``
-    (time = mode number), ``dynamic_NNNNNN.vtu`` at every output time with ``dynamic.pvd``
-    (written when the dynamic analysis ends, however it ends).  ``files``: the static file
-    and the collections written, as ``<folder name>/<file>``."""
+    computed, the finite-element way: points at the reference configuration, the motion as
+    point data (ParaView's Warp By Vector on ``displacement`` shows the deformed shape).
+    ``static.vtu`` and ``dynamic_NNNNNN.vtu`` at every output time carry ``displacement``
+    (m) and ``velocity`` (m/s), with ``dynamic.pvd`` (written when the dynamic analysis
+    ends, however it ends); ``mode_K.vtu`` (points at the linearisation point, point data
+    ``mode``, the mode shape normalised to a largest nodal displacement of 1) with
+    ``modes.pvd`` (time = mode number).  ``files``: the static file and the collections
+    written, as ``<folder name>/<file>``.  Each run it observes starts a fresh series: the
+    files of the previous one are removed."""
 
     def __init__(self, folder: str | Path) -> None:
+        if not isinstance(folder, str | os.PathLike):
+            raise TypeError(f"folder: expected the path of the output folder (str or "
+                            f"pathlib.Path), got {type(folder).__name__} {folder!r}")
         self.folder = Path(folder)
         self.files: list[str] = []
         self._entries: list[tuple[float, str]] = []
+        self._written: list[str] = []   # every file of the current series
 
     def begin(self, model: Model) -> None:
         self.shape = Shape(model)
@@ -246,20 +257,30 @@ class VtkSeries(Observer):
         self.zero = np.zeros((self.shape.points, 3))
         try:
             self.folder.mkdir(exist_ok=True)
+            for name in self._written:   # a second run: a fresh series
+                (self.folder / name).unlink(missing_ok=True)
         except OSError as error:
-            raise output.OutputError(f"{self.folder}: cannot create the folder "
+            raise output.OutputError(f"{self.folder}: cannot prepare the folder "
                                      f"({error.strerror or error})") from None
+        self.files, self._entries, self._written = [], [], []
 
     def _write(self, name: str, q: np.ndarray, vectors: dict[str, np.ndarray]) -> None:
         write_vtu(self.folder / name, self.shape, q, vectors)
+        self._written.append(name)
 
     def _collection(self, name: str, entries: list[tuple[float, str]]) -> None:
         write_pvd(self.folder / name, entries)
+        self._written.append(name)
         self.files.append(f"{self.folder.name}/{name}")
 
+    def _state(self, name: str, q: np.ndarray, v: np.ndarray | None) -> None:
+        """The state ``q``, ``v`` as ``name``: reference points, displacement, velocity."""
+        self._write(name, self.reference, {
+            "displacement": self.shape.sample(q - self.reference),
+            "velocity": self.zero if v is None else self.shape.sample(v)})
+
     def static(self, q: np.ndarray) -> None:
-        self._write("static.vtu", q, {"displacement": self.shape.sample(q - self.reference),
-                                      "velocity": self.zero})
+        self._state("static.vtu", q, None)
         self.files.append(f"{self.folder.name}/static.vtu")
 
     def modal(self, modes: Modes) -> None:
@@ -272,8 +293,7 @@ class VtkSeries(Observer):
 
     def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
         name = f"dynamic_{len(self._entries):06d}.vtu"
-        self._write(name, q, {"displacement": self.shape.sample(q - self.reference),
-                              "velocity": self.shape.sample(v)})
+        self._state(name, q, v)
         self._entries.append((t, name))
 
     def dynamic_end(self) -> None:

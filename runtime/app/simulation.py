@@ -9,13 +9,13 @@ series stream rows and files while the dynamic analysis goes on).
 from __future__ import annotations
 
 import contextlib
+import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from runtime import progress
 from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
@@ -24,7 +24,7 @@ from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
 from runtime.model.settings import Static
-from runtime.progress import Bar, enabled
+from runtime.progress import Bar, enabled, warn
 from runtime.solve import engines
 from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
@@ -55,7 +55,7 @@ class Simulation:
         self.scene, self.method, self.backend = scene, method, backend
         self.engine_name = engine
         self.store_states = store_states
-        self.observers = list(observers)
+        self.observers = _observers(observers)
         self.summary = summary if summary is not None else Summary(scene.source)
         self.summary.record_title(scene.title)
         self.phase = "model build"
@@ -70,9 +70,16 @@ class Simulation:
         """Build the model (kernels compiled or loaded) and its sensors; choose the engine.
         Raises ValueError (invalid options), JitEnvironmentError and OSError (kernels)."""
         self.phase = "model build"
+        solver = self.scene.solver
+        if self.engine_name is None and solver.engine == "compiled" and \
+                (self.backend or solver.backend) != "c":
+            # the scene's engine (an engine option is checked by engines.choose)
+            given = (f'solver.backend = "{solver.backend}"' if self.backend is None
+                     else f'the backend option "{self.backend}"')
+            raise ValueError(f'solver.engine: the compiled engine needs backend "c", got '
+                             f'{given}; use engine = "python" or backend = "c"')
         model = Model(self.scene, self.method, self.backend)
-        self.engine_name = engines.choose(self.engine_name or self.scene.solver.engine,
-                                          model.backend)
+        self.engine_name = engines.choose(self.engine_name or solver.engine, model.backend)
         self.summary.record_build(model.method, model.backend, model.timing["compile_s"],
                                   model.timing["preprocess_s"])
         self.sensors = Sensors(model)
@@ -82,7 +89,6 @@ class Simulation:
             analysis.check_held(model)   # before any work: a free body has no equilibrium
         for text in locking_warnings(self.scene):
             self.summary.warn(text)
-            progress.warn(text)
         for observer in self.observers:
             observer.begin(model)
         return model
@@ -138,14 +144,30 @@ class Simulation:
 
     def _observe(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
         values = self.sensors.values(q, v, t)
-        for observer in self.observers:
-            observer.sample(t, q, v, values)
+        # the history first: it is never behind what an observer wrote (``keep_outputs``
+        # cuts it back to what they did write)
         self.history["t"].append(t)
         for name in self.sensors.names:
             self.history[name].append(values[name])
         if self.store_states:
             self._states[0].append(np.array(q))
             self._states[1].append(np.array(v))
+        for observer in self.observers:
+            observer.sample(t, q, v, values)
+
+    def keep_outputs(self, count: int) -> None:
+        """Keep the first ``count`` output times of the dynamic analysis only (those a writer
+        did write when the run stopped): history, states and the summary's ``t_reached``
+        and ``sensors_final`` follow."""
+        history, dynamic = self.history, self.summary.dynamic
+        if not history or len(history["t"]) <= count:
+            return
+        for values in (*history.values(), *self._states):
+            del values[count:]
+        if dynamic is not None:
+            dynamic.t_reached = history["t"][-1] if count else 0.0
+            dynamic.sensors_final = {name: history[name][-1] for name in self.sensors.names
+                                     if history[name]}
 
     def _dynamic(self, settings) -> int:
         """The dynamic analysis with the chosen engine (``runtime.solve.engines``); fills
@@ -204,6 +226,21 @@ class Simulation:
                       self.model, exit_code)
 
 
+def _observers(observers: Sequence[Observer]) -> list[Observer]:
+    """``observers`` as a list; TypeError naming the argument unless it is a sequence of
+    :class:`Observer` objects."""
+    if not isinstance(observers, Sequence) or isinstance(observers, str):
+        raise TypeError(f"observers: expected a sequence (list or tuple) of "
+                        f"runtime.app.result.Observer objects, got {type(observers).__name__} "
+                        f"{observers!r}")
+    for k, observer in enumerate(observers):
+        if not isinstance(observer, Observer):
+            raise TypeError(f"observers[{k}]: expected a runtime.app.result.Observer (subclass "
+                            f"it and override the hooks you need), got "
+                            f"{type(observer).__name__} {observer!r}")
+    return list(observers)
+
+
 def locking_warnings(scene: Scene) -> list[str]:
     """A warning per material and kind of domain (beams, plates) that uses the svk law with
     nu != 0 (Poisson locking, by the amount ``ElementKind.svk_locking`` states)."""
@@ -216,9 +253,12 @@ def locking_warnings(scene: Scene) -> list[str]:
         locking = dict(filter(None, (element_kind(b.element).svk_locking(nu)
                                      for b in scene.bodies if b.material == name)))
         if "beams" in locking:
+            excess = locking["beams"]
             out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
-                       f"(Poisson locking): its beams come out up to {locking['beams']:.0%} "
-                       f"too stiff in bending; use law = \"ecm\" (docs/laws.md)")
+                       f"(Poisson locking): its beams come out up to {excess:.0%} too stiff "
+                       f"in bending (bending modulus lam + 2G = {1 + excess:.3g} E instead of "
+                       f"E, 2D and 3D beams alike: deflections up to {excess / (1 + excess):.0%}"
+                       f" too small); use law = \"ecm\" (docs/laws.md)")
         if "plates" in locking:
             out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
                        f"(Poisson thickness locking): its plates come out about "
@@ -245,6 +285,9 @@ def run_scene(scene: Scene | str | Path, method: str | None = None,
     KeyboardInterrupt as it comes.
     """
     start = time.perf_counter()
+    if not isinstance(scene, Scene | str | os.PathLike):
+        raise TypeError(f"scene: expected a runtime.Scene or the path of a TOML scene file "
+                        f"(str or pathlib.Path), got {type(scene).__name__} {scene!r}")
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if store_states is None:
@@ -252,6 +295,8 @@ def run_scene(scene: Scene | str | Path, method: str | None = None,
     simulation = Simulation(scene, method, backend, engine, store_states, observers)
     with enabled(progress):
         simulation.build()
+        for text in simulation.summary.warnings:   # ``ancf run`` reports them at the end
+            warn(text)
         code = simulation.analyses()
     simulation.summary.timing.total_s = time.perf_counter() - start
     return simulation.result(code)

@@ -269,14 +269,18 @@ def _label(name: str, unit: str | None, width: int = 40) -> str:
 
 def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
                 out_dir: str | Path, units: Mapping[str, str] | None = None,
-                energies: Sequence[str] = ()) -> tuple[list[Path], list[str]]:
+                energies: Sequence[str] = (), *,
+                unwritten: list[str] | None = None) -> tuple[list[Path], list[str]]:
     """Plot each series against t (s) into ``out_dir``: one PNG per series not in
     ``energies`` (:func:`plot_file_name`), and ``energies.png`` with one panel per series of
-    ``energies``, each on its own scale (a 1e-5 J curve stays visible beside a 1.7 J one).
+    ``energies``, each on its own scale (a 1e-5 J curve stays visible beside a 1.7 J one),
+    as the change from its initial value (the value at t = 0 in the panel's label).
     y axes carry ``units[name]``.  Each PNG is written atomically.
 
     A plot that fails is a warning, never an exception (except KeyboardInterrupt): returns
-    the written paths and the warnings.  Nothing is drawn when t is empty.
+    the written paths and the warnings.  Nothing is drawn when t is empty.  ``unwritten``,
+    if given, also receives the warnings of the files that the environment kept from being
+    written (an OSError: a full disk, a read-only folder).
     """
     units = units or {}
     if len(t) == 0 or not series:
@@ -303,6 +307,8 @@ def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
             written.append(target)
         except Exception as error:
             problems.append(f"{file}: not written ({type(error).__name__}: {error})")
+            if isinstance(error, OSError) and unwritten is not None:
+                unwritten.append(problems[-1])
 
     def single(name: str):
         fig = Figure(figsize=(6.4, 4.0), layout="constrained")
@@ -318,10 +324,14 @@ def plot_series(t: Sequence[float], series: Mapping[str, Sequence[float]],
         fig = Figure(figsize=(6.4, 1.2 + 1.8 * len(names)), layout="constrained")
         axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
         for ax, name in zip(axes, names, strict=True):
-            ax.plot(t, series[name], lw=1.2)
-            ax.set_ylabel(_label(name, units.get(name, "J"), 24))
+            unit = units.get(name, "J")
+            first = float(series[name][0])
+            ax.plot(t, [float(v) - first for v in series[name]], lw=1.2)
+            ax.set_ylabel(_label(name, unit, 24))
+            ax.set_title(f"{_label(name, None)}: change from its initial value {first:.7g} "
+                         f"{unit} (t = {float(t[0]):g} s)", fontsize=9, loc="left")
             ax.grid(True, alpha=0.3)
-        axes[0].set_title("energies")
+        fig.suptitle("energies")
         axes[-1].set_xlabel("t (s)")
         return fig
 

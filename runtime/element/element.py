@@ -302,11 +302,13 @@ class Element:
 
     def _family(self, family: str):
         kernels = kernel_family(self.kind.name, family, self.backend)
+        # charged once per family (this is called again for a family already loaded), and
+        # only if loaded for this element, not before
         if family not in self.loaded_families:
             self.loaded_families.append(family)
-        if kernels.loaded_at >= self._created:   # loaded for this element, not before
-            self.timing["compile_s"] += kernels.compile_s
-            self.timing["load_s"] += kernels.load_s
+            if kernels.loaded_at >= self._created:
+                self.timing["compile_s"] += kernels.compile_s
+                self.timing["load_s"] += kernels.load_s
         return kernels
 
     def _orders(self, quadrature) -> tuple[int, ...]:

@@ -126,15 +126,15 @@ class Body:
         return self.placement.node_position(index, self.grid_shape)
 
     def to_dict(self) -> dict[str, Any]:
-        """The TOML table ``[[body]]``."""
-        section = ({"thickness": self.thickness} if self.rectangle is not None
-                   else {"height": self.height, "width": self.width})
+        """The TOML table ``[[body]]``: what the body was given, so that the parser rejects
+        what does not fit its kind (a plate's height, a beam's thickness, a plate's
+        elements beside its grid)."""
+        section = {"height": self.height, "width": self.width, "thickness": self.thickness}
         head = {"name": self.name, "element": self.element, "material": self.material,
                 "section": {k: v for k, v in section.items() if v is not None}}
         # a rectangle's grid sets its elements (written only when they disagree: an error)
         grid = getattr(self.rectangle, "grid", None)
-        if self.rectangle is None or (self.elements is not None
-                                      and (grid is None or self.elements != math.prod(grid))):
+        if self.elements is not None and (grid is None or self.elements != math.prod(grid)):
             head["elements"] = self.elements
         return {**plain(head),
-                **table(self, skip=(*head, "height", "width", "thickness", "elements"))}
+                **table(self, skip=(*head, *section, "elements"))}

@@ -1,7 +1,9 @@
 """Cross-checks of a parsed scene, for what it would do wrong:
 
-* constraints: at most one clamp, pin or prescribed rotation per node (a clamp already holds
-  what a pin holds; a clamp and a prescribed rotation contradict each other); joints join two
+* constraints: at most one kind of clamp, pin or prescribed rotation per node (a clamp
+  already holds what a pin holds; a clamp and a prescribed rotation contradict each other;
+  two clamps or two pins of one node, as at the corner of two clamped edges, are merged;
+  two prescribed rotations are refused); joints join two
   distinct nodes at the same place in the reference, each pair once, and never two nodes whose
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
@@ -23,7 +25,7 @@ from runtime.model.items.sensors import Sensor
 from runtime.model.schema import NodeRef
 from runtime.model.settings import MULTIPLE_TOLERANCE, Dynamic
 
-# two node constraints on one node: why not (by their types; one type: the same twice)
+# two node constraints on one node: why not (by their types; one type listed: refused twice)
 CONFLICTS = {
     frozenset({"clamp", "pin"}): "redundant: the clamp holds every coordinate of the node, the "
                                  "pin only its position; keep the clamp",
@@ -47,9 +49,9 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
             if j == i:
                 continue
             first = constraints[j]
-            why = CONFLICTS.get(frozenset({first.type, c.type}),
-                                "the same constraint twice" if first.type == c.type else
-                                "a node has at most one of them")
+            if first.type == c.type and frozenset({c.type}) not in CONFLICTS:
+                continue   # held twice the same way (two clamped edges' corner): merged
+            why = CONFLICTS.get(frozenset({first.type, c.type}), "a node has at most one of them")
             where = c.target_key
             raise SceneError(f"constraint[{i}].{where}: constraint[{j}] ({first.type}) and "
                              f"constraint[{i}] ({c.type}) on node {node}: {why}")

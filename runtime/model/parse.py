@@ -15,6 +15,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from runtime.catalog import (
     BACKENDS,
     DEFAULT_LAW,
@@ -44,6 +46,7 @@ from runtime.model.schema import (
     number,
     parse_record,
     rotation_vector,
+    size,
     string,
     vector,
 )
@@ -63,6 +66,13 @@ MODAL_ABOUT = ("reference", "static")
 TITLE_LENGTH = 200
 
 
+# a shear correction factor is of order 1 (5/6 for a rectangle); far outside, the shear
+# stiffness k G dwarfs or vanishes beside E and the results are meaningless
+SHEAR_CORRECTION_RANGE = (1e-2, 1e2)
+# largest kinetic energy (J) of a body's initial motion: beyond it, the energies, their sums
+# and the squares Newton's norms form overflow double precision (2e308)
+KINETIC_ENERGY_LIMIT = 1e100
+
 # a relative Newton tolerance outside this range is never met or accepts unconverged steps
 TOLERANCE_RANGE = (1e-15, 1e-2)
 
@@ -78,15 +88,20 @@ def _material(name: str, data: Any) -> Material:
     path = f"material.{name}" if name else 'material.""'
     checked_name(name, path, "a material name")
     keys(data, path, ("E", "nu", "rho"), ("law", "shear_correction", "damping"))
-    E = number(data["E"], f"{path}.E", positive=True)
+    E = size(data["E"], f"{path}.E", "Young's modulus in Pa")
     nu = number(data["nu"], f"{path}.nu")
     if not -1.0 < nu < 0.5:
         raise SceneError(f"{path}.nu: expected a Poisson ratio in (-1, 0.5), got {show(nu)}")
-    rho = number(data["rho"], f"{path}.rho", positive=True)
+    rho = size(data["rho"], f"{path}.rho", "a density in kg/m^3")
     law = choice(data.get("law", DEFAULT_LAW), f"{path}.law", material_laws(), "material law")
     shear = None
     if "shear_correction" in data:
         shear = number(data["shear_correction"], f"{path}.shear_correction", positive=True)
+        low, high = SHEAR_CORRECTION_RANGE
+        if not low <= shear <= high:
+            raise SceneError(f"{path}.shear_correction: expected a shear correction factor in "
+                             f"[{low:g}, {high:g}] (of order 1: 5/6 for a rectangular "
+                             f"section), got {show(data['shear_correction'])}")
         if law != "ecm":
             raise SceneError(f'{path}.shear_correction: only meaningful with law = "ecm", got '
                              f'law = "{law}"; remove it or set law = "ecm"')
@@ -149,6 +164,29 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                 velocity, spin, rectangle, thickness)
 
 
+def _check_initial_motion(body: Body, path: str, rho: float) -> None:
+    """SceneError when the initial velocity or spin of ``body`` (at ``path``) gives it a
+    kinetic energy beyond KINETIC_ENERGY_LIMIT: a bound on its speed from its mass."""
+    mass = rho * math.prod(body.geometry) * math.prod(body.counts)
+    fastest = math.sqrt(2 * KINETIC_ENERGY_LIMIT / mass)
+    speeds = []
+    if body.initial_velocity is not None:
+        speeds.append(("initial_velocity", math.hypot(*body.initial_velocity)))
+    if body.initial_angular_velocity is not None:
+        spin = body.initial_angular_velocity
+        reach = math.dist(spin.about, (0.0,) * len(spin.about)) + \
+            math.sqrt(len(spin.about)) * body.placement.extent()
+        speeds.append(("initial_angular_velocity.omega", math.hypot(*np.atleast_1d(
+            spin.omega)) * reach))
+    for key, speed in speeds:
+        if speed > fastest:
+            raise SceneError(f"{path}.{key}: expected a motion of body {show(body.name)} "
+                             f"({mass:.3g} kg) at speeds of at most {fastest:.3g} m/s (a "
+                             f"kinetic energy of at most {KINETIC_ENERGY_LIMIT:g} J, what double "
+                             f"precision carries through a run), got speeds up to {speed:.3g} "
+                             f"m/s")
+
+
 def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
     """Section, element count and placement (a ``Line`` or an ``Arc``) of a line body (beam
     kinds)."""
@@ -161,8 +199,8 @@ def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
                          f"elements along the body")
     section = keys(data["section"], f"{path}.section", ("height", "width"), (),
                    "a table {height = H, width = W}")
-    height = number(section["height"], f"{path}.section.height", positive=True)
-    width = number(section["width"], f"{path}.section.width", positive=True)
+    height = size(section["height"], f"{path}.section.height", "a section height in m")
+    width = size(section["width"], f"{path}.section.width", "a section width in m")
     elements = count(data["elements"], f"{path}.elements")
     straight = any(key in data for key in Line.keys)
     if straight and "arc" in data:
@@ -192,7 +230,7 @@ def _plate_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
                          f"element)")
     section = keys(data["section"], f"{path}.section", ("thickness",), (),
                    "a table {thickness = T}")
-    thickness = number(section["thickness"], f"{path}.section.thickness", positive=True)
+    thickness = size(section["thickness"], f"{path}.section.thickness", "a thickness in m")
     rectangle = Rectangle.parse(data["rectangle"], f"{path}.rectangle", dim, f"{kind} is {dim}D")
     return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle)
 
@@ -335,6 +373,9 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
                              f"body[0], got {body.element} ({body.dim}D)")
         bodies.append(body)
     check_model_size(tuple(bodies))
+    for i, body in enumerate(bodies):   # element sizes once the counts are known to fit
+        body.placement.check_counts(body.counts, f"body[{i}]")
+        _check_initial_motion(body, f"body[{i}]", materials[body.material].rho)
     context = Context(bodies[0].dim, Nodes(tuple(bodies)))
 
     constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)

@@ -16,9 +16,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.element import reference
+from runtime.element.element import MAGNITUDE
 from runtime.kernels.kind import ElementKind
 from runtime.model.errors import SceneError, show
-from runtime.model.schema import count, keys, number, table, vector
+from runtime.model.schema import count, in_range, keys, number, table, vector
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,18 @@ class Placement:
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         """Size (m) of one element along each meshed axis."""
         raise NotImplementedError
+
+    def check_counts(self, counts: tuple[int, ...], path: str) -> None:
+        """SceneError at the body's count key (``path.count_key``, per axis ``[k]`` on a
+        grid) when so many elements make an element side shorter than ``runtime.Element``
+        takes (1 / MAGNITUDE m)."""
+        for k, (side, n) in enumerate(zip(self.element_sides(counts), counts, strict=True)):
+            if side < 1 / MAGNITUDE:
+                key = self.count_key + (f"[{k}]" if self.mesh_dims > 1 else "")
+                most = max(1, math.floor(side * n * MAGNITUDE))
+                raise SceneError(f"{path}.{key}: {n} elements make elements {side:.3g} m long; "
+                                 f"expected elements of at least {1 / MAGNITUDE:g} m (at most "
+                                 f"{most} elements), got {n}")
 
     def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
         """Reference position (m) of node ``index`` of the structured mesh whose node grid has
@@ -78,6 +91,8 @@ class Line(Placement):
         if not math.isfinite(sum((b - a) * (b - a) for a, b in zip(start, end, strict=True))):
             raise SceneError(f"{path}.end: expected a body of finite length, got start = "
                              f"{show(data['start'])} and end = {show(data['end'])}")
+        in_range(math.dist(start, end), f"{path}.end", "a body length |end - start| in m",
+                 f" (start = {show(data['start'])})")
         return cls(start, end)
 
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
@@ -121,11 +136,14 @@ class Arc(Placement):
         if not math.isfinite(extent * extent):
             raise SceneError(f"{path}.radius: expected an arc of finite extent, got radius "
                              f"{show(a['radius'])} about centre {show(a['center'])}")
+        in_range(radius, f"{path}.radius", "an arc radius in m")
         start_angle = number(a.get("start_angle_deg", 0.0), f"{path}.start_angle_deg")
         angle = number(a["angle_deg"], f"{path}.angle_deg")
         if angle == 0.0 or abs(angle) > 360.0:
             raise SceneError(f"{path}.angle_deg: expected a non-zero angle of at most 360 "
                              f"degrees in magnitude, got {show(a['angle_deg'])}")
+        in_range(radius * math.radians(abs(angle)), f"{path}.angle_deg",
+                 "an arc length radius x angle in m", f" (radius = {show(a['radius'])} m)")
         return cls(center, radius, start_angle, angle)
 
     def to_dict(self) -> dict[str, Any]:
@@ -172,16 +190,21 @@ class Rectangle(Placement):
         r = keys(data, path, ("corner", "size", "grid"), (),
                  "a table {corner = [x, y, z], size = [a, b], grid = [nx, ny]}")
         corner = vector(r["corner"], f"{path}.corner", dim, why)
-        size = vector(r["size"], f"{path}.size", 2, "the sides a along x and b along y, in m")
-        extent = size[0] + size[1] + max(map(abs, corner))
-        if min(size) <= 0 or not math.isfinite(extent * extent):
+        if max(map(abs, corner)) > MAGNITUDE:
+            raise SceneError(f"{path}.corner: expected a point with coordinates of at most "
+                             f"{MAGNITUDE:g} m in magnitude, got {show(r['corner'])}")
+        sides = vector(r["size"], f"{path}.size", 2, "the sides a along x and b along y, in m")
+        if min(sides) <= 0 or not math.isfinite((sides[0] + sides[1]) ** 2):
             raise SceneError(f"{path}.size: expected two positive finite sides in m, got "
                              f"{show(r['size'])}")
+        for side in sides:
+            in_range(side, f"{path}.size", "sides in m")
         grid = r["grid"]
         if not isinstance(grid, list) or len(grid) != 2:
             raise SceneError(f"{path}.grid: expected [nx, ny], two positive integers "
                              f"(elements along x and y), got {show(grid)}")
-        return cls(corner, size, tuple(count(n, f"{path}.grid[{k}]") for k, n in enumerate(grid)))
+        return cls(corner, sides,
+                   tuple(count(n, f"{path}.grid[{k}]") for k, n in enumerate(grid)))
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``rectangle = {...}``."""

@@ -21,6 +21,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from runtime.element.element import MAGNITUDE
 from runtime.model.errors import SceneError, is_finite, show
 from runtime.model.time_laws import Law, parse_law
 
@@ -129,6 +130,22 @@ def number(value: Any, path: str, positive: bool = False) -> float:
     if positive and value <= 0:
         raise SceneError(f"{path}: expected a positive number, got {show(value)}")
     return float(value)
+
+
+def in_range(value: float, path: str, what: str, hint: str = "") -> float:
+    """``value`` (a positive number: a size in m, a modulus in Pa, a density in kg/m^3)
+    within [1 / MAGNITUDE, MAGNITUDE], the range ``runtime.Element`` takes (``hint``: how to
+    fix it)."""
+    if not 1 / MAGNITUDE <= value <= MAGNITUDE:
+        raise SceneError(f"{path}: expected {what} between {1 / MAGNITUDE:g} and "
+                         f"{MAGNITUDE:g}{hint}, got {show(value)}")
+    return value
+
+
+def size(value: Any, path: str, what: str) -> float:
+    """A positive finite number within the range of :func:`in_range` (``what`` it is, with
+    its unit, e.g. "a section height in m")."""
+    return in_range(number(value, path, positive=True), path, what)
 
 
 def string(value: Any, path: str) -> str:
