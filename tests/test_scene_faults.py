@@ -227,9 +227,6 @@ CASES = [
     ("pin and clamp on one node", {"constraint+": hold("pin", "beam:0")},
      "constraint[1].node: constraint[0] (clamp) and constraint[1] (pin) on node beam:0: "
      "redundant: the clamp holds every coordinate of the node"),
-    ("clamp twice", {"constraint+": hold("clamp", "beam:-11")},
-     "constraint[1].node: constraint[0] (clamp) and constraint[1] (clamp) on node beam:0: the "
-     "same constraint twice"),
     ("pin and prescribed rotation on one node",
      {"constraint": [rot("beam:0"), hold("pin", "beam:0")]},
      "constraint[1].node: constraint[0] (prescribed_rotation) and constraint[1] (pin) on node "
