@@ -66,7 +66,8 @@ class Observer:
     """Receives a run's results as they are computed; every hook does nothing by default.
 
     Order: ``begin`` once the model is built; ``static``, ``modal`` after those analyses;
-    ``dynamic_start``, ``sample`` at every output time (t = 0 included), then
+    ``dynamic_start``, ``samples`` for every block of output times (t = 0 included; by
+    default ``sample`` at each), then
     ``dynamic_end`` however the dynamic analysis ends (when it ends by an exception, errors
     of ``dynamic_end`` are ignored).  An exception of a hook stops the run.
     """
@@ -85,6 +86,15 @@ class Observer:
 
     def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
         """Output time t (s): coordinates, velocities (size,) and sensor values."""
+
+    def samples(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                values: dict[str, np.ndarray]) -> None:
+        """A block of output times (k,) in s: coordinates and velocities (k, size), sensor
+        values (k,) each.  By default ``sample`` at each time in turn; an observer that can
+        take a whole block at once (a CSV writer) overrides it."""
+        for row, t in enumerate(times):
+            self.sample(float(t), q[row], v[row],
+                        {name: float(value[row]) for name, value in values.items()})
 
     def dynamic_end(self) -> None:
         """The dynamic analysis ended (completed, diverged, interrupted or failed)."""

@@ -117,8 +117,10 @@ class _CsvWriter(Observer):
         self.job.files.add(CSV)
         self.writer = output.TimeSeriesWriter(self.job.out / CSV, names)
 
-    def sample(self, t: float, q: np.ndarray, v: np.ndarray, values: dict[str, float]) -> None:
-        self.writer.write(t, [values[name] for name in self.names])
+    def samples(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                values: dict[str, np.ndarray]) -> None:
+        self.writer.write_rows(times, np.column_stack([values[name] for name in self.names])
+                               if self.names else np.empty((len(times), 0)))
 
     def dynamic_end(self) -> None:
         if self.writer is not None:

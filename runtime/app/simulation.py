@@ -20,7 +20,7 @@ from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
 from runtime.kernels.kind import element_kind
-from runtime.model.items.sensors import Sensors
+from runtime.model.items.sensors import Samples, Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
 from runtime.model.settings import Static
@@ -142,18 +142,29 @@ class Simulation:
         for observer in self.observers:
             observer.modal(self.modes)
 
-    def _observe(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
-        values = self.sensors.values(q, v, t)
+    def _observe(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                 dissipated: np.ndarray) -> None:
+        """A block of output times (k,): states (k, size), dissipated energy (k,)."""
+        values = self.sensors.block(Samples(times, q, v, dissipated))
         # the history first: it is never behind what an observer wrote (``keep_outputs``
         # cuts it back to what they did write)
-        self.history["t"].append(t)
+        self.history["t"].extend(times.tolist())
         for name in self.sensors.names:
-            self.history[name].append(values[name])
+            self.history[name].extend(values[name].tolist())
         if self.store_states:
-            self._states[0].append(np.array(q))
-            self._states[1].append(np.array(v))
-        for observer in self.observers:
-            observer.sample(t, q, v, values)
+            self._states[0].extend(np.array(q))
+            self._states[1].extend(np.array(v))
+        if all(type(o).samples is not Observer.samples for o in self.observers):
+            for observer in self.observers:
+                observer.samples(times, q, v, values)
+            return
+        # an observer takes one output time at a time: every observer sees each time before
+        # any sees the next (as the order of the hooks promises)
+        for row in range(len(times)):
+            rows = slice(row, row + 1)
+            one = {name: value[rows] for name, value in values.items()}
+            for observer in self.observers:
+                observer.samples(times[rows], q[rows], v[rows], one)
 
     def keep_outputs(self, count: int) -> None:
         """Keep the first ``count`` output times of the dynamic analysis only (those a writer
@@ -183,7 +194,8 @@ class Simulation:
         code, failed = 0, True
         bar = Bar("dynamic analysis", settings.t_end, "s")
         try:
-            engine.run(settings.t_end, settings.step, self._observe, bar)
+            engine.run(settings.t_end, settings.step, progress=bar,
+                       observe_block=self._observe)
             failed = False
         except Divergence as error:
             self.summary.diverged(str(error))

@@ -24,6 +24,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
 
+import numpy as np
+
 __all__ = ["ENERGIES_FILE", "OutputError", "RESERVED_FILES", "TimeSeriesWriter", "VTK_FOLDER",
            "atomic_file", "atomic_path", "plot_file_name", "plot_series", "prepare_folder",
            "write_json_atomic"]
@@ -188,6 +190,22 @@ class TimeSeriesWriter:
         self._append(line.encode("ascii"))
         self.rows += 1
         self.last_t = float(t)
+
+    def write_rows(self, times: Sequence[float], values: np.ndarray) -> None:
+        """Append one row per time (s), ``values`` (rows, columns) in column order, in one
+        write (whole rows: a failure cuts the file back to the rows before them)."""
+        if self._file is None:
+            raise ValueError(f"{self.path}: write after close")
+        values = np.asarray(values, float).reshape(len(times), -1)
+        if values.shape[1] != len(self.columns):
+            raise ValueError(f"expected {len(self.columns)} values, got {values.shape[1]}")
+        if not len(times):
+            return
+        lines = "".join(",".join([repr(float(t)), *map(repr, row)]) + "\n"
+                        for t, row in zip(times, values.tolist(), strict=True))
+        self._append(lines.encode("ascii"))
+        self.rows += len(times)
+        self.last_t = float(times[-1])
 
     def _append(self, data: bytes) -> None:
         """Write ``data`` whole, or cut the file back to its last whole line and close it."""

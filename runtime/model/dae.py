@@ -154,17 +154,18 @@ class DAESystem:
     # --- full vectors ------------------------------------------------------------------
 
     def full_coordinates(self, q_free: np.ndarray, q_prescribed: np.ndarray) -> np.ndarray:
-        """q_full (size,): free and prescribed parts, fixed ones at their held values."""
-        q_full = self.fixed_values.copy()
-        q_full[self.free] = q_free
-        q_full[self.prescribed] = q_prescribed
+        """q_full (size,): free and prescribed parts, fixed ones at their held values; rows
+        (k, nf) and (k, np) give (k, size)."""
+        q_full = np.broadcast_to(self.fixed_values, (*q_free.shape[:-1], self.size)).copy()
+        q_full[..., self.free] = q_free
+        q_full[..., self.prescribed] = q_prescribed
         return q_full
 
     def full_velocities(self, v_free: np.ndarray, v_prescribed: np.ndarray) -> np.ndarray:
-        """v_full (size,): fixed coordinates at rest."""
-        v_full = np.zeros(self.size)
-        v_full[self.free] = v_free
-        v_full[self.prescribed] = v_prescribed
+        """v_full (size,): fixed coordinates at rest; rows give (k, size)."""
+        v_full = np.zeros((*v_free.shape[:-1], self.size))
+        v_full[..., self.free] = v_free
+        v_full[..., self.prescribed] = v_prescribed
         return v_full
 
 

@@ -32,12 +32,17 @@ from runtime.solve.python_engine import (
     initial_state,
     newton_mode,
     newton_not_converged,
+    one_by_one,
 )
 from templates import environment
 
-STEPPER_VERSION = "1"
+STEPPER_VERSION = "2"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
+#: a call of the compiled step covers more output times while it lasts less than this (s),
+#: up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress latency stays short)
+BLOCK_SECONDS = 0.05
+MAX_BLOCK_OUTPUTS = 1024
 
 
 def _kernel_call(signature: dict, slots: dict[str, int], inputs: str = "",
@@ -259,42 +264,39 @@ class CompiledEngine:
 
     # --- the loop ----------------------------------------------------------------------
 
-    def run(self, t_end: float, step: float, observe, progress=None):
-        """Integrate from rest at t = 0 to ``t_end``; ``observe(t, q_full, v_full)`` at t = 0
-        and every ``output_every`` seconds, as the Python engine.  Raises Divergence."""
+    def run(self, t_end: float, step: float, observe=None, progress=None, *,
+            observe_block=None):
+        """Integrate from rest at t = 0 to ``t_end``, as the Python engine: the states at
+        t = 0 and every ``output_every`` seconds go to ``observe(t, q_full, v_full)`` one by
+        one, or to ``observe_block(times, q_full, v_full, dissipated)`` in blocks of
+        output times (k,), (k, size), (k, size), (k,): several output times per call of the
+        compiled step, so an output costs no call of its own.  Raises Divergence (the
+        outputs before it observed)."""
+        observe_block = observe_block or one_by_one(observe, self.dae.model)
         with single_threaded_blas():
-            return self._run(t_end, step, observe, progress)
+            return self._run(t_end, step, observe_block, progress)
 
-    def _run(self, t_end: float, step: float, observe, progress) -> State:
+    def _run(self, t_end: float, step: float, observe_block, progress) -> State:
         dae = self.dae
         state = initial_state(dae)
         m = self._model(step)
         s = self._state(state)
-        q, v = self._state_arrays[0], self._state_arrays[1]
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
-
-        def emit(t: float) -> None:
-            qp, vp, _ = (x[0] for x in dae.prescribed_motion([t]))
-            dae.model.dissipated_energy = s.dissipated
-            observe(t, dae.full_coordinates(q, qp), dae.full_velocities(v, vp))
-
-        emit(0.0)
+        self._emit(observe_block, np.zeros(1), state.q[None, :], state.v[None, :],
+                   np.zeros(1))
+        outputs = 1      # output times per call: doubled while calls stay short
         first = 1
         try:
             while first <= steps:
-                last = min(steps, ((first - 1) // stride + 1) * stride)  # next output
-                times = np.arange(first, last + 1) * step
-                block = [*dae.prescribed_motion(times), dae.load_factors(times)]
-                status = self._lib.ancf_advance(m, s, first, last - first + 1,
-                                                *map(self._block_array, block))
-                self._sync(s)
-                if status:
-                    raise Divergence(s.failed_at, self._cause(status, s))
-                emit(last * step)
+                last = min(steps, ((first - 1) // stride + outputs) * stride)
+                seconds = s.advance_seconds
+                done = self._advance(m, s, first, last, stride, steps, step, observe_block)
                 if progress is not None:
-                    progress.update(last * step)
+                    progress.update(done * step)
+                if s.advance_seconds - seconds < BLOCK_SECONDS and outputs < MAX_BLOCK_OUTPUTS:
+                    outputs *= 2
                 first = last + 1
         finally:
             self._sync(s)
@@ -303,6 +305,39 @@ class CompiledEngine:
         if self.integrator == "generalized_alpha":
             extra["abar"] = arrays[4]
         return State(steps * step, arrays[0], arrays[1], arrays[2], arrays[3], extra)
+
+    def _advance(self, m, s, first: int, last: int, stride: int, steps: int, step: float,
+                 observe_block) -> int:
+        """Steps ``first`` .. ``last`` in one call; observes their output times; returns the
+        last step done.  Raises Divergence after observing the outputs before it."""
+        dae = self.dae
+        times = np.arange(first, last + 1) * step
+        block = [*dae.prescribed_motion(times), dae.load_factors(times)]
+        numbers = np.arange(first, last + 1)
+        output_steps = numbers[(numbers % stride == 0) | (numbers == steps)]
+        nf = dae.free.size
+        out_q, out_v = (np.empty((output_steps.size, nf)) for _ in range(2))
+        out_dissipated = np.empty(output_steps.size)
+        before = s.steps
+        status = self._lib.ancf_advance(m, s, first, last - first + 1,
+                                        *map(self._block_array, block), stride, steps,
+                                        *map(self._block_array, (out_q, out_v, out_dissipated)))
+        self._sync(s)
+        done = first - 1 + (s.steps - before)
+        written = int(np.count_nonzero(output_steps <= done))
+        if written:
+            self._emit(observe_block, output_steps[:written] * step, out_q[:written],
+                       out_v[:written], out_dissipated[:written])
+        if status:
+            raise Divergence(s.failed_at, self._cause(status, s))
+        return done
+
+    def _emit(self, observe_block, times: np.ndarray, q_free: np.ndarray, v_free: np.ndarray,
+              dissipated: np.ndarray) -> None:
+        """Observe a block of output states given over the free coordinates."""
+        qp, vp, _ = self.dae.prescribed_motion(times)
+        observe_block(times, self.dae.full_coordinates(q_free, qp),
+                      self.dae.full_velocities(v_free, vp), dissipated)
 
     def _block_array(self, array: np.ndarray):
         """A block's (steps, columns) array as a C pointer (NULL when it has no columns);

@@ -73,6 +73,17 @@ NON_FINITE = "non-finite forces (the state blew up)"
 SINGULAR = "singular iteration matrix"
 
 
+def one_by_one(observe, model: Model):
+    """An ``observe_block`` that hands each output time of a block to ``observe(t, q, v)``
+    in turn, with the energy dissipated so far in ``model.dissipated_energy``."""
+    def observe_block(times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                      dissipated: np.ndarray) -> None:
+        for t, q_row, v_row, energy in zip(times, q, v, dissipated, strict=True):
+            model.dissipated_energy = float(energy)
+            observe(float(t), q_row, v_row)
+    return observe_block
+
+
 def newton_mode(settings) -> str:
     """The Newton mode of dynamic ``settings`` (ValueError naming the option otherwise)."""
     if settings.newton not in NEWTON_MODES:
@@ -204,28 +215,32 @@ class Integrator:
     def initial_state(self, t: float = 0.0) -> State:
         return initial_state(self.dae, t)
 
-    def run(self, t_end: float, step: float, observe, progress=None) -> State:
-        """Integrate from rest at t = 0 to ``t_end``; ``observe(t, q_full, v_full)`` is called
-        at t = 0 and every ``output_every`` seconds.  Raises Divergence."""
+    def run(self, t_end: float, step: float, observe=None, progress=None, *,
+            observe_block=None) -> State:
+        """Integrate from rest at t = 0 to ``t_end``; the state at t = 0 and every
+        ``output_every`` seconds goes to ``observe(t, q_full, v_full)``, or to
+        ``observe_block(times, q_full, v_full, dissipated)`` as a block of one output time
+        ((1,), (1, size), (1, size), (1,)).  Raises Divergence."""
+        observe_block = observe_block or one_by_one(observe, self.dae.model)
         with single_threaded_blas():
-            return self._run(t_end, step, observe, progress)
+            return self._run(t_end, step, observe_block, progress)
 
-    def _observe(self, observe, state: State) -> None:
-        qp, vp, _ = (x[0] for x in self.dae.prescribed_motion([state.t]))
-        self.dae.model.dissipated_energy = state.extra["dissipated"]
-        observe(state.t, self.dae.full_coordinates(state.q, qp),
-                self.dae.full_velocities(state.v, vp))
+    def _observe(self, observe_block, state: State) -> None:
+        qp, vp, _ = self.dae.prescribed_motion([state.t])
+        observe_block(np.array([state.t]), self.dae.full_coordinates(state.q[None, :], qp),
+                      self.dae.full_velocities(state.v[None, :], vp),
+                      np.array([state.extra["dissipated"]]))
 
-    def _run(self, t_end: float, step: float, observe, progress) -> State:
+    def _run(self, t_end: float, step: float, observe_block, progress) -> State:
         state = self.initial_state()
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
-        self._observe(observe, state)
+        self._observe(observe_block, state)
         for n in range(1, steps + 1):
             state = self.advance(state, n, step)
             if n % stride == 0 or n == steps:
-                self._observe(observe, state)
+                self._observe(observe_block, state)
             if progress is not None:
                 progress.update(state.t)
         return state
