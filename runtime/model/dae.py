@@ -58,6 +58,9 @@ class DAESystem:
         self.dim, self.size = model.dim, model.size
         self.free, self.fixed, self.prescribed = model.free, model.fixed, model.prescribed
         self.fixed_values = np.array(q_full, dtype=float)
+        # column of each prescribed coordinate among the prescribed ones (-1 elsewhere)
+        self._prescribed_position = np.full(self.size, -1)
+        self._prescribed_position[self.prescribed] = np.arange(self.prescribed.size)
         self.scale = model.length_scale()
         self.mass_ff, self.mass_fp = model.mass_ff, model.mass_fp
         self.bandwidth = model.bandwidth
@@ -127,12 +130,12 @@ class DAESystem:
         coordinates at ``times`` (s)."""
         times = np.atleast_1d(np.asarray(times, float))
         n = times.size
-        q, v, a = (np.zeros((n, self.size)) for _ in range(3))
+        q, v, a = (np.zeros((n, self.prescribed.size)) for _ in range(3))
         for hub in self.hubs:
             theta, rate, acc = hub.law.sample(times)
             rot, d_rot, dd_rot = rotations(self.dim, hub.axis, theta)
             for k, rotated in enumerate(hub.rotated):
-                cols = hub.coordinates[k]
+                cols = self._prescribed_position[hub.coordinates[k]]
                 ref = hub.reference[k]
                 if not rotated:
                     q[:, cols] = ref
@@ -140,8 +143,7 @@ class DAESystem:
                 q[:, cols] = rot @ ref
                 v[:, cols] = rate[:, None] * (d_rot @ ref)
                 a[:, cols] = acc[:, None] * (d_rot @ ref) + rate[:, None] ** 2 * (dd_rot @ ref)
-        p = self.prescribed
-        return q[:, p], v[:, p], a[:, p]
+        return q, v, a
 
     def load_factors(self, times: np.ndarray) -> np.ndarray:
         """(len(times), loads) values of the loads' time laws at ``times`` (s)."""
