@@ -19,6 +19,7 @@ import numpy as np
 from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
+from runtime.catalog import INTEGRATORS
 from runtime.kernels.kind import element_kind
 from runtime.model.items.sensors import Samples, Sensors
 from runtime.model.model import Model
@@ -103,7 +104,7 @@ class Simulation:
         try:
             if scene.static is not None:
                 self.phase = "static analysis"
-                found = analysis.solve_static(model, scene.static)
+                found = self._solve_static(scene.static)
                 self.static_q = found.q
                 summary.record_static(self.sensors.values(found.q, t=None), found.iterations,
                                       found.load_steps)
@@ -130,12 +131,22 @@ class Simulation:
                     for f in b.element.loaded_families}))
         return 0
 
+    def _solve_static(self, settings) -> analysis.StaticResult:
+        """The static equilibrium with the chosen engine's Newton solve."""
+        dynamic = self.scene.dynamic
+        newton = engines.static_newton(self.engine_name, self.model, settings,
+                                       dynamic.integrator if dynamic else INTEGRATORS[0])
+        if newton is not None:
+            self.summary.timing.compile_s += newton.compile_s
+            self._built.update(newton.modules)
+        return analysis.solve_static(self.model, settings, newton)
+
     def _modal(self) -> None:
         model, settings = self.model, self.scene.modal
         about = model.reference
         if settings.about == "static":
             about = self.static_q if self.static_q is not None else \
-                analysis.solve_static(model, self.scene.static or Static()).q
+                self._solve_static(self.scene.static or Static()).q
         found = modal_shapes(model, about, settings.modes)
         self.modes = Modes(found.frequencies, found.shapes, np.array(about))
         self.summary.record_modal(settings.about, found.frequencies, model.damped)

@@ -20,6 +20,7 @@ import numpy as np
 from runtime.kernels import abi, jit
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
+from runtime.model.settings import Dynamic
 from runtime.solve.linear import single_threaded_blas
 from runtime.solve.python_engine import (
     CONTRACTION,
@@ -34,6 +35,7 @@ from runtime.solve.python_engine import (
     newton_not_converged,
     one_by_one,
 )
+from runtime.solve.static import ConvergenceError
 from templates import environment
 
 STEPPER_VERSION = "2"
@@ -360,3 +362,48 @@ class CompiledEngine:
         if status == 2:
             return newton_not_converged(self.settings.max_iterations, s.last_correction)
         return SINGULAR
+
+
+class CompiledStatic:
+    """Newton solves of the static equilibrium through the generated step (``ancf_static``:
+    the same kernels, banded assembly, factorisation and joint solve as the dynamic step),
+    one call per load increment of ``runtime.solve.static``.  The module is the one a
+    dynamic analysis with ``integrator`` uses (compiled once for both)."""
+
+    def __init__(self, model: Model, settings, integrator: str) -> None:
+        binding = Dynamic(t_end=1.0, step=1.0, integrator=integrator,
+                          tolerance=settings.tolerance, max_iterations=settings.max_iterations)
+        self.engine = CompiledEngine(model, binding, model.reference)
+        self.compile_s, self.modules = self.engine.compile_s, self.engine.modules
+        dae = self.engine.dae
+        self._m = self.engine._model(1.0)
+        self._m.modified = 0
+        rest = np.zeros(dae.free.size)
+        self._s = self.engine._state(State(0.0, dae.fixed_values[dae.free], rest, rest,
+                                           np.zeros(dae.joints),
+                                           {"dissipated": 0.0, "power": 0.0}))
+        self._qp = dae.prescribed_motion([0.0])[0][0]
+        self._qp_buffer = self.engine._buffer(self._qp)
+        self.max_iterations = settings.max_iterations
+
+    def __call__(self, q: np.ndarray, load_fraction: float,
+                 multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+        """Equilibrium (q_full (size,), multipliers, iterations) under ``load_fraction`` of
+        every load, from q_full and multipliers.  Raises ConvergenceError."""
+        dae, s = self.engine.dae, self._s
+        state_q, state_lam = self.engine._state_arrays[0], self.engine._state_arrays[3]
+        state_q[:] = q[dae.free]
+        state_lam[:] = multipliers
+        loads = self.engine._buffer(np.full(len(dae.load_laws), load_fraction))
+        before = s.newton_iterations
+        status = self.engine._lib.ancf_static(self._m, s, self._qp_buffer, loads)
+        self.engine._sync(s)
+        if status == 1:
+            raise ConvergenceError("static: non-finite residual")
+        if status == 2:
+            raise ConvergenceError(f"static: Newton did not converge in {self.max_iterations} "
+                                   f"iterations (last step {s.last_correction:.3g} m)")
+        if status == 3:
+            raise ConvergenceError("static: singular iteration matrix")
+        return (dae.full_coordinates(state_q.copy(), self._qp), state_lam.copy(),
+                s.newton_iterations - before)

@@ -48,3 +48,14 @@ def choose(requested: str | None, backend: str) -> str:
 def make(name: str, model: Model, settings, q_full: np.ndarray):
     """The engine ``name`` for a dynamic analysis of ``model`` from ``q_full``."""
     return ENGINES[name](model, settings, q_full)
+
+
+def static_newton(name: str, model: Model, settings, integrator: str):
+    """The Newton solve of one static load increment of engine ``name`` (see
+    ``runtime.solve.static.solve_static``): None for the Python one, the generated step's
+    for ``compiled`` (its module the one of a dynamic analysis with ``integrator``)."""
+    if name == "python":
+        return None
+    from runtime.solve.compiled_engine import CompiledStatic
+
+    return CompiledStatic(model, settings, integrator)

@@ -59,13 +59,19 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
                            f"iterations (last step {np.abs(step).max():.3g} m)")
 
 
-def solve_static(model: Model, settings) -> StaticResult:
-    """Equilibrium under every load at its nominal value (see ``_solve_static``)."""
+def solve_static(model: Model, settings, newton=None) -> StaticResult:
+    """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
+    solves one load increment (default ``newton_static``, in Python; the compiled engine's
+    ``CompiledStatic`` is the other)."""
+    if newton is None:
+        def newton(q, fraction, multipliers):
+            return newton_static(model, q, fraction * model.nominal_load(), settings,
+                                 multipliers)
     with single_threaded_blas():
-        return _solve_static(model, settings)
+        return _solve_static(model, settings, newton)
 
 
-def _solve_static(model: Model, settings) -> StaticResult:
+def _solve_static(model: Model, settings, newton) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
@@ -73,14 +79,13 @@ def _solve_static(model: Model, settings) -> StaticResult:
     lets the next grow again (doubling, up to the initial increment).
     """
     check_held(model)
-    nominal = model.nominal_load()
     q = model.reference.copy()
     multipliers = np.zeros(model.joints.shape[0])
     done, increment, iterations, steps = 0.0, 1.0 / settings.load_steps, 0, 0
     while done < 1.0 - 1e-12:
         target = min(1.0, done + increment)
         try:
-            q_new, mu_new, used = newton_static(model, q, target * nominal, settings, multipliers)
+            q_new, mu_new, used = newton(q, target, multipliers)
         except ConvergenceError as error:
             increment /= 2
             if increment < 1.0 / 1024:
