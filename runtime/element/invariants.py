@@ -296,6 +296,22 @@ def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
     return rules
 
 
+def cable_table(kind: ElementKind, family: KernelFamily, geometry, order: int,
+                coefficients: dict[str, np.ndarray]) -> np.ndarray:
+    """Per-point table of a cable's quadrature kernels (straight references): at the Gauss
+    points of order ``order`` on the axis, ds/dx, d2s/dx2, and the weights of the axial part
+    (E11 coefficient on the axis times the weight, which holds the area: EA dx, N m) and of
+    the bending part (the same modulus times I dx, N m^3); symgen/energies.py."""
+    points, weights = subdomain_rule(kind, geometry, (order,) * kind.dim, "axis")
+    shared = np.asarray(geometry, float)
+    first = shape_gradient_table(kind, family, geometry, points)
+    second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
+    area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
+    modulus = float(coefficients["axis"][0])
+    return np.ascontiguousarray(np.column_stack([first, second, weights * modulus,
+                                                 weights * modulus * moment / area]))
+
+
 def law_table(kind: ElementKind, rules: dict[str, LawRule],
               coefficients: dict[str, np.ndarray]) -> np.ndarray:
     """Per-point table of the ``quadrature_law`` kernels: local gradients, U^-1 upper
