@@ -374,11 +374,11 @@ def law_domains(spec: ElementSpec) -> tuple[str, ...]:
 
 
 def applicable_laws(spec: ElementSpec) -> dict:
-    """The laws whose every part integrates over a subdomain the element's domain has."""
-    from symgen import laws
+    """The laws of the element's energy (``symgen.energies``) whose every part integrates over
+    a subdomain the element's domain has."""
+    from symgen import energies
 
-    return {name: law for name, law in laws.LAWS.items()
-            if laws.not_applicable(law, spec.domain) is None}
+    return energies.applicable_laws(spec)
 
 
 def check_law_patterns(spec: ElementSpec) -> None:

@@ -39,6 +39,9 @@ class ElementSpec:
         for the others at the nodes (checked).
     quadrature: default Gauss order per local direction (length ``dim``).
     description: one line for listings.
+    energy: the strain energy (``symgen.energies.ENERGIES``): ``continuum`` (the Green-Lagrange
+        strain of the full deformation gradient with a material law, the default) or
+        ``cable`` (axial strain and bending of a structural beam carrying r, r_x).
     """
 
     name: str
@@ -48,6 +51,7 @@ class ElementSpec:
     shape_functions: tuple[sp.Expr, ...]
     quadrature: tuple[int, ...]
     description: str = ""
+    energy: str = "continuum"
 
     def __post_init__(self) -> None:
         nodes = tuple(tuple(sp.sympify(c) for c in node) for node in self.nodes)
@@ -70,6 +74,9 @@ class ElementSpec:
             )
         if len(self.quadrature) != self.dim:
             raise ValueError(f"element {self.name!r}: quadrature needs {self.dim} orders")
+        from symgen import energies
+
+        energies.check(self)
         allowed = set(self.coordinates) | set(self.domain.parameters)
         for s in self.shape_functions:
             extra = s.free_symbols - allowed

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from symgen import derive, laws, methods
+from symgen import derive, energies, laws, methods
 from symgen.element import ElementSpec
 from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
 from symgen.methods.cij import cij_sizes
@@ -280,7 +280,9 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
             }
             for k in family_kernels
         }
+    energy = energies.metadata(spec)
     return {
+        **({"energy": energy} if energy is not None else {}),
         "name": spec.name,
         "description": spec.description,
         "dim": spec.dim,
@@ -310,9 +312,7 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                                        if law.default_corrections is not None else [])}
             for law in derive.applicable_laws(spec).values()
         },
-        "laws_not_applicable": {name: laws.not_applicable(law, spec.domain)
-                                for name, law in laws.LAWS.items()
-                                if laws.not_applicable(law, spec.domain) is not None},
+        "laws_not_applicable": energies.not_applicable(spec),
         "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
@@ -375,10 +375,8 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                         + "\n")
         written.append(path)
     if families is None:
-        for law in laws.LAWS.values():
-            reason = laws.not_applicable(law, spec.domain)
-            if reason is not None:
-                print(f"{spec.name}: {reason} (not generated)", file=sys.stderr)
+        for reason in energies.not_applicable(spec).values():
+            print(f"{spec.name}: {reason} (not generated)", file=sys.stderr)
         path = folder / "element.json"
         path.write_text(json.dumps(element_metadata(spec, built), sort_keys=True,
                                          separators=(",", ":"))

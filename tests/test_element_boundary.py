@@ -61,9 +61,9 @@ class Setup:
         return self.el.group_kernel(kernel)
 
     def one_shot(self, kernel: str, out: dict | None = None, **inputs):
-        """A one-shot KernelFamily call of the element's kernels: ``gram`` is the element's
-        unless given, an input given as None is left out."""
-        inputs = {"gram": self.el.invariants["gram"], **inputs}
+        """A one-shot KernelFamily call of the element's kernels: ``gram`` (and a cable's
+        ``gram_linear``) are the element's unless given, an input given as None is left out."""
+        inputs = {**self.el.kernel_inputs, **inputs}
         family = kernel_family(self.kind, self.el.family, self.backend)
         return family(kernel, {k: v for k, v in inputs.items() if v is not None}, out)
 
@@ -362,6 +362,19 @@ CONSTRUCTOR_CASES = [
 
 ALL_CASES = ELEMENT_OUT_CASES + GROUP_CASES + COORDINATE_CASES + CONSTRUCTOR_CASES
 
+#: A kind whose energy takes straight references only (cables, element.json ``energy``)
+#: refuses these non-rigid references before their mapping or invariants are formed.
+STRAIGHT_ONLY = {"e0 degenerate (r_y = 0; plates r_z)": "e0: {kind} takes straight references "
+                 "only", "e0 overflowing the invariants": "e0: {kind} takes straight references "
+                 "only"}
+
+
+def expected(kind: str, description: str, fragment: str) -> str:
+    """The fragment case ``description`` expects for ``kind`` (``STRAIGHT_ONLY``)."""
+    if element_kind(kind).energy.curved is not None:
+        return STRAIGHT_ONLY.get(description, fragment)
+    return fragment
+
 
 def case_ids(cases) -> list[str]:
     return [description for description, _, _ in cases]
@@ -374,14 +387,15 @@ def test_corpus_descriptions_are_unique():
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # overflow while forming invariants
 @pytest.mark.parametrize("description, call, fragment", ALL_CASES, ids=case_ids(ALL_CASES))
 def test_bad_call_raises_value_error_naming_the_argument(setup, description, call, fragment):
-    raises(setup, call, fragment)
+    raises(setup, call, expected(setup.kind, description, fragment))
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("description, call, fragment", ALL_CASES, ids=case_ids(ALL_CASES))
 def test_backends_give_identical_messages(kind, description, call, fragment):
-    c, numpy = (raises(Setup(kind, backend), call, fragment) for backend in BACKENDS)
+    c, numpy = (raises(Setup(kind, backend), call, expected(kind, description, fragment))
+                for backend in BACKENDS)
     assert c == numpy
 
 

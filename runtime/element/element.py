@@ -91,6 +91,9 @@ class Element:
                    else self._coordinates(e0, "e0", batch=False))
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
         self.variant = "straight" if self.straight else "general"
+        if self.variant not in self.kind.energy.variants:
+            raise ValueError(f"e0: {self.kind.name} takes straight references only (rigid "
+                             f"placements of the straight element): {self.kind.energy.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
         #: kernel families loaded (compiled on first use with backend c), in load order
@@ -100,8 +103,9 @@ class Element:
         start = time.perf_counter()
         self.shear_correction = self._shear_correction(shear_correction)
         # svk through its own kernels where the kind has them (the 2-node beams), otherwise
-        # (closed forms as data, or no general svk map) through the law path
+        # (closed forms as data, no general svk map, a structural energy) through the law path
         if self.law == "svk" and not inv.has_closed_tables(self.kind) and (
+                not self.kind.energy.structural) and (
                 self.straight or "invariants_general" in self.kind.families):
             self.invariants = self._svk_invariants(builders)
         else:
@@ -173,7 +177,9 @@ class Element:
         laws = self._family("laws")
         coefficients = self.law_coefficients()
         if self.straight:
-            inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
+            if not self.kind.energy.structural:  # a cable's J0 has no section to check
+                inv.checked_reference(self.kind, builders, self.geometry, self.e0,
+                                      self.quadrature)
             if inv.has_closed_tables(self.kind):  # exact tables (closed.json), any law
                 return inv.closed_law_invariants(self.kind, self.geometry, coefficients,
                                                  self.rho)
@@ -192,6 +198,9 @@ class Element:
         return inv.law_rules(self.kind, builders, self.geometry, self.e0, self.quadrature)
 
     def _law_table(self, builders) -> np.ndarray:
+        if self.kind.energy.structural:
+            return inv.cable_table(self.kind, builders, self.geometry, self.quadrature[0],
+                                   self.law_coefficients())
         return inv.law_table(self.kind, self._law_rules(builders), self.law_coefficients())
 
     def _damping_kernels(self) -> dict:
@@ -202,12 +211,12 @@ class Element:
             alpha = np.array([self.damping])
             if self.method == "quadrature":
                 family = "quadrature_law"
-                table = (self._inputs["table"] if self.law != "svk"
+                table = (self._inputs["table"] if self.law != "svk" or self.kind.energy.structural
                          else self._law_table(self._family("invariants")))
                 fixed = {"table": table, "alpha": alpha}
             else:
                 family = f"damping_{self.variant}"
-                fixed = {"gram": self.invariants["gram"], "alpha": alpha}
+                fixed = {**self._gram_inputs(), "alpha": alpha}
             self.timing["preprocess_s"] += time.perf_counter() - start
             kernels = self._family(family)
             self._damping_family = kernels
@@ -322,14 +331,21 @@ class Element:
                              f"and 64 (e.g. {self.kind.quadrature}), got {quadrature!r}")
         return tuple(int(o) for o in orders)
 
+    def _gram_inputs(self) -> dict:
+        """The gram tensor and, for energies with one, the linear term (cable bending)."""
+        return {name: self.invariants[name] for name in ("gram", "gram_linear")
+                if name in self.invariants}
+
     def _method_inputs(self, builders) -> dict:
         stored = self.invariants
         if self.method == "gram":
-            return {"gram": stored["gram"]}
+            return self._gram_inputs()
         if self.method == "cij":
             k2, jacobian = inv.cij_operators(self.kind, self.variant, stored["cij"])
             return {"k1": stored["k1"], "u0": stored["u0"], "k2_matrix": k2,
                     "jacobian_matrix": jacobian}
+        if self.kind.energy.structural:  # the cable's quadrature family: its table only
+            return {"table": self._law_table(builders)}
         if self.law != "svk":  # quadrature_law also holds the damping kernels (alpha)
             return {"table": self._law_table(builders), "alpha": np.array([self.damping])}
         return {"material": np.array([self.lam, self.shear]),

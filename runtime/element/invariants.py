@@ -296,6 +296,52 @@ def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
     return rules
 
 
+def cable_table(kind: ElementKind, family: KernelFamily, geometry, order: int,
+                coefficients: dict[str, np.ndarray]) -> np.ndarray:
+    """Per-point table of a cable's quadrature kernels (straight references): at the Gauss
+    points of order ``order`` on the axis, ds/dx, d2s/dx2, and the weights of the axial part
+    (E11 coefficient on the axis times the weight, which holds the area: EA dx, N m) and of
+    the bending part (the same modulus times I dx, N m^3); symgen/energies.py."""
+    points, weights = subdomain_rule(kind, geometry, (order,) * kind.dim, "axis")
+    shared = np.asarray(geometry, float)
+    first = shape_gradient_table(kind, family, geometry, points)
+    second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
+    area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
+    modulus = float(coefficients["axis"][0])
+    return np.ascontiguousarray(np.column_stack([first, second, weights * modulus,
+                                                 weights * modulus * moment / area]))
+
+
+def cable_invariants(kind: ElementKind, family: KernelFamily, geometry, orders,
+                     coefficients: dict[str, np.ndarray], density: float) -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij, U0 and the gram form's linear term of a straight cable by
+    quadrature (the closed forms come from the generated ``law_invariants_straight``): the
+    axial part through ``law_algebra`` with b = ds/dx on the axis rule of order
+    ``orders[0]``, the bending part EI K_kl, K = int s_k'' s_l'' dx, added to K1, and
+    ``gram_linear`` = EI mu K / 4 (mu = 1 on the diagonal, 2 off it); symgen/energies.py."""
+    points, weights = subdomain_rule(kind, geometry, (orders[0],) * kind.dim, "axis")
+    shared = np.asarray(geometry, float)
+    b = full_gradients(kind, shape_gradient_table(kind, family, geometry, points))
+    p_dir = np.einsum("pka,pla->pakl", b, b)
+    none = {domain: np.zeros_like(value) for domain, value in coefficients.items()}
+    parts = [(coefficients["axis"] if domain == "axis" else none[domain],
+              lambda: np.einsum("p,pakl,pbmn->abklmn", weights, p_dir, p_dir, optimize=True),
+              np.einsum("p,pakl->akl", weights, p_dir), weights.sum())
+             for domain in kind.law_domains]
+    volume, volume_weights = domain_rule(kind, geometry, orders)
+    values = family("shape_values", {"point": volume, "geometry": shared})["values"]
+    mass = np.einsum("p,pk,pl->kl", volume_weights, values, values)
+    stored = law_algebra(kind, "straight", parts, mass, density)
+    second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
+    area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
+    bending = float(coefficients["axis"][0]) * moment * np.einsum(
+        "p,pk,pl->kl", weights / area, second, second)
+    rows, cols = np.triu_indices(kind.n_shape)
+    stored["k1"] = stored["k1"] + bending[rows, cols]
+    stored["gram_linear"] = np.where(rows == cols, 1, 2) * bending[rows, cols] / 4
+    return stored
+
+
 def law_table(kind: ElementKind, rules: dict[str, LawRule],
               coefficients: dict[str, np.ndarray]) -> np.ndarray:
     """Per-point table of the ``quadrature_law`` kernels: local gradients, U^-1 upper

@@ -79,13 +79,39 @@ class LawInfo:
 
 
 @dataclass(frozen=True)
+class Energy:
+    """The strain energy of a kind (``symgen/energies.py``): ``name`` ``continuum`` (the
+    Green-Lagrange strain of the full deformation gradient with a material law) or ``cable``
+    (axial strain and bending of r, r_x); its ``bending`` model (None for a continuum), the
+    reference ``variants`` it takes and, when it refuses curved references, why
+    (``curved``)."""
+
+    name: str
+    bending: str | None
+    variants: tuple[str, ...]
+    curved: str | None
+
+    @classmethod
+    def from_document(cls, meta: dict | None) -> Energy:
+        """The energy entry of element.json (absent: the continuum, every variant)."""
+        if meta is None:
+            return cls("continuum", None, ("straight", "general"), None)
+        return cls(meta["name"], meta["bending"], tuple(meta["variants"]), meta["curved"])
+
+    @property
+    def structural(self) -> bool:
+        """Whether the energy is a structural (beam) one rather than a continuum's."""
+        return self.name != "continuum"
+
+
+@dataclass(frozen=True)
 class ElementKind:
     """Metadata of one generated element kind (see the module docstring).
 
     ``families`` maps a kernel family to its kernels, each {"arrays": [{name, role, size}],
     "operations": count}; ``patterns`` the stored index patterns per reference variant;
-    ``meta`` keeps the document as read (for tools that print it; the runtime reads the
-    typed fields).
+    ``energy`` the strain energy (``Energy``); ``meta`` keeps the document as read (for
+    tools that print it; the runtime reads the typed fields).
     """
 
     name: str
@@ -109,6 +135,7 @@ class ElementKind:
     gradient_pattern: tuple[tuple[int, int], ...]
     closed_tables: str | None
     straight_reference_coefficients: tuple
+    energy: Energy
     meta: dict = field(repr=False, compare=False)
 
     @classmethod
@@ -128,7 +155,8 @@ class ElementKind:
                    dict(meta.get("laws_not_applicable", {})), meta["families"],
                    meta["optimization"], meta["patterns"], meta["cij_sizes"],
                    tuple(tuple(p) for p in meta["gradient_pattern"]), meta.get("closed_tables"),
-                   tuple(meta["straight_reference"]), meta)
+                   tuple(meta["straight_reference"]), Energy.from_document(meta.get("energy")),
+                   meta)
 
     def _linear(self, coeffs, geometry) -> np.ndarray:
         """Values of entries linear in the domain parameters ([a0, a1, a2, b] each)."""
@@ -207,7 +235,7 @@ class ElementKind:
         Poisson's ratio ``nu``: (what locks, relative excess stiffness), None without
         locking.  Beam bending sees lam + 2G instead of E (Poisson locking), plate bending
         lam + 2G instead of E / (1 - nu^2) (Poisson thickness locking)."""
-        if nu == 0:
+        if nu == 0 or self.energy.structural:  # a cable's 1D law has no Poisson part
             return None
         if self.domain.name == "beam":
             return "beams", (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1

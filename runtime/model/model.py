@@ -446,10 +446,13 @@ class Model:
                 column = self.rigid_field(unit[:self.dim], unit[self.dim:] if rotations == 3
                                           else unit[self.dim], centre, name)
                 norms.append(np.linalg.norm(column))
-                columns.append(scipy.sparse.csc_matrix(column[:, None] / norms[-1]))
+                columns.append(scipy.sparse.csc_matrix(column[:, None] / (norms[-1] or 1.0)))
         basis = scipy.sparse.hstack(columns).tocsr()
         held = np.concatenate([self.fixed, self.prescribed])
-        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis])
+        # a motion the coordinates do not carry (a 3D cable's spin about its own axis: its
+        # nodes hold no section) moves nothing: counted as held
+        absent = scipy.sparse.csr_matrix(np.diag(np.asarray(norms) == 0).astype(float))
+        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis, absent])
         values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())
         null = vectors[:, values <= tolerance]
         sentences = []

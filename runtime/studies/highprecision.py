@@ -1,4 +1,5 @@
-"""High-precision reference: direct Gauss quadrature of the St. Venant-Kirchhoff energy in mpmath.
+"""High-precision reference: direct Gauss quadrature of the St. Venant-Kirchhoff energy in mpmath
+(and of the cable energy of Berzeri and Shabana for cable kinds).
 
 Shares no code with the generator or the kernels: the shape functions of every shipped kind
 are typed here from the literature (``LITERATURE``: DESIGN.md section 3 for the 2-node beams,
@@ -75,8 +76,18 @@ def _plate() -> list[sp.Expr]:
     ]
 
 
+def _cable() -> list[sp.Expr]:
+    """Cubic Hermite functions of the ANCF cable (Berzeri and Shabana; Gerstmayr and
+    Irschik): s = [1 - 3xi^2 + 2xi^3, L (xi - 2xi^2 + xi^3), 3xi^2 - 2xi^3, L (xi^3 - xi^2)]."""
+    xi = X / L
+    return [1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3,
+            L * (xi**3 - xi**2)]
+
+
 #: kind: its shape functions typed from the literature, node-major, in X, Y, Z, L, H, W.
 LITERATURE = {
+    "cable2d": _cable,
+    "cable3d": _cable,
     "beam2d": lambda: _beam_2node(2),
     "beam3d": lambda: _beam_2node(3),
     "beam2d_3node": lambda: _beam_3node(2),
@@ -129,11 +140,49 @@ def _gauss(order: int):
     return nodes, weights
 
 
+@functools.cache
+def _cable_functions(kind: str, source: str | None):
+    s = sp.Matrix(shape_functions(kind, source))
+    return (sp.lambdify((X, L), s.diff(X), modules="mpmath"),
+            sp.lambdify((X, L), s.diff(X, 2), modules="mpmath"))
+
+
+def cable_energy_and_force(kind, e, length, height, width, E, orders=None, source=None):
+    """(U, force) of a cable (a straight reference parameterised by arc length) by 50-digit
+    Gauss quadrature along its length: the structural energy of Berzeri and Shabana,
+    U = EA/2 int ((r_x.r_x - 1)/2)^2 dx + EI/2 int r_xx.r_xx dx, with A = h w and
+    I = w h^3 / 12 in 2D, h w (h^2 + w^2) / 24 in 3D (the mean of the principal moments)."""
+    info = element_kind(kind)
+    dim = info.dim
+    order = (orders or info.exact_orders)[0]
+    first, second = _cable_functions(kind, source)
+    E, length, height, width = (mp.mpf(v) for v in (E, length, height, width))
+    area = height * width
+    moment = (width * height**3 / 12 if dim == 2
+              else height * width * (height**2 + width**2) / 24)
+    n = len(e) // dim
+    q = mp.matrix([[mp.mpf(float(e[k * dim + c])) for c in range(dim)] for k in range(n)])
+    nodes, weights = _gauss(order)
+    energy, grad = mp.mpf(0), mp.matrix(n, dim)
+    for t, w in zip(nodes, weights, strict=True):
+        x, weight = (t + 1) * length / 2, w * length / 2
+        s1, s2 = mp.matrix(first(x, length)), mp.matrix(second(x, length))
+        r_x, r_xx = q.T * s1, q.T * s2
+        eps = (sum(c**2 for c in r_x) - 1) / 2
+        energy += weight * (E * area * eps**2 + E * moment * sum(c**2 for c in r_xx)) / 2
+        grad += weight * (E * area * eps * s1 * r_x.T + E * moment * s2 * r_xx.T)
+    force = np.array([-float(grad[k, c]) for k in range(n) for c in range(dim)])
+    return float(energy), force
+
+
 def energy_and_force(kind, e, e0, length, height, width, E, nu, orders=None, source=None):
     """(U, force) of one element by 50-digit Gauss quadrature; force = -dU/de.  ``orders``:
     Gauss orders per local axis (default: the element's exact orders for a straight
-    reference); ``source``: which shape functions (see ``shape_functions``)."""
+    reference); ``source``: which shape functions (see ``shape_functions``).  Cables
+    (element.json ``energy``) take their structural energy (``cable_energy_and_force``)."""
     info = element_kind(kind)
+    if info.energy.name == "cable":
+        return cable_energy_and_force(kind, e, length, height, width, E, orders, source)
     dim = info.dim
     orders = orders or info.exact_orders
     gradients = _gradient_function(kind, source)

@@ -65,13 +65,21 @@ class Family:
         return build(spec) if self.variant is None else build(spec, self.variant)
 
 
+def _curved(spec: ElementSpec) -> bool:
+    """Families of curved references only where the energy takes them (not cables:
+    ``symgen.energies.CURVED_REFUSED``)."""
+    from symgen import energies
+
+    return not energies.is_cable(spec)
+
+
 def _small_general_map(spec: ElementSpec) -> bool:
     """The general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
     map of the whole general pattern); otherwise curved references take the law path."""
     from symgen import derive
     from symgen.methods.common import LOOPED_PATTERN_ABOVE, closed_as_data
 
-    return not closed_as_data(spec) and len(
+    return _curved(spec) and not closed_as_data(spec) and len(
         derive.patterns(spec, "general").gram) <= LOOPED_PATTERN_ABOVE["gram"]
 
 
@@ -83,11 +91,11 @@ FAMILIES: tuple[Family, ...] = (
     Family("quadrature", "quadrature", "quadrature"),
     Family("cij", "cij", "cij"),
     Family("gram_straight", "gram", "gram", variant="straight"),
-    Family("gram_general", "gram", "gram", variant="general"),
+    Family("gram_general", "gram", "gram", variant="general", when=_curved),
     Family("laws", "laws", "laws", optimization=PREPROCESSING),
     Family("quadrature_law", "quadrature_law", "quadrature", builder="build_law"),
     Family("damping_straight", "damping", "damping", variant="straight"),
-    Family("damping_general", "damping", "damping", variant="general"),
+    Family("damping_general", "damping", "damping", variant="general", when=_curved),
 )
 _BY_NAME = {family.name: family for family in FAMILIES}
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive
+from symgen import derive, energies
 from symgen.element import ElementSpec
 from symgen.ir import Array, Assign, Temporaries, refs
 
@@ -241,4 +241,21 @@ def invariant_outputs(spec: ElementSpec, pattern: derive.Patterns, k1_doc: str,
             Array("k1", npairs, "output", k1_doc),
             Array("gram", len(pattern.gram), "output", "gram matrix Dm, gram-pattern order"),
             Array("cij", len(pattern.cij), "output", "c^{kp}_{mq} of C^ij, cij-pattern order"),
-            Array("u0", 1, "output", u0_doc)]
+            Array("u0", 1, "output", u0_doc), *gram_linear_arrays(spec, "output")]
+
+
+def gram_linear_arrays(spec: ElementSpec, role: str) -> list[Array]:
+    """The linear term of the gram form (the cable's bending, ``symgen.energies``) as an
+    array of ``role``, or none for energies without one."""
+    if not energies.is_cable(spec):
+        return []
+    return [Array("gram_linear", len(derive.pairs(spec.n_shape)), role,
+                  "linear term of U in DeltaG (N m, bending), upper-pair order")]
+
+
+def gram_linear(spec: ElementSpec) -> list:
+    """The entries of the gram form's linear term (zeros for energies without one)."""
+    npairs = len(derive.pairs(spec.n_shape))
+    if not energies.is_cable(spec):
+        return [0] * npairs
+    return refs("gram_linear", npairs)

@@ -10,6 +10,8 @@ from symgen.methods.common import (
     DAMPING_KERNELS,
     coordinate_arrays,
     gram_gradient,
+    gram_linear,
+    gram_linear_arrays,
     loop_tables,
     looped,
     looped_start,
@@ -44,13 +46,16 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
     with gd = dG/dt = Qdot Q^T + Q Qdot^T (upper), so with hd = Dm (alpha gd) the damping
     force is -T'(hd) Q, d/de_dot = -2 alpha Gamma^T Dm Gamma and d/de = -(2 alpha Gamma^T Dm
     Gammadot + T'(hd) kron I) (Gammadot = Gamma of Qdot).  The one-pass kernel uses
-    h = Dm (g + alpha gd) for the elastic plus damping force and its Jacobian."""
+    h = Dm (g + alpha gd) for the elastic plus damping force and its Jacobian.  An energy
+    with a linear term c (the cable's bending, ``symgen.energies``) adds c to h of the
+    one-pass kernel, and its damping -alpha T'(c) Qdot to the force and -alpha T'(c) kron I
+    to d/de_dot."""
     d, n, ndof = spec.dim, spec.n_shape, spec.ndof
     pattern = derive.patterns(spec, variant)
     e_dot, tail = damping_arrays(spec, name)
     arrays = [*coordinate_arrays(spec, True), e_dot,
               Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
-              *tail]
+              *gram_linear_arrays(spec, "shared"), *tail]
     temps = Temporaries()
     body: list = []
     q, q0, dq = translate(spec, body, temps, with_reference=True)
@@ -75,12 +80,13 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
     dm = {}
     for v, (a, b) in enumerate(pattern.gram):
         dm[(a, b)] = dm[(b, a)] = ref("gram", v)
+    linear = gram_linear(spec)
     hvec = materialize(body, temps, [
         sum(dm[(a, b)] * strain[b] for b in range(len(pairs)) if (a, b) in dm)
-        for a in range(len(pairs))])
+        + (linear[a] if combined else 0) for a in range(len(pairs))])
 
-    def tprime(k: int, m: int):
-        return (4 if k == m else 2) * hvec[pidx[(k, m)]]
+    def tprime(k: int, m: int, vec=hvec):
+        return (4 if k == m else 2) * vec[pidx[(k, m)]]
 
     doc = {"damping_force": "Kelvin-Voigt damping force -T'(Dm alpha gd) Q",
            "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
@@ -88,8 +94,9 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
            "respect to e and e_dot, in one pass"}[name]
     kernel = Kernel(name, doc + " (gram form).", arrays, body)
     if name != "damping_jacobians":
-        store(body, "force", [-sum(tprime(k, m) * q[m * d + c] for m in range(n))
-                               for k in range(n) for c in range(d)])
+        store(body, "force", [-sum(tprime(k, m) * q[m * d + c]
+                                   + alpha * tprime(k, m, linear) * qd[m * d + c]
+                                   for m in range(n)) for k in range(n) for c in range(d)])
     if name == "damping_force":
         return kernel
 
@@ -128,7 +135,9 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
                 value += tprime(p, qn)
             full.append(-value)
     store(body, "jacobian", materialize(body, temps, full))
-    upper = {ij: -2 * alpha * value for ij, value in material.items()}
+    upper = {(i, j): -alpha * (2 * value + (tprime(i // d, j // d, linear)
+                                            if i % d == j % d else 0))
+             for (i, j), value in material.items()}
     names = materialize(body, temps, list(upper.values()))
     store_symmetric(body, "jacobian_dot", ndof, dict(zip(upper, names, strict=True)), False)
     return kernel

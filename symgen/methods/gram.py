@@ -10,6 +10,8 @@ from symgen.methods.common import (
     KERNELS,
     coordinate_arrays,
     gram_gradient,
+    gram_linear,
+    gram_linear_arrays,
     kernel_name,
     loop_tables,
     looped,
@@ -23,7 +25,9 @@ from symgen.methods.common import (
 
 
 def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
-    """Gram form: g = DeltaG = Q0 dQ^T + dQ Q^T (upper), h = Dm g, U = g.h, F = -T' Q.
+    """Gram form: g = DeltaG = Q0 dQ^T + dQ Q^T (upper), h = Dm g + c, U = g.(h + c),
+    F = -T' Q, with c the linear term of energies that have one (the cable's bending,
+    ``symgen.energies``; zero otherwise).
 
     T'_kk = 4 h_kk, T'_kl = 2 h_kl.  Jacobian: -(2 Gamma^T Dm Gamma + T' kron I) with
     Gamma = dg/de, built as W = Dm Gamma first.
@@ -32,6 +36,7 @@ def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     pattern = derive.patterns(spec, variant)
     arrays = [*coordinate_arrays(spec, True),
               Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
+              *gram_linear_arrays(spec, "shared"),
               *[quantity_output(spec, quantity) for quantity in quantities]]
     doc = {"energy": "strain energy U = g^T Dm g", "force": "elastic force F = -T' Q",
            "jacobian": "elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I)"}
@@ -48,13 +53,15 @@ def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     dm = {}
     for v, (a, b) in enumerate(pattern.gram):
         dm[(a, b)] = dm[(b, a)] = ref("gram", v)
+    linear = gram_linear(spec)
     hvec = materialize(body, temps, [
-        sum(dm[(a, b)] * g[b] for b in range(len(pairs)) if (a, b) in dm)
+        sum(dm[(a, b)] * g[b] for b in range(len(pairs)) if (a, b) in dm) + linear[a]
         for a in range(len(pairs))])
     kernel = Kernel(kernel_name(quantities),
                     "; ".join(doc[q] for q in quantities).capitalize() + ".", arrays, body)
     if "energy" in quantities:
-        store(body, "energy", [sum(x * y for x, y in zip(g, hvec, strict=True))])
+        store(body, "energy", [sum(x * (y + c) for x, y, c in zip(g, hvec, linear,
+                                                                  strict=True))])
 
     def tprime(k: int, m: int):
         return (4 if k == m else 2) * hvec[pidx[(k, m)]]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive
+from symgen import derive, energies
 from symgen.element import ElementSpec
 from symgen.ir import Array, Kernel, Temporaries, emit_cse, ref, refs
 from symgen.methods.common import closed_as_data, geometry_doc, geometry_subs, invariant_outputs
@@ -19,6 +19,9 @@ def build(spec: ElementSpec, variant: str) -> list[Kernel]:
     for the general one the integrals -> invariants map."""
     if variant != "straight":
         return [_invariants_kernel(spec, variant)]
+    if energies.is_cable(spec):  # invariants through the law path, quadrature tables
+        return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
+                _shape_curvatures_kernel(spec), _section_kernel(spec)]
     if closed_as_data(spec):
         return [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
     return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
@@ -51,6 +54,32 @@ def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
                     for j, (k, c) in enumerate(pattern)], Temporaries())
     return Kernel("shape_gradients", "Local shape-function gradients at local points.",
                   arrays, body)
+
+
+def _shape_curvatures_kernel(spec: ElementSpec) -> Kernel:
+    """d2 s_k / dx2 (the bending part of the cable energy, ``symgen.energies``)."""
+    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
+              Array("geometry", 3, "shared", geometry_doc(spec)),
+              Array("curvatures", spec.n_shape, "output", "d2 s_k / dx2 (1/m^2)")]
+    subs = {**geometry_subs(spec, "geometry"),
+            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
+    body: list = []
+    emit_cse(body, [(f"curvatures[{k}]", sp.diff(s, spec.coordinates[0], 2).subs(subs), False)
+                    for k, s in enumerate(spec.shape_functions)], Temporaries())
+    return Kernel("shape_curvatures", "Second shape-function derivatives along x at local "
+                  "points.", arrays, body)
+
+
+def _section_kernel(spec: ElementSpec) -> Kernel:
+    """Area and bending second moment of the section of a cable (``symgen.energies``)."""
+    arrays = [Array("geometry", 3, "batch", geometry_doc(spec)),
+              Array("section", 2, "output", "area A (m^2), second moment I (m^4)")]
+    subs = geometry_subs(spec, "geometry")
+    body: list = []
+    emit_cse(body, [("section[0]", energies.area(spec).subs(subs), False),
+                    ("section[1]", energies.second_moment(spec).subs(subs), False)],
+             Temporaries())
+    return Kernel("section", "Cross-section area and bending second moment.", arrays, body)
 
 
 def _integral_arrays(spec: ElementSpec, pattern: derive.Patterns, role: str) -> list[Array]:

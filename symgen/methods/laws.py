@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive, laws
+from symgen import derive, energies, laws
 from symgen.element import ElementSpec
 from symgen.ir import Array, Kernel, Temporaries, emit_cse, ref, refs
 from symgen.methods.common import closed_as_data, geometry_doc, geometry_subs, invariant_outputs
@@ -74,6 +74,12 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
     density = ref("density", 0)
     values = derive.law_invariant_values(spec, pattern, parts,
                                          derive.straight_integrals(spec).mass, density)
+    if energies.is_cable(spec):
+        modulus = energies.bending_modulus({domain: refs(domain, size)
+                                            for domain in derive.law_domains(spec)})
+        bending = energies.bending_terms(spec, derive.pairs(spec.n_shape), modulus)
+        values["k1"] = [a + b for a, b in zip(values["k1"], bending["k1"], strict=True)]
+        values["gram_linear"] = bending["gram_linear"]
     subs = geometry_subs(spec, "geometry")
     names = ", ".join(laws.coefficient_names(spec.dim))
     arrays = [Array("geometry", 3, "batch", geometry_doc(spec)),

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive, laws
+from symgen import derive, energies, laws
 from symgen.element import ElementSpec
 from symgen.ir import Array, Assign, Kernel, Loop, PointLoop, Temporaries, ref, refs
 from symgen.methods.common import (
@@ -24,6 +24,15 @@ from symgen.methods.common import (
     translate,
 )
 from symgen.methods.damping import damping_arrays
+
+#: What each kernel of the quadrature_law families computes (their docstrings).
+KERNEL_DOCS = {"force": "elastic force", "jacobian": "elastic Jacobian",
+               "energy": "strain energy", "force_jacobian": "elastic force and Jacobian",
+               "damping_force": "Kelvin-Voigt damping force",
+               "damping_jacobians": "Jacobians of the damping force with respect to e and "
+               "e_dot",
+               "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
+               "respect to e and e_dot"}
 
 
 def quadrature_table_width(spec: ElementSpec) -> int:
@@ -264,12 +273,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
     body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
     if looped(spec, "quadrature_law") and "jacobian" in quantities:
         arrays += _point_locals(spec, damped)
-    doc = {"force": "elastic force", "jacobian": "elastic Jacobian", "energy": "strain energy",
-           "force_jacobian": "elastic force and Jacobian",
-           "damping_force": "Kelvin-Voigt damping force",
-           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
-           "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
-           "respect to e and e_dot"}[name]
+    doc = KERNEL_DOCS[name]
     return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
                   "call (volume and axis rules).", arrays, body,
                   loop_tables(spec, "straight") if looped(spec, "quadrature_law") else None)
@@ -341,12 +345,83 @@ def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn,
     point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
 
 
+def cable_table_width(spec: ElementSpec) -> int:
+    """Doubles per point of a cable's quadrature table: ds/dx, d2s/dx2, two weights."""
+    return 2 * spec.n_shape + 2
+
+
+def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
+    """Gauss quadrature of the cable energy (``symgen.energies``) along the axis at every
+    call, with Kelvin-Voigt damping.  Each table row is an axis point: ds/dx, d2s/dx2, and
+    the weights of the axial part (EA dx) and of the bending part (EI dx).  Per point the
+    energy and the dissipation potential over alpha come from ``energies.point_energy`` and
+    ``energies.point_dissipation``; force, Jacobians and damping are their exact
+    derivatives (F = -dU/de - alpha dPhi/de_dot)."""
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    damped = name in DAMPING_KERNELS
+    width_ = cable_table_width(spec)
+    arrays = [*coordinate_arrays(spec, True)]
+    table = Array("table", width_, "table", "per axis point: ds/dx, d2s/dx2, weights of the "
+                  "axial part (EA dx, N m) and of the bending part (EI dx, N m^3)")
+    if damped:
+        e_dot, tail = damping_arrays(spec, name)
+        arrays += [e_dot, table, *tail]
+    else:
+        arrays += [table, *[quantity_output(spec, quantity) for quantity in name.split("_")]]
+    temps = Temporaries()
+    body: list = []
+    q, q0, dq = translate(spec, body, temps, with_reference=True)
+    tab = refs("tab", width_)
+    s1, s2, w_axial, w_bending = tab[:n], tab[n:2 * n], tab[2 * n], tab[2 * n + 1]
+    shift = sp.symbols(f"dq0:{ndof}")
+    rate = sp.symbols(f"qd0:{ndof}")
+    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending)
+    subs = dict(zip(shift, dq, strict=True))
+    point: list = []
+    if name == "energy":
+        store(point, "energy", [energy.xreplace(subs)], accumulate=True)
+    force = [-sp.diff(energy, v) for v in shift]
+    stiffness = [[sp.diff(f, v) for v in shift] for f in force]
+    if damped:
+        alpha = ref("alpha", 0)
+        # the dissipation in the current position q = q0 + dq, relative to the first node
+        current = [a + b for a, b in zip(q0, shift, strict=True)]
+        dissipation = alpha * energies.point_dissipation(s1, s2, current, rate, d, w_axial,
+                                                         w_bending)
+        subs.update(zip(rate, relative_velocities(spec), strict=True))
+        damping = [-sp.diff(dissipation, v) for v in rate]
+        jacobian = [[sp.diff(f, v) for v in shift] for f in damping]
+        jacobian_dot = [[sp.diff(f, v) for v in rate] for f in damping]
+        if name == "damped_force_jacobians":
+            damping = [a + b for a, b in zip(force, damping, strict=True)]
+            jacobian = [[a + b for a, b in zip(ra, rb, strict=True)]
+                        for ra, rb in zip(stiffness, jacobian, strict=True)]
+        outputs = {"force": damping, "jacobian": jacobian, "jacobian_dot": jacobian_dot}
+        wanted = [a.name for a in tail if a.role == "output"]
+    else:
+        outputs = {"force": force, "jacobian": stiffness}
+        wanted = [quantity for quantity in name.split("_") if quantity != "energy"]
+    for quantity in wanted:
+        values = outputs[quantity]
+        flat = values if quantity == "force" else [v for row in values for v in row]
+        store(point, quantity, materialize(point, temps, [v.xreplace(subs) for v in flat]),
+              accumulate=True)
+    body.append(PointLoop("table", tuple(point), spec.quadrature[0]))
+    doc = KERNEL_DOCS[name]
+    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of the cable energy by Gauss quadrature "
+                  "along the axis at every call.", arrays, body)
+
+
 def build(spec: ElementSpec) -> list[Kernel]:
-    """The kernels of the ``quadrature`` family."""
+    """The kernels of the ``quadrature`` family (of the cable energy for cable elements)."""
+    if energies.is_cable(spec):
+        return [cable_quadrature_kernel(spec, kernel_name(q)) for q in KERNELS]
     return [quadrature_kernel(spec, quantities, "straight") for quantities in KERNELS]
 
 
 def build_law(spec: ElementSpec) -> list[Kernel]:
     """The kernels of the ``quadrature_law`` family (elastic and damping)."""
-    return [quadrature_law_kernel(spec, name)
-            for name in [kernel_name(q) for q in KERNELS] + list(DAMPING_KERNELS)]
+    names = [kernel_name(q) for q in KERNELS] + list(DAMPING_KERNELS)
+    if energies.is_cable(spec):
+        return [cable_quadrature_kernel(spec, name) for name in names]
+    return [quadrature_law_kernel(spec, name) for name in names]

@@ -14,7 +14,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.element import invariants
+from runtime.kernels.kind import element_kind
 from runtime.kernels.loader import kernel_family
+from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
@@ -93,6 +95,18 @@ def _moment_key(value: Any, path: str, context: Context) -> float | tuple[float,
     return rotation_vector(value, path, context.dim, "the moment in N m")
 
 
+def _section_node_key(value: Any, path: str, context: Context) -> NodeRef:
+    """A node a moment can act on: one with r_y, or in 2D one with r_x (a cable node); a 3D
+    cable node (r_x only) has no section orientation for the twist."""
+    ref = node_key(value, path, context)
+    kind = element_kind(context.node.bodies[ref.body].element)
+    if "r_y" not in kind.vectors and (context.dim == 3 or "r_x" not in kind.vectors):
+        raise SceneError(f"{path}: node {show(value)} of body {show(ref.body)} ({kind.name}) "
+                         f"carries only {', '.join(kind.vectors)}: a moment needs the node's "
+                         "section (r_y; in 2D r_x); a 3D cable node has no section orientation")
+    return ref
+
+
 @dataclass(frozen=True)
 class PointMoment(NodeLoad):
     """A moment ``moment`` in N m on the section of ``node``: a number about +z in 2D, a
@@ -113,18 +127,26 @@ class PointMoment(NodeLoad):
     linear distribution of tractions over the section (the bending stress -M y / I) with
     resultant M.  Assumption: small rotations of the section; Q is constant, so a section
     turned by a finite angle theta receives the moment of those fixed tractions, M cos(theta)
-    in bending, not M.
+    in bending, not M.  A 2D node without r_y (a cable's) takes the moment on its tangent:
+    d r_x = d theta (-r_x,y, r_x,x), so Q_x = M (-r_x,y, r_x,x) / |r_x|^2 at the reference
+    (a 3D cable node has no section orientation: refused).
     """
 
     type: ClassVar[str] = "point_moment"
     on_gradients: ClassVar[bool] = True
     noun: ClassVar[str] = "moment"
+    node: NodeRef | str = key(_section_node_key)
     moment: float | tuple[float, ...] = key(_moment_key)
 
     def nominal(self, model: ModelView) -> np.ndarray:
         node = model.node_index(self.node)
-        frame = model.node_frame(model.reference, node)
         out = np.zeros(model.size)
+        if "r_y" not in model.node_vectors(node):  # a 2D cable node: on its tangent
+            tangent = model.reference[model.node_dofs(node, "r_x")]
+            out[model.node_dofs(node, "r_x")] = (self.moment * np.array([-tangent[1], tangent[0]])
+                                                 / (tangent @ tangent))
+            return out
+        frame = model.node_frame(model.reference, node)
         if model.dim == 2:
             out[model.node_dofs(node, "r_y")] = -self.moment * frame[:, 0]
             return out

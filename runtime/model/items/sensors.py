@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from runtime.kernels.kind import element_kind
 from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
@@ -90,6 +91,19 @@ def _component_key(value: Any, path: str, context: Context) -> str:
     return choice(value, path, components, "component")
 
 
+def _frame_key(value: Any, path: str, context: Context) -> NodeRef:
+    """A node whose gradients define a frame (at least dim - 1 of them: a 3D cable node,
+    carrying r_x only, has no section orientation)."""
+    ref = node_key(value, path, context)
+    kind = element_kind(context.node.bodies[ref.body].element)
+    if len(kind.vectors) - 1 < kind.dim - 1:
+        raise SceneError(f"{path}: node {show(value)} of body {show(ref.body)} ({kind.name}) "
+                         f"carries only {', '.join(kind.vectors)}: too few gradients for a "
+                         f"frame in {kind.dim}D (a cable node has no section orientation); "
+                         "expected a node of a kind with a frame")
+    return ref
+
+
 @dataclass(frozen=True)
 class NodeSensor(Sensor):
     """A vector of ``node`` (m): one ``component`` (x | y | z | norm), in global axes or, with
@@ -100,7 +114,7 @@ class NodeSensor(Sensor):
     energy: ClassVar[bool] = False
     node: NodeRef | str = key(node_key)
     component: str = key(_component_key)
-    frame: NodeRef | str | None = key(node_key, None)
+    frame: NodeRef | str | None = key(_frame_key, None)
 
     def _vector(self, position: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """The vectors (k, dim) this sensor reports from the node's positions (k, dim) and
