@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from runtime.catalog import generated_dir, generated_kinds
+from runtime.catalog import VARIANTS, generated_dir, generated_kinds
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ class Energy:
     def from_document(cls, meta: dict | None) -> Energy:
         """The energy entry of element.json (absent: the continuum, every variant)."""
         if meta is None:
-            return cls("continuum", None, ("straight", "general"), None)
+            return cls("continuum", None, VARIANTS, None)
         return cls(meta["name"], meta["bending"], tuple(meta["variants"]), meta["curved"])
 
     @property
