@@ -263,7 +263,8 @@ def parser() -> argparse.ArgumentParser:
                           "scene's [output])")
     run.add_argument("--plane", choices=[AUTO_PLANE, *PLANES], default=AUTO_PLANE,
                      help="projection of the animation and snapshot (default auto: the "
-                          "model's longest axis across, the direction it moves most along up)")
+                          "model's longest axis across, the direction it moves most along up; "
+                          "plates seen obliquely)")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability
