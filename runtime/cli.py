@@ -17,14 +17,7 @@ from typing import NoReturn
 from runtime import progress
 from runtime.catalog import BACKENDS, ENGINES, METHODS
 from runtime.kernels.errors import JitEnvironmentError
-
-
-def _orders(text: str) -> tuple[int, ...]:
-    try:
-        return tuple(int(part) for part in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated Gauss orders such as 5,3,3, got {text!r}") from None
+from runtime.studies.options import add_list_option, announce, default_out
 
 
 def _generate_into(elements: list[str], backends: list[str], methods: list[str] | None,
@@ -82,8 +75,9 @@ def cmd_generate(args) -> int:
         diff = generation_diff(elements, out)
         if diff:
             print(diff)
+            subset = f" --element {' '.join(args.element)}" if args.element else ""
             print(f"\ngenerated kernels in {out} differ from what symgen produces; update them "
-                  f"with: ancf generate{''.join(' --element ' + e for e in args.element or [])}")
+                  f"with: ancf generate{subset}")
             return 1
         print(f"generated kernels in {out} are up to date")
         return 0
@@ -98,7 +92,8 @@ def cmd_generate(args) -> int:
 def cmd_invariants(args) -> int:
     from runtime.studies.invariant_comparison import compare, report
 
-    print(report(compare(args.element, args.reference, args.quadrature, args.backend)))
+    orders = tuple(args.quadrature) if args.quadrature else None
+    print(report(compare(args.element, args.reference, orders, args.backend)))
     return 0
 
 
@@ -172,6 +167,7 @@ def cmd_run(args) -> int:
 def cmd_bench_paper(args) -> int:
     from runtime.studies import paper
 
+    announce("ancf bench paper", args.out)
     results = paper.bench_paper(args.quick, args.scheduler, args.workers, args.serial,
                                 args.backend)
     paths = paper.write(results, args.out)
@@ -181,17 +177,20 @@ def cmd_bench_paper(args) -> int:
 
 
 def report_folder(out: str | None, quick: bool) -> Path:
-    """Where ``ancf report`` writes: ``out``; by default ``docs`` (the tracked report), or a
-    new temporary folder for ``--quick`` (a smoke test never overwrites the report)."""
-    if out is not None:
-        return Path(out)
-    return Path(tempfile.mkdtemp(prefix="ancf-report-quick-")) if quick else Path("docs")
+    """Where ``ancf report`` writes (created): ``out``; by default ``docs`` (the tracked
+    report), or ``results/report`` for ``--quick`` (a smoke test never overwrites the
+    report)."""
+    folder = Path(out) if out is not None else default_out("report") if quick else Path("docs")
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
 
 
 def cmd_report(args) -> int:
     from runtime.studies import report
 
-    path = report.build(report_folder(args.out, args.quick), quick=args.quick,
+    folder = report_folder(args.out, args.quick)
+    announce("ancf report", folder)
+    path = report.build(folder, quick=args.quick,
                         scheduler=args.scheduler, workers=args.workers)
     print(f"written: {path}")
     return 0
@@ -231,9 +230,10 @@ def parser() -> argparse.ArgumentParser:
     sub = main.add_subparsers(dest="command", required=True)
 
     gen = sub.add_parser("generate", help="regenerate kernels from symgen into generated/")
-    gen.add_argument("--element", action="append", help="element kind (repeatable; default all)")
-    gen.add_argument("--backend", action="append", choices=list(BACKENDS))
-    gen.add_argument("--method", action="append", choices=list(METHOD_FAMILIES))
+    add_list_option(gen, "--element", "element kinds (default all)", metavar="NAME")
+    add_list_option(gen, "--backend", "backends (default all)", choices=list(BACKENDS))
+    add_list_option(gen, "--method", "kernel families of these methods (default all)",
+                    choices=list(METHOD_FAMILIES))
     gen.add_argument("--out", help="output folder (default: the package's generated/)")
     gen.add_argument("--check", action="store_true",
                      help="compare with the output folder instead of writing; exit 1 on a diff")
@@ -242,7 +242,8 @@ def parser() -> argparse.ArgumentParser:
     invariants = sub.add_parser("invariants", help="symbolic vs quadrature invariants")
     invariants.add_argument("--element", default="beam3d")
     invariants.add_argument("--reference", choices=["straight", "curved"], default="straight")
-    invariants.add_argument("--quadrature", type=_orders, help="Gauss orders, e.g. 5,3,3")
+    add_list_option(invariants, "--quadrature", "Gauss orders per direction, e.g. 5 3 3",
+                    convert=int, metavar="N")
     invariants.add_argument("--backend", choices=list(BACKENDS), default="numpy")
     invariants.set_defaults(run=cmd_invariants)
 
@@ -262,7 +263,8 @@ def parser() -> argparse.ArgumentParser:
                           "scene's [output])")
     run.add_argument("--plane", choices=[AUTO_PLANE, *PLANES], default=AUTO_PLANE,
                      help="projection of the animation and snapshot (default auto: the "
-                          "model's longest axis across, the direction it moves most along up)")
+                          "model's longest axis across, the direction it moves most along up; "
+                          "plates seen obliquely)")
     run.set_defaults(run=cmd_run)
 
     from runtime.studies import error_vs_time, stability
@@ -274,7 +276,7 @@ def parser() -> argparse.ArgumentParser:
 
     report = sub.add_parser("report", help="measure everything and write docs/report.md")
     report.add_argument("--out", help="folder of report.md and its figures (default: docs; "
-                                      "with --quick a new temporary folder)")
+                                      "with --quick results/report)")
     report.add_argument("--quick", action="store_true",
                         help="small versions (smoke test), never into docs/ unless --out says")
     report.add_argument("--scheduler", help="address of an existing dask scheduler")
@@ -284,13 +286,14 @@ def parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks")
     bench_sub = bench.add_subparsers(dest="what", required=True)
     kernels = bench_sub.add_parser("kernels", help="per-element kernel cost, every method")
-    kernels.add_argument("--element", action="append", help="element kind (default all)")
+    add_list_option(kernels, "--element", "element kinds (default all)", metavar="NAME")
     kernels.add_argument("--batch", type=int, default=10_000)
-    kernels.add_argument("--method", action="append", choices=list(METHODS))
-    kernels.add_argument("--backend", action="append", choices=list(BACKENDS))
+    add_list_option(kernels, "--method", "methods (default all)", choices=list(METHODS))
+    add_list_option(kernels, "--backend", "backends (default all)", choices=list(BACKENDS))
     kernels.set_defaults(run=cmd_bench)
     paper = bench_sub.add_parser("paper", help="the paper's Tables I and II on this machine")
-    paper.add_argument("--out", default="results/paper", help="folder for paper.md/json/csv")
+    paper.add_argument("--out", default=str(default_out("paper")),
+                       help="folder for paper.md/json/csv (default: results/paper)")
     paper.add_argument("--scheduler", help="address of an existing dask scheduler")
     paper.add_argument("--workers", type=int, help="local dask workers (default: cores)")
     paper.add_argument("--serial", action="store_true", help="run in this process")
@@ -298,8 +301,8 @@ def parser() -> argparse.ArgumentParser:
     paper.add_argument("--backend", choices=list(BACKENDS), default="c")
     paper.set_defaults(run=cmd_bench_paper)
     steps = bench_sub.add_parser("steps", help="cost of one dynamic step against model size")
-    steps.add_argument("--elements", type=int, action="append",
-                       help="beam3d elements (repeatable; default 10, 100, 1000, 10000)")
+    add_list_option(steps, "--elements", "beam3d elements (default 10 100 1000 10000)",
+                    convert=int, metavar="N")
     steps.add_argument("--method", choices=list(METHODS), default="gram")
     steps.add_argument("--quiet", action="store_true", help="no progress lines")
     steps.set_defaults(run=cmd_bench_steps)

@@ -26,7 +26,9 @@ Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 from __future__ import annotations
 
 import os
+import textwrap
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -106,14 +108,28 @@ class Shape:
             result[points.ravel(), :self.dim] = samples.reshape(-1, self.dim)
         return result
 
-    def projected(self, vectors: np.ndarray, plane: str) -> tuple[np.ndarray, np.ndarray]:
+    @property
+    def surface(self) -> bool:
+        """True if some body is a surface (plate elements, quad cells)."""
+        return any(kind == "quad" for kind, _ in self.cells)
+
+    def projected(self, vectors: np.ndarray,
+                  view: str | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Horizontal and vertical coordinates (k,) of the outline of ``vectors`` (points, 3)
-        on ``plane`` (a key of ``PLANES``), NaN between polylines (matplotlib breaks lines
-        there)."""
-        i, j = PLANES[plane]
-        drawn = vectors[self.outline][:, [i, j]]
+        on ``view``: a plane (a key of ``PLANES``) or a (2, 3) projection matrix; NaN between
+        polylines (matplotlib breaks lines there)."""
+        drawn = vectors[self.outline] @ _matrix(view).T
         drawn[self.outline < 0] = np.nan
         return drawn[:, 0], drawn[:, 1]
+
+
+def _matrix(view: str | np.ndarray) -> np.ndarray:
+    """The (2, 3) projection of ``view``: a key of ``PLANES`` or already a matrix."""
+    if not isinstance(view, str):
+        return np.asarray(view, dtype=float)
+    matrix = np.zeros((2, 3))
+    matrix[[0, 1], list(PLANES[view])] = 1.0
+    return matrix
 
 
 def _sample_fractions(kind: ElementKind, axes: list[int], per_element: int) -> list[np.ndarray]:
@@ -336,15 +352,17 @@ class Frames(Observer):
         del self.times[k], self.frames[k], self._outputs[k]
 
 
-def magnification(reference: np.ndarray, states: Sequence[np.ndarray]) -> float:
+def magnification(reference: np.ndarray, states: Sequence[np.ndarray],
+                  fill: float = 0.1) -> float:
     """Scale of the displacements drawn: 1 when the largest displacement of ``states``
     (each (points, 3), like ``reference``) is at least 5 % of the model's extent, else the
-    1-2-5 factor that shows it as about 10 % (a small static deflection stays visible)."""
+    1-2-5 factor that shows it as about ``fill`` of it, at most (a small static deflection
+    stays visible)."""
     extent = float(np.ptp(reference, axis=0).max()) or 1.0
     largest = max((float(np.abs(s - reference).max()) for s in states), default=0.0)
     if largest == 0.0 or largest >= 0.05 * extent:
         return 1.0
-    wanted = 0.1 * extent / largest
+    wanted = fill * extent / largest
     power = 10.0 ** np.floor(np.log10(wanted))
     return float(max(m * power for m in (1, 2, 5) if m * power <= wanted))
 
@@ -368,58 +386,99 @@ def view_plane(reference: np.ndarray, states: Sequence[np.ndarray]) -> str:
     return next(name for name, axes in PLANES.items() if axes == pair)
 
 
-def _axes(fig, shape: Shape, plane: str, reference: np.ndarray, shown: Sequence[np.ndarray]):
-    """An axes of ``fig`` for ``plane`` with limits holding every sample (points, 3) of
-    ``reference`` and ``shown``, equal scales, the outline of ``reference`` dashed."""
-    i, j = PLANES[plane]
-    everything = np.concatenate([reference, *shown])
-    low, high = everything.min(axis=0), everything.max(axis=0)
-    margin = 0.05 * float(max(high[i] - low[i], high[j] - low[j]) or 1.0)
-    ax = fig.add_subplot()
-    ax.set_xlim(low[i] - margin, high[i] + margin)
-    ax.set_ylim(low[j] - margin, high[j] + margin)
-    ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel(f"{plane[0]} (m)")
-    ax.set_ylabel(f"{plane[1]} (m)")
-    ax.grid(True, alpha=0.3)
-    ax.plot(*shape.projected(reference, plane), "--", color="0.6", lw=1, label="reference")
-    return ax
+#: the drawn motion fills about this fraction of the model's extent (a 1-2-5 magnification)
+FILL = 0.25
+#: width of the drawings (inches); their height follows the drawn box within HEIGHTS
+WIDTH = 6.4
+HEIGHTS = (2.4, 4.8)
+#: inches of a drawing taken by its title, labels and ticks, across and up
+_DECOR = (0.9, 1.3)
+#: angle of the receding axis of an oblique view
+OBLIQUE_DEG = 30.0
 
 
-def _heading(title: str, what: str, scale: float) -> str:
-    """Two title lines: the scene title (cut to 60 characters), then what is drawn."""
-    short = title if len(title) <= 60 else title[:57] + "..."
-    return f"{short}\n{what}" + (f", displacements x{scale:g}" if scale != 1 else "")
+@dataclass(frozen=True)
+class _View:
+    """A projection of the drawings: ``matrix`` (2, 3), axis labels and what the heading
+    says about it ('' for a plane)."""
+
+    matrix: np.ndarray
+    labels: tuple[str, str]
+    note: str = ""
 
 
-def _check_plane(plane: str, reference: np.ndarray, states: Sequence[np.ndarray]) -> str:
-    """``plane``, or the one :func:`view_plane` chooses for ``AUTO_PLANE``."""
-    if plane == AUTO_PLANE:
-        return view_plane(reference, states)
-    if plane not in PLANES:
+def _view(plane: str, shape: Shape, reference: np.ndarray,
+          states: Sequence[np.ndarray]) -> _View:
+    """``plane`` as a :class:`_View`; ``AUTO_PLANE`` is the plane :func:`view_plane`
+    chooses, seen obliquely for a surface in 3D (the third axis drawn receding at
+    ``OBLIQUE_DEG``: a plate bending out of its plane is not seen edge-on)."""
+    if plane != AUTO_PLANE and plane not in PLANES:
         raise ValueError(f"plane: expected {AUTO_PLANE} or one of {', '.join(PLANES)}, got "
                          f"{plane!r}")
-    return plane
+    chosen = view_plane(reference, states) if plane == AUTO_PLANE else plane
+    matrix = _matrix(chosen)
+    if plane != AUTO_PLANE or not shape.surface or shape.dim != 3:
+        return _View(matrix, (chosen[0], chosen[1]))
+    depth = ({"x", "y", "z"} - set(chosen)).pop()
+    angle = np.radians(OBLIQUE_DEG)
+    matrix[:, "xyz".index(depth)] = np.cos(angle), np.sin(angle)
+    return _View(matrix, (chosen[0], chosen[1]),
+                 f"oblique view, {depth} drawn at {OBLIQUE_DEG:g} degrees")
+
+
+def _drawing(shape: Shape, view: _View, reference: np.ndarray,
+             shown: Sequence[np.ndarray], scale: float):
+    """A figure and its axes holding every sample (points, 3) of ``reference`` and
+    ``shown`` (displacements magnified ``scale`` times, which the vertical label says) at
+    equal scales, the figure's height fitted to the drawn box (a slender beam is not a
+    strip in a white page), the outline of ``reference`` dashed."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    drawn = np.concatenate([reference, *shown]) @ view.matrix.T
+    low, high = drawn.min(axis=0), drawn.max(axis=0)
+    margin = 0.05 * float(max(high - low) or 1.0)
+    low, high = low - margin, high + margin
+    across, up = high - low
+    height = (WIDTH - _DECOR[0]) * up / across + _DECOR[1]
+    fig = Figure(figsize=(WIDTH, float(np.clip(height, *HEIGHTS))), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_xlim(low[0], high[0])
+    ax.set_ylim(low[1], high[1])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel(f"{view.labels[0]} (m)")
+    ax.set_ylabel(f"{view.labels[1]} (m)" if scale == 1 else
+                  f"{view.labels[1]} (m, displacements x{scale:g})")
+    ax.grid(True, alpha=0.3)
+    ax.plot(*shape.projected(reference, view.matrix), "--", color="0.6", lw=1,
+            label="reference")
+    return fig, ax
+
+
+def _heading(title: str, what: str, scale: float, view: _View) -> str:
+    """The scene title (wrapped on at most two lines), then what is drawn, the
+    magnification and the view."""
+    lines = textwrap.wrap(title, 90, max_lines=2, placeholder=" ...")
+    said = [what] + ([f"displacements x{scale:g}"] if scale != 1 else []) \
+        + ([view.note] if view.note else [])
+    return "\n".join([*lines, ", ".join(said)])
 
 
 def write_snapshot(path: str | Path, shape: Shape, reference: np.ndarray, q: np.ndarray,
                    title: str, what: str = "static state", plane: str = AUTO_PLANE) -> Path:
     """PNG of the outline of ``shape`` (centre lines, plate element edges) at ``q`` over the
     reference ``reference`` (both coordinates, (size,)) projected on ``plane`` (a key of
-    ``PLANES``, or ``AUTO_PLANE``: :func:`view_plane`), titled ``title`` and ``what``;
-    displacements magnified as :func:`magnification` says."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    ``PLANES``, or ``AUTO_PLANE``: :func:`view_plane`, obliquely for plates), titled
+    ``title`` and ``what``; displacements magnified as :func:`magnification` says (to
+    ``FILL``), the figure fitted to the drawing."""
     base, state = shape.sample(reference), shape.sample(q)
-    plane = _check_plane(plane, base, [state])
-    scale = magnification(base, [state])
+    view = _view(plane, shape, base, [state])
+    scale = magnification(base, [state], FILL)
     shown = base + scale * (state - base)
-    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = _axes(fig, shape, plane, base, [shown])
-    ax.plot(*shape.projected(shown, plane), lw=2, color="C0", label="deformed")
-    ax.set_title(_heading(title, what, scale), fontsize=9)
+    fig, ax = _drawing(shape, view, base, [shown], scale)
+    ax.plot(*shape.projected(shown, view.matrix), lw=2, color="C0", label="deformed")
+    ax.set_title(_heading(title, what, scale, view), fontsize=9)
     ax.legend(fontsize=8)
     path = Path(path)
     with output.atomic_file(path) as f:
@@ -431,33 +490,28 @@ def write_animation(path: str | Path, frames: Frames, title: str, plane: str = A
                     fps: int = 10) -> Path:
     """GIF of the outlines of ``frames`` (centre lines, plate element edges) projected on
     ``plane`` (as for :func:`write_snapshot`; at most ``MAX_FRAMES`` frames, evenly chosen,
-    the last included), with the reference dashed and the time in the title; displacements
-    magnified as :func:`magnification` says."""
+    the last included), with the reference dashed and the time in a corner; displacements
+    magnified as :func:`magnification` says (to ``FILL``), the figure fitted to the motion."""
     from matplotlib.animation import FuncAnimation, PillowWriter
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
 
     if not frames.frames:
         raise ValueError("animation: no output time to draw")
-    plane = _check_plane(plane, frames.reference, frames.frames)
+    view = _view(plane, frames.shape, frames.reference, frames.frames)
     count = len(frames.frames)
     chosen = np.unique(np.linspace(0, count - 1, min(count, MAX_FRAMES)).round().astype(int))
     base = frames.reference
-    scale = magnification(base, [frames.frames[k] for k in chosen])
+    scale = magnification(base, [frames.frames[k] for k in chosen], FILL)
     shown = [base + scale * (frames.frames[k] - base) for k in chosen]
-    fig = Figure(figsize=(6.4, 4.0))
-    FigureCanvasAgg(fig)
     shape = frames.shape
-    ax = _axes(fig, shape, plane, base, shown)
-    (curve,) = ax.plot(*shape.projected(shown[0], plane), lw=2, color="C0")
-    ax.set_title(_heading(title, "dynamic analysis", scale), fontsize=9)
-    clock = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
-    fig.set_layout_engine("constrained")
+    fig, ax = _drawing(shape, view, base, shown, scale)
+    (curve,) = ax.plot(*shape.projected(shown[0], view.matrix), lw=2, color="C0")
+    ax.set_title(_heading(title, "dynamic analysis", scale, view), fontsize=9)
+    clock = fig.text(0.99, 0.01, "", ha="right", va="bottom", fontsize=9)
     fig.canvas.draw()               # lay out once: the frames keep that layout (fast)
     fig.set_layout_engine("none")
 
     def draw(n: int):
-        curve.set_data(*shape.projected(shown[n], plane))
+        curve.set_data(*shape.projected(shown[n], view.matrix))
         clock.set_text(f"t = {frames.times[chosen[n]]:.4g} s")
         return curve, clock
 

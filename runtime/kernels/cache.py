@@ -1,7 +1,10 @@
 """The kernel cache folder and its security checks: loading a shared object runs its code,
 so folders are created with mode 0700, a folder or cached file that belongs to another user,
 is writable by group or others or is a symbolic link is refused (:class:`CacheError`), and a
-``.so`` is trusted only if its SHA-256 matches its ready marker."""
+``.so`` is trusted only if its SHA-256 matches its ready marker and, where shared objects are
+ELF files, its headers, segments and sections lie within the file: the dynamic loader maps a
+truncated file past its end and the process dies of SIGBUS, which no handler can turn into a
+rebuild or a message."""
 
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ import hashlib
 import importlib.machinery
 import os
 import stat
+import struct
 import sys
 from pathlib import Path
 
@@ -156,8 +160,61 @@ def _read_private(path: Path) -> bytes | None:
         return fh.read()
 
 
+#: Shared objects are ELF files everywhere but on macOS (Mach-O) and Windows (PE).
+_ELF_PLATFORM = sys.platform not in ("darwin", "win32")
+_SHT_NOBITS = 8  # a section that occupies no bytes of the file (.bss)
+#: Per ELF class (1: 32-bit, 2: 64-bit): the formats of the file header, a program header
+#: and a section header, and the field indices of (offset, size) in the latter two.
+_ELF_LAYOUT = {
+    1: ("16sHHIIIIIHHHHHH", "IIIIIIII", (1, 4), "IIIIIIIIII", (4, 5)),
+    2: ("16sHHIQQQIHHHHHH", "IIQQQQQQ", (2, 5), "IIQQQQIIQQ", (4, 5)),
+}
+
+
+def _extents_within(binary: bytes, order: str, fmt: str, start: int, count: int,
+                    entsize: int, fields: tuple[int, int], skip_nobits: bool) -> bool:
+    """True if a table of ``count`` headers at ``start`` and the file extents they name,
+    (offset, size) at indices ``fields``, lie within ``binary``."""
+    size = struct.calcsize(order + fmt)
+    if count and (entsize < size or start + count * entsize > len(binary)):
+        return False
+    for i in range(count):
+        header = struct.unpack_from(order + fmt, binary, start + i * entsize)
+        if skip_nobits and header[1] == _SHT_NOBITS:
+            continue
+        offset, length = header[fields[0]], header[fields[1]]
+        if offset + length > len(binary):
+            return False
+    return True
+
+
+def _whole_shared_object(binary: bytes) -> bool:
+    """True if ``binary`` is a whole shared object: on ELF platforms, a dynamic ELF file whose
+    program headers, segments, section headers and sections all lie within it (a truncated
+    or mangled file fails); elsewhere always True (the loader there does not map past the
+    end)."""
+    if not _ELF_PLATFORM:
+        return True
+    if len(binary) < 52 or binary[:4] != b"\x7fELF" or binary[4] not in _ELF_LAYOUT \
+            or binary[5] not in (1, 2):
+        return False
+    order = "<" if binary[5] == 1 else ">"
+    header_fmt, ph_fmt, ph_fields, sh_fmt, sh_fields = _ELF_LAYOUT[binary[4]]
+    if len(binary) < struct.calcsize(order + header_fmt):
+        return False
+    (_, e_type, _, _, _, phoff, shoff, _, _, phentsize, phnum, shentsize, shnum,
+     _) = struct.unpack_from(order + header_fmt, binary)
+    return (e_type == 3  # ET_DYN
+            and phnum > 0
+            and _extents_within(binary, order, ph_fmt, phoff, phnum, phentsize, ph_fields,
+                                skip_nobits=False)
+            and _extents_within(binary, order, sh_fmt, shoff, shnum, shentsize, sh_fields,
+                                skip_nobits=True))
+
+
 def verified(so: Path, ready: Path) -> bool:
-    """True if the ready marker exists and names the SHA-256 of the shared object."""
+    """True if the ready marker exists and names the SHA-256 of the shared object, and the
+    shared object is whole (:func:`_whole_shared_object`)."""
     marker = _read_private(ready)
     if marker is None:
         return False
@@ -165,4 +222,5 @@ def verified(so: Path, ready: Path) -> bool:
     if len(fields) != 2 or fields[1] != so.name:
         return False
     binary = _read_private(so)
-    return binary is not None and hashlib.sha256(binary).hexdigest() == fields[0]
+    return (binary is not None and hashlib.sha256(binary).hexdigest() == fields[0]
+            and _whole_shared_object(binary))

@@ -7,8 +7,8 @@ compiles in a private temporary folder, moves the ``.so`` into place atomically 
 ``<modname>.ready`` (the SHA-256 of the ``.so``) last; the others poll for the marker.  A
 failed build renames the lock to ``<modname>.failed`` (holding the compiler log); waiters
 raise from it and a later fresh call removes it and tries again.  A ``.so`` is loaded only
-if the cache (``runtime.kernels.cache``) verifies it against its marker (otherwise it is
-rebuilt).  The faults are those of ``runtime.kernels.errors``.
+if the cache (``runtime.kernels.cache``) verifies it against its marker and finds it a whole
+ELF file (otherwise it is rebuilt).  The faults are those of ``runtime.kernels.errors``.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""``ancf study error-vs-time``: the command's options (comma-separated sweeps) and its
-handler, which runs the study and prints its Markdown.
+"""``ancf study error-vs-time``: the command's options (sweeps are list options,
+``runtime.studies.options``) and its handler, which runs the study and prints its Markdown.
 """
 
 from __future__ import annotations
@@ -13,17 +13,17 @@ from runtime.catalog import BACKENDS, INTEGRATORS, METHODS
 from runtime.model.errors import SceneError
 from runtime.studies.error_vs_time.plan import MEASURES, StudyError
 from runtime.studies.error_vs_time.run import default_out, study
+from runtime.studies.options import add_list_option, announce
 from runtime.studies.sweep import SchedulerError
 
+COMMAND = "ancf study error-vs-time"
 
-def _split(text: str | None, convert) -> list | None:
-    """Comma-separated option values, converted where possible (left as text otherwise, so
-    that validation names the option and the culprit)."""
-    if text is None:
+
+def _converted(items: list[str] | None, convert) -> list | None:
+    """List option values converted where possible (left as text otherwise, so that
+    validation names the option and the culprit)."""
+    if items is None:
         return None
-    items = [part.strip() for part in text.split(",")]
-    if items == [""]:
-        return []
     out: list = []
     for item in items:
         try:
@@ -37,15 +37,16 @@ def cmd_error_vs_time(args: argparse.Namespace) -> int:
     """``ancf study error-vs-time``: run the study, print the Markdown; exit code 0, or 2
     with a one-line message for invalid input or an unreachable scheduler."""
     try:
-        study(args.scene, args.out, elements=_split(args.elements, int),
-                     step=_split(args.step, float), integrator=_split(args.integrator, str),
-                     method=_split(args.method, str), backend=args.backend, error=args.error,
-                     sensor=args.sensor, reference=_split(args.reference, _number_text),
-                     t_end=_split(args.t_end, float)[0] if args.t_end else None,
-                     repeat=args.repeat, targets=_split(args.targets, float),
-                     scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+        study(args.scene, args.out, elements=_converted(args.elements, int),
+              step=_converted(args.step, float), integrator=args.integrator,
+              method=args.method, backend=args.backend, error=args.error,
+              sensor=args.sensor, reference=_converted(args.reference, _number_text),
+              t_end=_converted([args.t_end], float)[0] if args.t_end else None,
+              repeat=args.repeat, targets=_converted(args.targets, float),
+              scheduler=args.scheduler, workers=args.workers, serial=args.serial,
+              on_start=lambda folder: announce(COMMAND, folder))
     except (StudyError, SchedulerError, SceneError) as error:
-        print(f"ancf study error-vs-time: {str(error).splitlines()[0]}", file=sys.stderr)
+        print(f"{COMMAND}: {str(error).splitlines()[0]}", file=sys.stderr)
         return 2
     out = Path(args.out) if args.out else default_out(args.scene)
     print((out / "error_vs_time.md").read_text(encoding="utf-8"))
@@ -67,30 +68,29 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "or a reference run) and wall time; write error_vs_time.csv, .png and .md "
                     "and print the Markdown.")
     parser.add_argument("scene", help="scene TOML file (may hold a [study] table)")
-    parser.add_argument("--elements", metavar="N,N,...", help="mesh sizes, e.g. 2,5,10")
-    parser.add_argument("--step", metavar="H,H,...", help="time steps in s, e.g. 1e-3,5e-4")
-    parser.add_argument("--integrator", metavar="NAME,...",
-                        help=f"integrators: {', '.join(INTEGRATORS)}")
-    parser.add_argument("--method", metavar="NAME,...",
-                        help=f"elastic force methods: {', '.join(METHODS)}")
+    add_list_option(parser, "--elements", "mesh sizes, e.g. 2 5 10", metavar="N")
+    add_list_option(parser, "--step", "time steps in s, e.g. 1e-3 5e-4", metavar="H")
+    add_list_option(parser, "--integrator", f"integrators: {', '.join(INTEGRATORS)}",
+                    metavar="NAME")
+    add_list_option(parser, "--method", f"elastic force methods: {', '.join(METHODS)}",
+                    metavar="NAME")
     parser.add_argument("--backend", help=f"kernel backend: {', '.join(BACKENDS)}")
     parser.add_argument("--error", help=f"error measure: {', '.join(MEASURES)}")
     parser.add_argument("--sensor", help="the sensor the error is computed from")
-    parser.add_argument("--reference", metavar="ELEMENTS,STEP",
-                        help="reference run of error 'reference' (default: twice the finest "
-                             "mesh, half the finest step)")
+    add_list_option(parser, "--reference", "reference run of error 'reference': ELEMENTS "
+                    "STEP (default: twice the finest mesh, half the finest step)",
+                    metavar="VALUE")
     parser.add_argument("--t-end", dest="t_end", metavar="T",
                         help="end time in s (overrides [analysis.dynamic].t_end)")
     parser.add_argument("--repeat", type=int, help="runs per case; the fastest is kept")
-    parser.add_argument("--targets", metavar="E,E,...",
-                        help="accuracies of the summary (default: up to four levels 1e-k, "
-                             "3e-k between the errors)")
+    add_list_option(parser, "--targets", "accuracies of the summary (default: up to four "
+                    "levels 1e-k, 3e-k between the errors)", metavar="E")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     parser.add_argument("--workers", type=int, metavar="N",
                         help="workers of the local cluster (default: one per core)")
     parser.add_argument("--serial", action="store_true", help="run every case in this process")
     parser.add_argument("--out", metavar="DIR",
-                        help="output folder (default: results/error_vs_time/<scene stem>)")
+                        help="output folder (default: results/error-vs-time/<scene stem>)")
     parser.set_defaults(run=cmd_error_vs_time)
     return parser

@@ -116,6 +116,8 @@ def plot(plan: Plan, rows: list[dict], path: Path) -> None:
                  f"{'' if annotate_all else ' (points on the lines)'}", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     if usable:
+        _label_ticks(ax.xaxis, [r["simulate_s"] for r in usable])
+        _label_ticks(ax.yaxis, [r["error"] for r in usable])
         ax.legend(fontsize=8, title="line: best error\nfor the time", title_fontsize=7,
                   loc="upper left", bbox_to_anchor=(1.01, 1.0))
     else:
@@ -138,6 +140,30 @@ def plot(plan: Plan, rows: list[dict], path: Path) -> None:
                 break
             note.remove()
     fig.savefig(path, dpi=110)
+
+
+def _log_ticks(low: float, high: float) -> list[float]:
+    """Labelled ticks of a log axis holding [low, high] (> 0) between its first and last:
+    1-2-5 steps, or decades beyond three decades; at least two."""
+    steps = (1,) if high / low > 1e3 else (1, 2, 5)
+    k0, k1 = math.floor(math.log10(low)) - 1, math.ceil(math.log10(high)) + 1
+    candidates = [m * 10.0**k for k in range(k0, k1 + 1) for m in steps]
+    first = max(i for i, t in enumerate(candidates) if t <= low * (1 + 1e-12))
+    last = min(i for i, t in enumerate(candidates) if t >= high * (1 - 1e-12))
+    if first == last:
+        first, last = first - 1, last + 1
+    return candidates[first:last + 1]
+
+
+def _label_ticks(axis: Any, values: list[float]) -> None:
+    """Put the limits of a log ``axis`` on labelled ticks holding every value."""
+    from matplotlib.ticker import NullFormatter
+
+    ticks = _log_ticks(min(values), max(values))
+    axis.axes.autoscale(False, axis=axis.axis_name)
+    axis.set_view_interval(ticks[0], ticks[-1], ignore=True)
+    axis.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
+    axis.set_minor_formatter(NullFormatter())
 
 
 def default_targets(rows: list[dict]) -> list[float]:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +19,7 @@ from runtime.studies.error_vs_time.measure import (
 )
 from runtime.studies.error_vs_time.plan import StudyError, plan_study
 from runtime.studies.error_vs_time.report import markdown, plot, write_csv
+from runtime.studies.options import default_out as command_out
 from runtime.studies.sweep import run_cases
 
 
@@ -29,7 +30,8 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
           reference: dict | Sequence[Any] | None = None, t_end: float | None = None,
           repeat: int | None = None, targets: Sequence[Any] | None = None,
           scheduler: str | None = None, workers: int | None = None,
-          serial: bool = False) -> list[dict]:
+          serial: bool = False,
+          on_start: Callable[[Path], None] | None = None) -> list[dict]:
     """Run the work-precision study of a scene; returns one row per run (CSV_COLUMNS; the
     reference run last, with role "reference").
 
@@ -38,7 +40,8 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
     sensor (a sensor name), reference ({elements, step[, integrator, method]} or
     [elements, step]), t_end (s), repeat (runs per case), targets (accuracies of the summary).
     scheduler / workers / serial: see ``runtime.studies.sweep.run_cases``.  out_dir (default
-    ``results/error_vs_time/<scene stem>``) receives error_vs_time.csv, .png and .md.
+    ``results/error-vs-time/<scene stem>``) receives error_vs_time.csv, .png and .md;
+    ``on_start(out_dir)`` is called once the input is valid, before the first run.
     Raises StudyError / SceneError for invalid input and SchedulerError for an unreachable
     scheduler, all before any run starts.
     """
@@ -66,6 +69,8 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
                       "series": None if plan.measure == "static_tip" else plan.sensor})
     if scheduler is not None:
         check_scheduler(scheduler)
+    if on_start is not None:
+        on_start(out)
     results = run_cases(run_case, cases, scheduler=scheduler, workers=workers, serial=serial,
                         label="error-vs-time study")
     rows = measured_rows(plan, runs, results)
@@ -85,5 +90,5 @@ def study(scene_path: str | Path, out_dir: str | Path | None = None, *,
 
 
 def default_out(scene_path: str | Path) -> Path:
-    """The default study folder: ``results/error_vs_time/<scene stem>``."""
-    return Path("results") / "error_vs_time" / Path(scene_path).stem
+    """The default study folder: ``results/error-vs-time/<scene stem>``."""
+    return command_out("error-vs-time", Path(scene_path).stem)

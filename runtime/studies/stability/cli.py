@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from runtime.studies.options import announce, default_out
 from runtime.studies.stability.measure import stability_study
 from runtime.studies.stability.report import markdown, write
 
@@ -14,6 +15,7 @@ from runtime.studies.stability.report import markdown, write
 def cmd_stability(args: argparse.Namespace) -> int:
     """``ancf study stability``: run, print the Markdown, write the files; exit code 0 even
     when rows fail (the table reports them)."""
+    announce("ancf study stability", args.out)
     start = time.perf_counter()
     rows = stability_study(scheduler=args.scheduler, workers=args.workers, quick=args.quick,
                            serial=args.serial)
@@ -33,7 +35,8 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         help="address of a running dask scheduler (default: a local cluster)")
     parser.add_argument("--workers", type=int, metavar="N",
                         help="processes of the local cluster (default: one per core)")
-    parser.add_argument("--out", default="results/stability", help="results folder")
+    parser.add_argument("--out", default=str(default_out("stability")),
+                        help="results folder (default: results/stability)")
     parser.add_argument("--quick", action="store_true", help="a small subset (seconds)")
     parser.add_argument("--serial", action="store_true",
                         help="run the cases in this process (no dask)")
