@@ -60,6 +60,16 @@ def add_list_option(parser: argparse.ArgumentParser, flag: str, help: str, *,
                         help=f"{help} (one or more, separated by spaces or commas)")
 
 
+def add_sweep_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a study whose cases run through ``runtime.studies.sweep``: a dask
+    scheduler, the workers of a local cluster, or every case in this process."""
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="workers of the local cluster (default: one per core)")
+    parser.add_argument("--serial", action="store_true", help="run every case in this process")
+
+
 def default_out(*command: str) -> Path:
     """The default output folder of a command: ``results/<command>`` (words as folders)."""
     return RESULTS.joinpath(*command)

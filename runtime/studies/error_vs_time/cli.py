@@ -13,7 +13,7 @@ from runtime.catalog import BACKENDS, INTEGRATORS, METHODS
 from runtime.model.errors import SceneError
 from runtime.studies.error_vs_time.plan import MEASURES, StudyError
 from runtime.studies.error_vs_time.run import default_out, study
-from runtime.studies.options import add_list_option, announce
+from runtime.studies.options import add_list_option, add_sweep_options, announce
 from runtime.studies.sweep import SchedulerError
 
 COMMAND = "ancf study error-vs-time"
@@ -85,11 +85,7 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     parser.add_argument("--repeat", type=int, help="runs per case; the fastest is kept")
     add_list_option(parser, "--targets", "accuracies of the summary (default: up to four "
                     "levels 1e-k, 3e-k between the errors)", metavar="E")
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    parser.add_argument("--workers", type=int, metavar="N",
-                        help="workers of the local cluster (default: one per core)")
-    parser.add_argument("--serial", action="store_true", help="run every case in this process")
+    add_sweep_options(parser)
     parser.add_argument("--out", metavar="DIR",
                         help="output folder (default: results/error-vs-time/<scene stem>)")
     parser.set_defaults(run=cmd_error_vs_time)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from runtime.studies.options import announce, default_out
+from runtime.studies.options import add_sweep_options, announce, default_out
 from runtime.studies.stability.measure import stability_study
 from runtime.studies.stability.report import markdown, write
 
@@ -31,14 +31,9 @@ def add_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     returned by ``add_subparsers``); the handler is set as ``run`` (``args.run(args)``)."""
     parser = subparsers.add_parser(
         "stability", help="extreme cases: kernel accuracy, integrators, Newton, locking")
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="address of a running dask scheduler (default: a local cluster)")
-    parser.add_argument("--workers", type=int, metavar="N",
-                        help="processes of the local cluster (default: one per core)")
+    add_sweep_options(parser)
     parser.add_argument("--out", default=str(default_out("stability")),
                         help="results folder (default: results/stability)")
     parser.add_argument("--quick", action="store_true", help="a small subset (seconds)")
-    parser.add_argument("--serial", action="store_true",
-                        help="run the cases in this process (no dask)")
     parser.set_defaults(run=cmd_stability)
     return parser
