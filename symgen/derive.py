@@ -1,6 +1,6 @@
 """Derivations shared by every element: gradients, integrals over the box, invariant algebra.
 
-Notation (DESIGN.md section 4): ``n`` shape functions, ``B`` (n x dim) their gradients with
+Notation (docs/design.md section 6): ``n`` shape functions, ``B`` (n x dim) their gradients with
 respect to the reference position r0, ``P = B B^T``.  Everything an evaluation method needs
 is a linear combination of four integrals over the reference volume:
 

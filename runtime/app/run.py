@@ -32,7 +32,7 @@ SUMMARY = "summary.json"
 
 
 class ExitCode(IntEnum):
-    """Exit codes of ``ancf run`` (README, DESIGN.md section 5)."""
+    """Exit codes of ``ancf run`` (README, docs/design.md section 8)."""
 
     OK = 0
     DIVERGED = 1

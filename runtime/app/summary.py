@@ -1,4 +1,4 @@
-"""The summary of a run, typed: what ``summary.json`` holds (DESIGN.md section 7).
+"""The summary of a run, typed: what ``summary.json`` holds (docs/design.md section 9).
 
 A :class:`Summary` is filled as the run goes by methods that say what happened
 (:meth:`Summary.record_static`, :meth:`Summary.diverged`, ...), so it tells what was done

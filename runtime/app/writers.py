@@ -1,4 +1,4 @@
-"""Run outputs (DESIGN.md section 7): the output folder, the time-series CSV written as the
+"""Run outputs (docs/design.md section 9): the output folder, the time-series CSV written as the
 run goes, the atomic ``summary.json`` and PNG plots (shapes: ``runtime.app.shapes``; progress:
 ``runtime.progress``).
 

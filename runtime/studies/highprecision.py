@@ -2,7 +2,7 @@
 (and of the cable energy of Berzeri and Shabana for cable kinds).
 
 Shares no code with the generator or the kernels: the shape functions of every shipped kind
-are typed here from the literature (``LITERATURE``: DESIGN.md section 3 for the 2-node beams,
+are typed here from the literature (``LITERATURE``: docs/design.md section 4 for the 2-node beams,
 Project Chrono's ANCF-3333 beam and ANCF-3443 plate in their normalised coordinates for the
 others), differentiated once by SymPy into mpmath functions, and the energy is integrated by
 Gauss quadrature in 50-digit arithmetic.  What an element states as data is read from its
@@ -34,7 +34,7 @@ X, Y, Z, L, H, W = sp.symbols("x y z L H W")
 
 
 def _beam_2node(dim: int) -> list[sp.Expr]:
-    """DESIGN.md section 3 (Shabana & Yakoub; the planar beam drops the z ones)."""
+    """docs/design.md section 4 (Shabana & Yakoub; the planar beam drops the z ones)."""
     xi = X / L
     s = [1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3), Y * (1 - xi), Z * (1 - xi),
          3 * xi**2 - 2 * xi**3, L * (-(xi**2) + xi**3), Y * xi, Z * xi]

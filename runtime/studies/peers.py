@@ -2,7 +2,7 @@
 peer (``ancf bench solvers``, issue 7).
 
 Exudyn (optional: ``pip install exudyn==1.13.6``) has no element equal to ours, so these are
-the closest it offers, with the data of DESIGN.md section 6:
+the closest it offers, with the data of docs/design.md section 10:
 
 * cantilever: ``ObjectANCFBeam`` (Nachbagauer-Gruber-Gerstmayr shear-deformable 3D ANCF beam:
   nodes r, r_y, r_z (18 coordinates per element), centre line linear between the nodes,
@@ -41,10 +41,10 @@ import scipy.linalg
 
 from runtime.catalog import INTEGRATORS, NEWTON_MODES
 
-# paper cantilever (DESIGN.md section 6, scenes/cantilever.toml)
+# paper cantilever (docs/design.md section 10, scenes/cantilever.toml)
 CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 8245.2,
               "force": 300.0, "ramp": 3.5}
-# paper rotating beam (DESIGN.md section 6, scenes/rotating_beam.toml)
+# paper rotating beam (docs/design.md section 10, scenes/rotating_beam.toml)
 ROTATING_BEAM = {"length": 8.0, "area": 7.299e-5, "inertia": 8.215e-9, "E": 68.95e9,
                  "rho": 2766.67, "omega": 4.0, "t_ramp": 15.0}
 TOLERANCE = 1e-10           # Newton, relative to the model size, as the project's default
