@@ -307,12 +307,14 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                        "parts": [{"name": part.name, "domain": part.domain}
                                  for part in law.parts(spec.dim)],
                        "corrections": (laws.correction_names(spec.dim)
-                                       if law.default_corrections is not None else [])}
+                                       if law.default_corrections is not None else []),
+                       "storage": derive.law_storage(spec, law)}
             for law in derive.applicable_laws(spec).values()
         },
-        "laws_not_applicable": {name: laws.not_applicable(law, spec.domain)
+        "laws_not_applicable": {name: laws.not_applicable(law, spec.domain, spec.nodes)
                                 for name, law in laws.LAWS.items()
-                                if laws.not_applicable(law, spec.domain) is not None},
+                                if laws.not_applicable(law, spec.domain, spec.nodes)
+                                is not None},
         "law_domains": list(derive.law_domains(spec)),
         "law_coefficients": laws.coefficient_names(spec.dim),
         "families": families,
@@ -376,7 +378,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
         written.append(path)
     if families is None:
         for law in laws.LAWS.values():
-            reason = laws.not_applicable(law, spec.domain)
+            reason = laws.not_applicable(law, spec.domain, spec.nodes)
             if reason is not None:
                 print(f"{spec.name}: {reason} (not generated)", file=sys.stderr)
         path = folder / "element.json"

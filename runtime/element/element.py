@@ -90,12 +90,14 @@ class Element:
         self.e0 = (self.kind.straight_reference(*self.geometry) if e0 is None
                    else self._coordinates(e0, "e0", batch=False))
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
-        self.variant = "straight" if self.straight else "general"
+        self.law, self.damping = self._law(law), self._damping(damping)
+        # a law with reduced integration stores general invariants, straight or not
+        self.variant = ("straight" if self.straight
+                        and self.kind.laws[self.law].storage == "straight" else "general")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
         #: kernel families loaded (compiled on first use with backend c), in load order
         self.loaded_families: list[str] = []
-        self.law, self.damping = self._law(law), self._damping(damping)
         builders = self._family("invariants")
         start = time.perf_counter()
         self.shear_correction = self._shear_correction(shear_correction)
@@ -172,7 +174,7 @@ class Element:
     def _law_invariants(self, builders) -> dict:
         laws = self._family("laws")
         coefficients = self.law_coefficients()
-        if self.straight:
+        if self.variant == "straight":
             inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
             if inv.has_closed_tables(self.kind):  # exact tables (closed.json), any law
                 return inv.closed_law_invariants(self.kind, self.geometry, coefficients,
