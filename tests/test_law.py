@@ -234,11 +234,12 @@ def test_rigidly_placed_straight_reference_uses_the_local_frame(law, kind, metho
                     rotate(base.damping_force(e, e_dot))) <= 1e-11
 
 
-@pytest.mark.parametrize("law, kind", LAW_KINDS)
+@pytest.mark.parametrize("law, kind", [(law, k) for law, k in LAW_KINDS if law != "svk"])
 @all_methods
 @all_shapes
 def test_rigid_motion_gives_zero_elastic_force_and_energy(law, kind, method, shape, rng):
-    """A rotated and translated reference is unstrained for every law."""
+    """A rotated and translated reference is unstrained for every law (svk:
+    tests/test_element.py, with cij's cancellation bounds for the plate)."""
     el = law_element(kind, law, method, "c", shape)
     d = dim_of(kind)
     e = rigid_motion(kind, el.e0, random_rotation(d, rng), rng.normal(size=d))

@@ -56,7 +56,9 @@ class Element:
     the axis part of a law uses the first order along the axis).
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
-    Poisson locking); shear_correction: the ECM shear-correction factors, one number for every
+    Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
+    of slender 2-node beams in large rotations; general invariants, straight or not);
+    shear_correction: the ECM shear-correction factors, one number for every
     transverse shear or a tuple (k1 on 2E13, k2 on 2E12 in 3D; k on 2E12 in 2D), default
     10 (1 + nu) / (12 + 11 nu); damping: Kelvin-Voigt alpha in s (stress = D (eps + alpha
     eps_dot)), used by ``damping_force``, ``damping_jacobians``, ``internal_force_and_jacobians``.

@@ -10,8 +10,9 @@ Two cases, each for 2, 4, 8, 16 and 32 elements:
 * ``linear``: a small tip load (tip deflection 1e-4 L, L/h = 50) against ``P L^3 / 3EI``, at
   nu = 0 and nu = 0.3.
 
-``python -m runtime.studies.locking [--kinds beam2d,beam3d] [--laws svk,ecm,ecm_sri]`` prints
-the markdown table of the relative errors of the tip deflection.
+``python -m runtime.studies.locking [--kinds K,...] [--laws L,...] [--cases C,...]`` prints
+the markdown table of the relative errors of the tip deflection (default: every law of the
+kinds the remedy applies to, the 2-node beams).
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ import numpy as np
 from scipy.integrate import solve_bvp
 
 ELEMENTS = (2, 4, 8, 16, 32)
-KINDS = ("beam2d", "beam3d")
-LAWS = ("svk", "ecm", "ecm_sri")
+#: the remedy (docs/laws.md): its kinds and laws are the study's defaults
+REMEDY = "ecm_sri"
 E_MODULUS, RHO, LENGTH = 2.1e11, 7800.0, 1.0      # Pa, kg/m^3, m
 #: (slenderness L/h, nu, load parameter P L^2 / EI, load steps) of each case
 CASES = {"elastica": (100.0, 0.0, 10.0, 20), "linear": (50.0, 0.0, 3e-4, 1),
@@ -86,8 +87,27 @@ class Row:
     errors: tuple[float, ...]
 
 
-def measure(kinds=KINDS, laws=LAWS, cases=tuple(CASES), elements=ELEMENTS) -> list[Row]:
-    """Every (kind, law, case) row of relative errors against ``reference``."""
+def default_kinds() -> list[str]:
+    """The generated kinds the remedy applies to."""
+    from runtime.catalog import generated_kinds
+    from runtime.kernels.kind import element_kind
+
+    return [kind for kind in generated_kinds() if REMEDY in element_kind(kind).laws]
+
+
+def default_laws() -> list[str]:
+    """Every material law of the kinds of ``default_kinds`` (the default law first)."""
+    from runtime.catalog import material_laws
+    from runtime.kernels.kind import element_kind
+
+    return [law for law in material_laws()
+            if all(law in element_kind(kind).laws for kind in default_kinds())]
+
+
+def measure(kinds=None, laws=None, cases=tuple(CASES), elements=ELEMENTS) -> list[Row]:
+    """Every (kind, law, case) row of relative errors against ``reference`` (kinds and laws
+    default to ``default_kinds`` and ``default_laws``)."""
+    kinds, laws = kinds or default_kinds(), laws or default_laws()
     rows = []
     for case in cases:
         exact = reference(case)
@@ -115,11 +135,12 @@ def main(argv: list[str] | None = None) -> None:
     """Print the convergence table (``--kinds``, ``--laws``, ``--cases``: comma lists)."""
     parser = argparse.ArgumentParser(prog="python -m runtime.studies.locking",
                                      description=__doc__.splitlines()[0])
-    parser.add_argument("--kinds", default=",".join(KINDS))
-    parser.add_argument("--laws", default=",".join(LAWS))
+    parser.add_argument("--kinds", default="", help="comma list (default: default_kinds)")
+    parser.add_argument("--laws", default="", help="comma list (default: default_laws)")
     parser.add_argument("--cases", default=",".join(CASES))
     args = parser.parse_args(argv)
-    rows = measure(args.kinds.split(","), args.laws.split(","), args.cases.split(","))
+    rows = measure([k for k in args.kinds.split(",") if k], [a for a in args.laws.split(",") if a],
+                   args.cases.split(","))
     print(report(rows))
 
 
