@@ -373,6 +373,21 @@ def law_domains(spec: ElementSpec) -> tuple[str, ...]:
     return tuple(d for d in laws.DOMAINS if d in used and d in spec.domain.subdomain_names)
 
 
+def straight_law_domains(spec: ElementSpec) -> tuple[str, ...]:
+    """The law domains integrated exactly (no axis of reduced integration): the laws on
+    these alone share the straight storage patterns of svk (``check_law_patterns``)."""
+    return tuple(d for d in law_domains(spec) if not spec.domain.reduced_axes(d))
+
+
+def law_storage(spec: ElementSpec, law) -> str:
+    """The storage variant of ``law``'s invariants for a straight element: ``straight`` (the
+    svk patterns, closed form) when every part integrates exactly, else ``general`` (reduced
+    integration fills entries that exact integration leaves zero: invariants by quadrature)."""
+    exact = set(straight_law_domains(spec))
+    return "straight" if all(part.domain in exact for part in law.parts(spec.dim)) \
+        else "general"
+
+
 def applicable_laws(spec: ElementSpec) -> dict:
     """The laws of the element's energy (``symgen.energies``) whose every part integrates over
     a subdomain the element's domain has."""
@@ -391,7 +406,7 @@ def check_law_patterns(spec: ElementSpec) -> None:
     n, d = spec.n_shape, spec.dim
     pattern = patterns(spec, "straight")
     normal = [(x, yy) for x in range(d) for yy in range(x, d)]
-    tables = [closed.domain_tables(spec, domain).psi for domain in law_domains(spec)]
+    tables = [closed.domain_tables(spec, domain).psi for domain in straight_law_domains(spec)]
 
     def vanishes(psi, terms) -> bool:
         total: dict = {}

@@ -10,7 +10,12 @@ Named *subdomains* are what material-law parts integrate over (symgen/laws.py):
 * ``volume``: the whole box (times the thickness in 2D);
 * a lower-dimensional part fixes some axes at a unit value (the beam ``axis``: y = z = 0;
   the plate ``midsurface``: z = 0); its measure is the integral over the free axes times the
-  extents of the fixed ones (and the thickness in 2D), e.g. ``h w int_0^l f(x, 0, 0) dx``.
+  extents of the fixed ones (and the thickness in 2D), e.g. ``h w int_0^l f(x, 0, 0) dx``;
+* an axis of a subdomain whose value is the name of a rule of ``AXIS_RULES`` is integrated
+  by that rule instead of exactly (*reduced integration*, the beam's ``volume_gauss2``,
+  ``volume_lobatto2``, ``axis_lobatto2``: x by the 2-point Gauss-Legendre rule, or by the
+  2-point Gauss-Lobatto rule at the ends x = 0, l).  The rules are symmetric, so every moment
+  of a monomial is rational and the closed forms stay exact.
 
 Everything an element derives (invariants, kernels, reference geometry, quadrature tables)
 reads the domain; nothing else in the generator knows which box an element has.
@@ -31,6 +36,9 @@ import sympy as sp
 #: Local coordinates of every domain, in axis order.
 x, y, z = sp.symbols("x y z", real=True)
 LOCAL = (x, y, z)
+#: Rules of reduced integration of a subdomain axis: name -> (points, weights) on [-1, 1].
+AXIS_RULES = {"gauss2": ((-1 / sp.sqrt(3), 1 / sp.sqrt(3)), (1, 1)),
+              "lobatto2": ((-1, 1), (1, 1))}
 
 
 @dataclass(frozen=True)
@@ -57,7 +65,8 @@ class Domain:
     ``length, height, width``: the sizes along local x, y, z, or the thickness in 2D), with
     ``labels`` for messages; thickness: 2D only, the parameter that scales areas;
     subdomains: ``{name: ((axis, unit value), ...)}`` of the axes each one fixes (``volume``,
-    fixing none, is always there).
+    fixing none, is always there); a value naming a rule of ``AXIS_RULES`` integrates that
+    axis by that rule instead.
     """
 
     name: str
@@ -80,7 +89,7 @@ class Domain:
         for name, fixed in subdomains.items():
             for axis, value in fixed:
                 a = self.axes[axis]
-                if not a.low <= value <= a.high:
+                if value not in AXIS_RULES and not a.low <= value <= a.high:
                     raise ValueError(f"domain {self.name!r}, subdomain {name!r}: unit value "
                                      f"{value} outside axis {axis}")
         subdomains = {"volume": (), **subdomains}
@@ -92,7 +101,22 @@ class Domain:
 
     def fixed(self, subdomain: str) -> tuple:
         """((axis, unit value), ...) of the axes ``subdomain`` fixes."""
-        return dict(self.subdomains)[subdomain]
+        return tuple((axis, value) for axis, value in dict(self.subdomains)[subdomain]
+                     if value not in AXIS_RULES)
+
+    def reduced_axes(self, subdomain: str) -> dict[int, str]:
+        """{axis: rule name} of the axes ``subdomain`` integrates by a rule of ``AXIS_RULES``."""
+        return {axis: value for axis, value in dict(self.subdomains)[subdomain]
+                if value in AXIS_RULES}
+
+    def rule_moment(self, axis: int, rule: str, power: int) -> sp.Rational:
+        """The ``rule`` of ``AXIS_RULES`` on the unit ``axis`` applied to ``u^power``:
+        ``sum_i w_i (high - low) / 2 u_i^power`` at the mapped points, exactly (rational)."""
+        a = self.axes[axis]
+        points, weights = AXIS_RULES[rule]
+        return sp.nsimplify(sp.expand(sum(
+            w * a.extent / 2 * (a.low + (t + 1) * a.extent / 2) ** power
+            for t, w in zip(points, weights, strict=True))), rational=True)
 
     @property
     def dim(self) -> int:
@@ -127,10 +151,14 @@ class Domain:
     def integrate_poly(self, poly: sp.Poly, subdomain: str = "volume") -> sp.Expr:
         """As ``integrate`` for a ``Poly`` in the local coordinates."""
         fixed = dict(self.fixed(subdomain))
+        reduced = self.reduced_axes(subdomain)
         total = sp.Integer(0)
         for powers, coeff in poly.terms():
             term = coeff
             for axis, (a, power) in enumerate(zip(self.axes, powers, strict=True)):
+                if axis in reduced:
+                    term *= self.rule_moment(axis, reduced[axis], power) * a.scale ** (power + 1)
+                    continue
                 if axis in fixed:
                     value = fixed[axis]
                     if power and value == 0:
@@ -152,9 +180,13 @@ class Domain:
         """Integral of the unit-box monomial ``u^powers`` over ``subdomain`` of the unit box
         (fixed axes at their unit value, free axes integrated; no extents)."""
         fixed = dict(self.fixed(subdomain))
+        reduced = self.reduced_axes(subdomain)
         value = Fraction(1)
         for axis, (a, power) in enumerate(zip(self.axes, powers, strict=True)):
-            if axis in fixed:
+            if axis in reduced:
+                moment = sp.Rational(self.rule_moment(axis, reduced[axis], power))
+                value *= Fraction(int(moment.p), int(moment.q))
+            elif axis in fixed:
                 value *= Fraction(fixed[axis]) ** power
             else:
                 low, high = Fraction(a.low), Fraction(a.high)
@@ -190,6 +222,7 @@ class Domain:
         extents and the thickness."""
         values = dict(zip(self.parameters, (float(v) for v in parameters), strict=True))
         fixed = dict(self.fixed(subdomain))
+        reduced = self.reduced_axes(subdomain)
         axes, weights = [], []
         factor = values[self.thickness] if self.thickness is not None else 1.0
         for i, (a, order) in enumerate(zip(self.axes, orders, strict=True)):
@@ -199,7 +232,8 @@ class Domain:
                 weights.append(np.array([1.0]))
                 factor *= float(a.extent) * scale
                 continue
-            t, w = np.polynomial.legendre.leggauss(order)
+            t, w = (np.array(AXIS_RULES[reduced[i]], dtype=float) if i in reduced
+                    else np.polynomial.legendre.leggauss(order))
             low, high = float(a.low) * scale, float(a.high) * scale
             axes.append(low + (t + 1) * (high - low) / 2)
             weights.append(w * (high - low) / 2)
@@ -218,7 +252,8 @@ class Domain:
                       "low": [int(a.low.p), int(a.low.q)],
                       "high": [int(a.high.p), int(a.high.q)]} for a in self.axes],
             "thickness": None if self.thickness is None else str(self.thickness),
-            "subdomains": {name: [[axis, [int(sp.Rational(v).p), int(sp.Rational(v).q)]]
+            "subdomains": {name: [[axis, v if v in AXIS_RULES else
+                                   [int(sp.Rational(v).p), int(sp.Rational(v).q)]]
                                   for axis, v in fixed]
                            for name, fixed in self.subdomains},
         }
@@ -236,13 +271,22 @@ HALF = sp.Rational(1, 2)
 
 def beam(dim: int) -> Domain:
     """x in [0, l], y in [-h/2, h/2] (, z in [-w/2, w/2]; in 2D w is the thickness); the
-    ``axis`` subdomain is y = z = 0 (measure: h w times the length)."""
+    ``axis`` subdomain is y = z = 0 (measure: h w times the length); the reduced ones of
+    ``beam_reduced`` integrate x by 2-point rules."""
     axes = [Axis(x, length, sp.Integer(0), sp.Integer(1)), Axis(y, height, -HALF, HALF)]
     if dim == 3:
         axes.append(Axis(z, width, -HALF, HALF))
     fixed = tuple((axis, sp.Integer(0)) for axis in range(1, dim))
     return Domain("beam", tuple(axes), (length, height, width), ("length", "height", "width"),
-                  width if dim == 2 else None, (("axis", fixed),))
+                  width if dim == 2 else None, (("axis", fixed), *beam_reduced(fixed)))
+
+
+def beam_reduced(axis_fixed: tuple) -> tuple:
+    """The beam subdomains with x integrated by a 2-point rule: ``volume_gauss2`` (Gauss-
+    Legendre), ``volume_lobatto2`` and ``axis_lobatto2`` (Gauss-Lobatto: the ends x = 0, l;
+    the axis fixes ``axis_fixed``, y = z = 0)."""
+    return (("volume_gauss2", ((0, "gauss2"),)), ("volume_lobatto2", ((0, "lobatto2"),)),
+            ("axis_lobatto2", ((0, "lobatto2"), *axis_fixed)))
 
 
 def plate() -> Domain:

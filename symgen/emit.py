@@ -309,7 +309,8 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                        "parts": [{"name": part.name, "domain": part.domain}
                                  for part in law.parts(spec.dim)],
                        "corrections": (laws.correction_names(spec.dim)
-                                       if law.default_corrections is not None else [])}
+                                       if law.default_corrections is not None else []),
+                       "storage": derive.law_storage(spec, law)}
             for law in derive.applicable_laws(spec).values()
         },
         "laws_not_applicable": energies.not_applicable(spec),

@@ -87,15 +87,16 @@ def not_applicable(spec) -> dict[str, str]:
     for name, law in laws.LAWS.items():
         if is_cable(spec) and name not in CABLE_LAWS:
             out[name] = _CABLE_REFUSES.format(name=name)
-        elif not is_cable(spec) and laws.not_applicable(law, spec.domain) is not None:
-            out[name] = laws.not_applicable(law, spec.domain)
+        elif not is_cable(spec) and laws.not_applicable(law, spec.domain, spec.nodes) \
+                is not None:
+            out[name] = laws.not_applicable(law, spec.domain, spec.nodes)
     return out
 
 
 def applicable_laws(spec) -> dict[str, laws.Law]:
     """The laws of the element's energy whose every part has its subdomain in the domain."""
     return {name: law for name, law in offered_laws(spec).items()
-            if laws.not_applicable(law, spec.domain) is None}
+            if laws.not_applicable(law, spec.domain, spec.nodes) is None}
 
 
 def second_moment(spec) -> sp.Expr:

@@ -7,7 +7,9 @@ that density integrated over the part's domain:
 
 * ``volume``: the whole reference volume (area times thickness in 2D);
 * ``axis``:   the beam axis y = z = 0, a line integral over x scaled by the cross-section
-  area ``h w`` (height times width, or times thickness in 2D).
+  area ``h w`` (height times width, or times thickness in 2D);
+* ``volume_gauss2``, ``volume_lobatto2``, ``axis_lobatto2``: the same with x integrated by a
+  2-point rule instead of exactly (Gauss-Legendre; Gauss-Lobatto: the ends x = 0, l).
 
 Every part has the *orthotropic form*: a full symmetric block on the normal strains and a
 diagonal block on the shear strains, nothing coupling the two.  Its numbers, the *law
@@ -24,7 +26,12 @@ Laws (docs/laws.md has the formulas):
   the Poisson part ``Dv`` (the isotropic normal block minus E on its diagonal) on the axis,
   which removes Poisson locking.  ``k1`` scales 2E13 and ``k2`` scales 2E12 (Chrono's order);
   in 2D one ``k`` scales 2E12.  Default ``k = 10 (1 + nu) / (12 + 11 nu)`` (Timoshenko,
-  rectangular section).
+  rectangular section);
+* ``ecm_sri``: ``ecm`` with selective reduced integration along x, against the locking of
+  slender beams in large rotations: E11 and the transverse shears (2E12, 2E13) by the 2-point
+  Gauss rule (membrane and shear locking), the cross-section strains (E22, E33, 2E23) and the
+  Poisson part at the element ends by the 2-point Lobatto rule (the linearly interpolated
+  r_y, r_z of a rotated element shrink between the ends, which E22, E33 would resist).
 """
 
 from __future__ import annotations
@@ -38,7 +45,7 @@ import sympy as sp
 #: domain (symgen/domains.py).  ``volume`` is every element's; ``axis`` (y = z = 0) is the
 #: beams'; ``midsurface`` (z = 0) is the plates'.  A law with a part on a subdomain that an
 #: element's domain lacks does not apply to that element (``not_applicable``).
-DOMAINS = ("volume", "axis", "midsurface")
+DOMAINS = ("volume", "axis", "midsurface", "volume_gauss2", "volume_lobatto2", "axis_lobatto2")
 
 young, poisson = sp.symbols("E nu", positive=True)
 #: Lame parameters in terms of E and nu.
@@ -161,21 +168,53 @@ def _ecm(dim: int) -> tuple[LawPart, ...]:
     return (LawPart("D0", "volume", d0), LawPart("Dv", "axis", dv))
 
 
+def _ecm_sri(dim: int) -> tuple[LawPart, ...]:
+    # ecm's D0 (diagonal) split by strains: E11 and the transverse shears (those involving x)
+    # on the 2-point Gauss rule along x, the cross-section strains and Dv at the ends
+    d0, dv = _ecm(dim)
+    along_x = sp.diag(1, *[0] * (dim - 1), *[int(0 in pair) for pair in shear_pairs(dim)])
+    return (LawPart("D0_axial_shear", "volume_gauss2", along_x * d0.voigt),
+            LawPart("D0_section", "volume_lobatto2", d0.voigt - along_x * d0.voigt),
+            LawPart("Dv", "axis_lobatto2", dv.voigt))
+
+
 LAWS: dict[str, Law] = {
     "svk": Law("svk", "St. Venant-Kirchhoff, isotropic D over the volume", _svk),
     "ecm": Law("ecm", "enhanced continuum mechanics: D0 over the volume, the Poisson part "
                "on the beam axis (no Poisson locking)", _ecm, timoshenko_correction),
+    "ecm_sri": Law("ecm_sri", "ecm with selective reduced integration along x: E11 and the "
+                   "transverse shears by 2-point Gauss, the cross-section strains and the "
+                   "Poisson part at the ends (no locking of slender beams)", _ecm_sri,
+                   timoshenko_correction),
 }
 
 
-def not_applicable(law: Law, domain) -> str | None:
-    """Why ``law`` does not apply to elements on ``domain`` (a ``symgen.domains.Domain``), or
-    None when it does: one of its parts integrates over a subdomain the domain lacks."""
+def not_applicable(law: Law, domain, nodes: tuple = ()) -> str | None:
+    """Why ``law`` does not apply to elements on ``domain`` (a ``symgen.domains.Domain``) with
+    ``nodes`` (points of the domain), or None when it does: one of its parts integrates over
+    a subdomain the domain lacks, or at the ends of an axis (Lobatto) that are not all the
+    nodes along it (``_not_at_nodes``)."""
     for part in law.parts(domain.dim):
         if part.domain not in domain.subdomain_names:
             return (f"law {law.name!r} does not apply to the {domain.name} domain: its part "
                     f"{part.name!r} integrates over the {part.domain}, which a {domain.name} "
                     f"has not (subdomains: {', '.join(domain.subdomain_names)})")
+        reason = _not_at_nodes(part, domain, nodes)
+        if reason is not None:
+            return f"law {law.name!r} does not apply: {reason}"
+    return None
+
+
+def _not_at_nodes(part: LawPart, domain, nodes: tuple) -> str | None:
+    """Why the Lobatto axes of ``part``'s subdomain miss nodes: sampling only the ends of an
+    axis along which interior nodes sit would leave their cross-section free (a mechanism)."""
+    for axis, rule in domain.reduced_axes(part.domain).items():
+        a = domain.axes[axis]
+        along = sorted({sp.nsimplify(node[axis] / a.scale) for node in nodes})
+        if rule.startswith("lobatto") and along != [a.low, a.high]:
+            return (f"its part {part.name!r} integrates at the ends of {a.coordinate} (the "
+                    f"{rule} rule of the {part.domain}), but the nodes sit at {a.coordinate} = "
+                    f"{', '.join(str(u * a.scale) for u in along)}")
     return None
 
 

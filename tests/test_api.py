@@ -326,11 +326,16 @@ def random_scene(rng: random.Random) -> Scene:
     bodies = []
     for name in rng.sample(NAMES, rng.randint(1, 3)):
         elements = rng.randint(1, 4)
-        common = dict(name=name, element=rng.choice(line_kinds),
-                      material=rng.choice(materials).name,
+        kind = rng.choice(line_kinds)        # with a material whose law applies to it
+        usable = [m.name for m in materials if element_kind(kind).law_not_applicable(m.law)
+                  is None]
+        if not usable:
+            materials.append(Material(f"m{len(materials)}", 2e11, 0.3, 7800.0))
+            usable = [materials[-1].name]
+        common = dict(name=name, element=kind, material=rng.choice(usable),
                       height=_number(rng, 0.01, 0.2), width=_number(rng, 0.01, 0.2),
                       elements=elements)
-        if rng.random() < 0.3:
+        if rng.random() < 0.3 and "general" in element_kind(kind).energy.variants:
             radius, start = _number(rng, 0.5, 2.0), _number(rng, -180, 180)
             angle = rng.choice([-1, 1]) * _number(rng, 10, 120)
             center = (point[0] - radius * math.cos(math.radians(start)),
@@ -410,7 +415,8 @@ def random_scene(rng: random.Random) -> Scene:
         if holder is None:
             options.append(PointForce(f"{body.name}:{index - body.n_nodes}",
                                       _vector(rng, dim, 100), time_law=law))
-        if holder in (None, Pin):
+        vectors = element_kind(body.element).vectors
+        if holder in (None, Pin) and ("r_y" in vectors or (dim == 2 and "r_x" in vectors)):
             options.append(PointMoment(NodeRef(body.name, index), _rotation(rng, dim),
                                        time_law=law))
         loads.append(rng.choice(options))
@@ -424,9 +430,11 @@ def random_scene(rng: random.Random) -> Scene:
             node = f"sheet:{rng.randrange(-columns, columns)},{rng.randrange(rows)}"
         name = rng.choice(["s", "tip.x", "U-", "_v"]) + str(i)
         components = ("x", "y", "norm") if dim == 2 else ("x", "y", "z", "norm")
+        # a frame needs gradients enough to span one (not a 3D cable's r_x alone)
+        framed = len(element_kind(body.element).vectors) - 1 >= dim - 1
         options = [
             Displacement(name, node, rng.choice(components),
-                         NodeRef(body.name, 0) if rng.random() < 0.5 else None),
+                         NodeRef(body.name, 0) if framed and rng.random() < 0.5 else None),
             Position(name, node, rng.choice(components)),
             StrainEnergy(name, rng.choice([None, body.name])),
             KineticEnergy(name, rng.choice([None, body.name])),

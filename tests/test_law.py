@@ -42,9 +42,11 @@ all_kinds = pytest.mark.parametrize("kind", KINDS)
 #: kinds ECM applies to (its Poisson part lives on the beam axis: not the plates)
 ECM_KINDS = [k for k in KINDS if "ecm" in element_kind(k).meta["laws"]]
 ecm_kinds = pytest.mark.parametrize("kind", ECM_KINDS)
-#: (law, kind) pairs that exist
-LAW_KINDS = [(law, k) for law in ("svk", "ecm") for k in KINDS
-             if law in element_kind(k).meta["laws"]]
+#: (law, kind) pairs that exist (every law of element.json: a new law is tested here)
+LAW_KINDS = [(law, k) for k in KINDS for law in element_kind(k).meta["laws"]]
+#: the laws with shear corrections (ecm and its variants) and the kinds they apply to
+ECM_LAW_KINDS = [(law, k) for law, k in LAW_KINDS if element_kind(k).laws[law].corrections]
+ecm_law_kinds = pytest.mark.parametrize("law, kind", ECM_LAW_KINDS)
 
 
 def default_law(kind: str) -> str:
@@ -211,15 +213,16 @@ def test_closed_form_and_quadrature_invariants_of_ecm_agree(kind):
                     el.invariants["gram"]) > 1e-3
 
 
-@ecm_kinds
+@ecm_law_kinds
 @all_methods
-def test_rigidly_placed_straight_reference_uses_the_local_frame(kind, method, rng):
+def test_rigidly_placed_straight_reference_uses_the_local_frame(law, kind, method, rng):
     """ECM is not isotropic: it acts in the element's local frame, so a rotated element gives
-    the rotated forces (and the closed-form invariants apply to any rigid placement)."""
+    the rotated forces (and the invariants of the straight element apply to any rigid
+    placement)."""
     d = dim_of(kind)
     R, t = random_rotation(d, rng), rng.normal(size=d)
-    base = law_element(kind, method=method)
-    placed = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm", method=method,
+    base = law_element(kind, law, method=method)
+    placed = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law=law, method=method,
                      e0=rigid_motion(kind, base.e0, R, t), damping=ALPHA)
     assert placed.straight
     e = base.e0 + 1e-2 * rng.standard_normal(base.ndof)
@@ -229,6 +232,19 @@ def test_rigidly_placed_straight_reference_uses_the_local_frame(kind, method, rn
     assert rel_diff(placed.elastic_force(moved), rotate(base.elastic_force(e))) <= 1e-11
     assert rel_diff(placed.damping_force(moved, moved_dot),
                     rotate(base.damping_force(e, e_dot))) <= 1e-11
+
+
+@pytest.mark.parametrize("law, kind", [(law, k) for law, k in LAW_KINDS if law != "svk"])
+@all_methods
+@all_shapes
+def test_rigid_motion_gives_zero_elastic_force_and_energy(law, kind, method, shape, rng):
+    """A rotated and translated reference is unstrained for every law (svk:
+    tests/test_element.py, with cij's cancellation bounds for the plate)."""
+    el = law_element(kind, law, method, "c", shape)
+    d = dim_of(kind)
+    e = rigid_motion(kind, el.e0, random_rotation(d, rng), rng.normal(size=d))
+    assert np.abs(el.elastic_force(e)).max() <= 1e-9 * force_scale()
+    assert abs(el.strain_energy(e)) <= 1e-9 * force_scale() * LENGTH
 
 
 # --- derivatives ------------------------------------------------------------------------------
@@ -241,12 +257,12 @@ def central_difference(function, x: np.ndarray, step: float) -> np.ndarray:
     return (values[: x.size] - values[x.size:]) / (2 * step)
 
 
-@ecm_kinds
+@ecm_law_kinds
 @all_methods
 @all_shapes
-def test_ecm_force_is_minus_energy_gradient_and_jacobian_its_derivative(kind, method, shape,
-                                                                         rng):
-    el = law_element(kind, method=method, shape=shape)
+def test_ecm_force_is_minus_energy_gradient_and_jacobian_its_derivative(law, kind, method,
+                                                                         shape, rng):
+    el = law_element(kind, law, method=method, shape=shape)
     e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
     step = 1e-6 * np.abs(e).max()
     assert rel_diff(el.elastic_force(e), -central_difference(el.strain_energy, e, step)) <= 1e-6
@@ -491,6 +507,52 @@ def test_invariant_report_compares_law_invariants():
     assert "law ecm" in invariant_report.report(result)
     with pytest.raises(ValueError, match="--law"):
         invariant_report.compare("beam2d", law="hooke")
+
+
+#: (law, kind) of the laws with reduced integration (general storage, invariants by
+#: quadrature of their rules also for a straight element)
+GENERAL_LAW_KINDS = [(law, k) for law, k in LAW_KINDS
+                     if element_kind(k).laws[law].storage == "general"]
+
+
+@pytest.mark.parametrize("law, kind", GENERAL_LAW_KINDS)
+def test_closed_form_and_quadrature_invariants_of_reduced_laws_agree(law, kind):
+    """The exact symbolic law algebra over the law's domains (reduced rules as exact rational
+    moments, symgen.closed) against the runtime's quadrature with the same rules, at numbers:
+    every K1 entry, U0 and a sample of the general gram and C^ij entries."""
+    import sympy as sp
+
+    from symgen import derive, laws
+    from symgen.elements import get
+
+    spec, el = get(kind), law_element(kind, law, backend="numpy", damping=0.0)
+    assert el.variant == "general" and el.straight
+    coefficients = laws.get(law).domain_coefficients(spec.dim)
+    parts = [(derive.straight_domain_integrals(spec, domain), coefficients[domain])
+             for domain in derive.law_domains(spec)]
+    k = sp.symbols(" ".join(laws.correction_names(spec.dim)), positive=True, seq=True)
+    numbers = dict(zip(spec.domain.parameters, (LENGTH, HEIGHT, WIDTH), strict=True))
+    numbers |= {laws.young: E_MODULUS, laws.poisson: NU}
+    numbers |= dict(zip(k, el.shear_correction, strict=True))
+
+    def value(expr) -> float:
+        return float(sp.sympify(expr).subs(numbers))
+
+    n = spec.n_shape
+    pattern = derive.patterns(spec, "general")
+    rng = np.random.default_rng(5)
+    scale = np.abs(el.invariants["gram"]).max()
+    for a in rng.choice(len(pattern.gram), 40, replace=False):
+        exact = value(derive.law_gram_value(spec, parts, *pattern.gram[a]))
+        assert abs(exact - el.invariants["gram"][a]) <= 1e-12 * scale
+    scale = np.abs(el.invariants["cij"]).max()
+    for a in rng.choice(len(pattern.cij), 40, replace=False):
+        exact = value(derive.law_cij_value(spec, parts, *pattern.cij[a]))
+        assert abs(exact - el.invariants["cij"][a]) <= 1e-12 * scale
+    k1 = [value(derive.law_k1_value(spec, parts, a, b)) for a, b in derive.pairs(n)]
+    assert rel_diff(el.invariants["k1"], np.array(k1)) <= 1e-12
+    assert el.invariants["u0"][0] == pytest.approx(value(derive.law_u0_value(spec, parts)),
+                                                   rel=1e-12)
 
 
 @pytest.mark.parametrize("kind", [k for k in KINDS if k not in ECM_KINDS])

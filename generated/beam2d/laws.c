@@ -12,8 +12,11 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
    volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
    axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+   volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
    Operations per element: 11. */
-void beam2d_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *axis_out)
+void beam2d_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {
@@ -26,6 +29,12 @@ void beam2d_laws_law_svk(long m, const double *material_in, long material_stride
     for (int i = 0; i < 4; i++) volume[i] = (vd){0};
     vd axis[4];
     for (int i = 0; i < 4; i++) axis[i] = (vd){0};
+    vd volume_gauss2[4];
+    for (int i = 0; i < 4; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[4];
+    for (int i = 0; i < 4; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[4];
+    for (int i = 0; i < 4; i++) axis_lobatto2[i] = (vd){0};
     const vd t0 = material[0]*(1.0/((1.0 + material[1])));
     const vd t1 = t0*(1.0/((-1.0 + 2.0*material[1])));
     const vd t2 = t1*(-1.0 + material[1]);
@@ -37,10 +46,25 @@ void beam2d_laws_law_svk(long m, const double *material_in, long material_stride
     axis[1] = SPLAT(0.0);
     axis[2] = SPLAT(0.0);
     axis[3] = SPLAT(0.0);
+    volume_gauss2[0] = SPLAT(0.0);
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = SPLAT(0.0);
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = SPLAT(0.0);
+    volume_lobatto2[3] = SPLAT(0.0);
+    axis_lobatto2[0] = SPLAT(0.0);
+    axis_lobatto2[1] = SPLAT(0.0);
+    axis_lobatto2[2] = SPLAT(0.0);
+    axis_lobatto2[3] = SPLAT(0.0);
 
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 4; i++) volume_out[(first + j) * 4 + i] = volume[i][j];
       for (int i = 0; i < 4; i++) axis_out[(first + j) * 4 + i] = axis[i][j];
+      for (int i = 0; i < 4; i++) volume_gauss2_out[(first + j) * 4 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 4; i++) volume_lobatto2_out[(first + j) * 4 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 4; i++) axis_lobatto2_out[(first + j) * 4 + i] = axis_lobatto2[i][j];
     }
   }
 }
@@ -50,8 +74,11 @@ void beam2d_laws_law_svk(long m, const double *material_in, long material_stride
    correction (batch, 1): shear correction factors k
    volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
    axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+   volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
    Operations per element: 17. */
-void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out)
+void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
 {
   vd material[2];
   vd correction[1];
@@ -68,6 +95,12 @@ void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride
     for (int i = 0; i < 4; i++) volume[i] = (vd){0};
     vd axis[4];
     for (int i = 0; i < 4; i++) axis[i] = (vd){0};
+    vd volume_gauss2[4];
+    for (int i = 0; i < 4; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[4];
+    for (int i = 0; i < 4; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[4];
+    for (int i = 0; i < 4; i++) axis_lobatto2[i] = (vd){0};
     const vd t0 = material[0]*(1.0/((1.0 + material[1])));
     const vd t1 = 2.0*(material[1]*material[1]);
     const vd t2 = -material[0]*t1*(1.0/((-1.0 + material[1] + t1)));
@@ -79,10 +112,91 @@ void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride
     axis[1] = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])));
     axis[2] = t2;
     axis[3] = SPLAT(0.0);
+    volume_gauss2[0] = SPLAT(0.0);
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = SPLAT(0.0);
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = SPLAT(0.0);
+    volume_lobatto2[3] = SPLAT(0.0);
+    axis_lobatto2[0] = SPLAT(0.0);
+    axis_lobatto2[1] = SPLAT(0.0);
+    axis_lobatto2[2] = SPLAT(0.0);
+    axis_lobatto2[3] = SPLAT(0.0);
 
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 4; i++) volume_out[(first + j) * 4 + i] = volume[i][j];
       for (int i = 0; i < 4; i++) axis_out[(first + j) * 4 + i] = axis[i][j];
+      for (int i = 0; i < 4; i++) volume_gauss2_out[(first + j) * 4 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 4; i++) volume_lobatto2_out[(first + j) * 4 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 4; i++) axis_lobatto2_out[(first + j) * 4 + i] = axis_lobatto2[i][j];
+    }
+  }
+}
+
+/* Law coefficients per domain of ecm_sri: ecm with selective reduced integration along x: E11 and the transverse shears by 2-point Gauss, the cross-section strains and the Poisson part at the ends (no locking of slender beams).
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (batch, 1): shear correction factors k
+   volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
+   axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+   volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
+   Operations per element: 17. */
+void beam2d_laws_law_ecm_sri(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
+{
+  vd material[2];
+  vd correction[1];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    if (first == 0 || correction_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 1; i++)
+        for (int j = 0; j < ANCF_LANES; j++) correction[i][j] = correction_in[lane[j] * correction_stride + i];
+    vd volume[4];
+    for (int i = 0; i < 4; i++) volume[i] = (vd){0};
+    vd axis[4];
+    for (int i = 0; i < 4; i++) axis[i] = (vd){0};
+    vd volume_gauss2[4];
+    for (int i = 0; i < 4; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[4];
+    for (int i = 0; i < 4; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[4];
+    for (int i = 0; i < 4; i++) axis_lobatto2[i] = (vd){0};
+    const vd t0 = material[0]*(1.0/((1.0 + material[1])));
+    const vd t1 = 2.0*(material[1]*material[1]);
+    const vd t2 = -material[0]*t1*(1.0/((-1.0 + material[1] + t1)));
+    volume[0] = SPLAT(0.0);
+    volume[1] = SPLAT(0.0);
+    volume[2] = SPLAT(0.0);
+    volume[3] = SPLAT(0.0);
+    axis[0] = SPLAT(0.0);
+    axis[1] = SPLAT(0.0);
+    axis[2] = SPLAT(0.0);
+    axis[3] = SPLAT(0.0);
+    volume_gauss2[0] = material[0];
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = 0.5*correction[0]*t0;
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = material[0];
+    volume_lobatto2[3] = SPLAT(0.0);
+    axis_lobatto2[0] = t2;
+    axis_lobatto2[1] = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])));
+    axis_lobatto2[2] = t2;
+    axis_lobatto2[3] = SPLAT(0.0);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 4; i++) volume_out[(first + j) * 4 + i] = volume[i][j];
+      for (int i = 0; i < 4; i++) axis_out[(first + j) * 4 + i] = axis[i][j];
+      for (int i = 0; i < 4; i++) volume_gauss2_out[(first + j) * 4 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 4; i++) volume_lobatto2_out[(first + j) * 4 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 4; i++) axis_lobatto2_out[(first + j) * 4 + i] = axis_lobatto2[i][j];
     }
   }
 }
@@ -92,6 +206,29 @@ void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride
    correction (output, 1): default shear correction factors k
    Operations per element: 6. */
 void beam2d_laws_law_ecm_correction(long m, const double *material_in, long material_stride, double *correction_out)
+{
+  vd material[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    vd correction[1];
+    for (int i = 0; i < 1; i++) correction[i] = (vd){0};
+    correction[0] = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1]);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 1; i++) correction_out[(first + j) * 1 + i] = correction[i][j];
+    }
+  }
+}
+
+/* Default shear correction factors of ecm_sri.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (output, 1): default shear correction factors k
+   Operations per element: 6. */
+void beam2d_laws_law_ecm_sri_correction(long m, const double *material_in, long material_stride, double *correction_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {

@@ -10,12 +10,18 @@ def law_svk(material_in):
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
     axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+    volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
     Operations per element: 11.
     """
     material = np.ascontiguousarray(material_in.T)
     m = material.shape[1]
     volume = np.zeros((4, m))
     axis = np.zeros((4, m))
+    volume_gauss2 = np.zeros((4, m))
+    volume_lobatto2 = np.zeros((4, m))
+    axis_lobatto2 = np.zeros((4, m))
     t0 = material[0]*(1.0/((1.0 + material[1])))
     t1 = t0*(1.0/((-1.0 + 2.0*material[1])))
     t2 = t1*(-1.0 + material[1])
@@ -27,8 +33,20 @@ def law_svk(material_in):
     axis[1] = 0.0
     axis[2] = 0.0
     axis[3] = 0.0
+    volume_gauss2[0] = 0.0
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.0
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = 0.0
+    volume_lobatto2[3] = 0.0
+    axis_lobatto2[0] = 0.0
+    axis_lobatto2[1] = 0.0
+    axis_lobatto2[2] = 0.0
+    axis_lobatto2[3] = 0.0
 
-    return volume.T, axis.T
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
 def law_ecm(material_in, correction_in):
@@ -38,6 +56,9 @@ def law_ecm(material_in, correction_in):
     correction (batch, 1): shear correction factors k
     volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
     axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+    volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
     Operations per element: 17.
     """
     material = np.ascontiguousarray(material_in.T)
@@ -45,6 +66,9 @@ def law_ecm(material_in, correction_in):
     m = material.shape[1]
     volume = np.zeros((4, m))
     axis = np.zeros((4, m))
+    volume_gauss2 = np.zeros((4, m))
+    volume_lobatto2 = np.zeros((4, m))
+    axis_lobatto2 = np.zeros((4, m))
     t0 = material[0]*(1.0/((1.0 + material[1])))
     t1 = 2.0*(material[1]*material[1])
     t2 = -material[0]*t1*(1.0/((-1.0 + material[1] + t1)))
@@ -56,12 +80,86 @@ def law_ecm(material_in, correction_in):
     axis[1] = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])))
     axis[2] = t2
     axis[3] = 0.0
+    volume_gauss2[0] = 0.0
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.0
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = 0.0
+    volume_lobatto2[3] = 0.0
+    axis_lobatto2[0] = 0.0
+    axis_lobatto2[1] = 0.0
+    axis_lobatto2[2] = 0.0
+    axis_lobatto2[3] = 0.0
 
-    return volume.T, axis.T
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
+
+
+def law_ecm_sri(material_in, correction_in):
+    """Law coefficients per domain of ecm_sri: ecm with selective reduced integration along x: E11 and the transverse shears by 2-point Gauss, the cross-section strains and the Poisson part at the ends (no locking of slender beams).
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (batch, 1): shear correction factors k
+    volume (output, 4): law coefficients (D11, D12, D22, D33) on the volume (Pa)
+    axis (output, 4): law coefficients (D11, D12, D22, D33) on the axis (Pa)
+    volume_gauss2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 4): law coefficients (D11, D12, D22, D33) on the axis_lobatto2 (Pa)
+    Operations per element: 17.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    correction = np.ascontiguousarray(correction_in.T)
+    m = material.shape[1]
+    volume = np.zeros((4, m))
+    axis = np.zeros((4, m))
+    volume_gauss2 = np.zeros((4, m))
+    volume_lobatto2 = np.zeros((4, m))
+    axis_lobatto2 = np.zeros((4, m))
+    t0 = material[0]*(1.0/((1.0 + material[1])))
+    t1 = 2.0*(material[1]*material[1])
+    t2 = -material[0]*t1*(1.0/((-1.0 + material[1] + t1)))
+    volume[0] = 0.0
+    volume[1] = 0.0
+    volume[2] = 0.0
+    volume[3] = 0.0
+    axis[0] = 0.0
+    axis[1] = 0.0
+    axis[2] = 0.0
+    axis[3] = 0.0
+    volume_gauss2[0] = material[0]
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.5*correction[0]*t0
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = material[0]
+    volume_lobatto2[3] = 0.0
+    axis_lobatto2[0] = t2
+    axis_lobatto2[1] = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])))
+    axis_lobatto2[2] = t2
+    axis_lobatto2[3] = 0.0
+
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
 def law_ecm_correction(material_in):
     """Default shear correction factors of ecm.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (output, 1): default shear correction factors k
+    Operations per element: 6.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    m = material.shape[1]
+    correction = np.zeros((1, m))
+    correction[0] = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1])
+
+    return correction.T
+
+
+def law_ecm_sri_correction(material_in):
+    """Default shear correction factors of ecm_sri.
 
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     correction (output, 1): default shear correction factors k

@@ -12,8 +12,11 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
    volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
    axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+   volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
    Operations per element: 11. */
-void beam3d_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *axis_out)
+void beam3d_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {
@@ -26,6 +29,12 @@ void beam3d_laws_law_svk(long m, const double *material_in, long material_stride
     for (int i = 0; i < 9; i++) volume[i] = (vd){0};
     vd axis[9];
     for (int i = 0; i < 9; i++) axis[i] = (vd){0};
+    vd volume_gauss2[9];
+    for (int i = 0; i < 9; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[9];
+    for (int i = 0; i < 9; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[9];
+    for (int i = 0; i < 9; i++) axis_lobatto2[i] = (vd){0};
     const vd t0 = material[0]*(1.0/((1.0 + material[1])));
     const vd t1 = t0*(1.0/((-1.0 + 2.0*material[1])));
     const vd t2 = t1*(-1.0 + material[1]);
@@ -49,10 +58,40 @@ void beam3d_laws_law_svk(long m, const double *material_in, long material_stride
     axis[6] = SPLAT(0.0);
     axis[7] = SPLAT(0.0);
     axis[8] = SPLAT(0.0);
+    volume_gauss2[0] = SPLAT(0.0);
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = SPLAT(0.0);
+    volume_gauss2[4] = SPLAT(0.0);
+    volume_gauss2[5] = SPLAT(0.0);
+    volume_gauss2[6] = SPLAT(0.0);
+    volume_gauss2[7] = SPLAT(0.0);
+    volume_gauss2[8] = SPLAT(0.0);
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = SPLAT(0.0);
+    volume_lobatto2[3] = SPLAT(0.0);
+    volume_lobatto2[4] = SPLAT(0.0);
+    volume_lobatto2[5] = SPLAT(0.0);
+    volume_lobatto2[6] = SPLAT(0.0);
+    volume_lobatto2[7] = SPLAT(0.0);
+    volume_lobatto2[8] = SPLAT(0.0);
+    axis_lobatto2[0] = SPLAT(0.0);
+    axis_lobatto2[1] = SPLAT(0.0);
+    axis_lobatto2[2] = SPLAT(0.0);
+    axis_lobatto2[3] = SPLAT(0.0);
+    axis_lobatto2[4] = SPLAT(0.0);
+    axis_lobatto2[5] = SPLAT(0.0);
+    axis_lobatto2[6] = SPLAT(0.0);
+    axis_lobatto2[7] = SPLAT(0.0);
+    axis_lobatto2[8] = SPLAT(0.0);
 
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 9; i++) volume_out[(first + j) * 9 + i] = volume[i][j];
       for (int i = 0; i < 9; i++) axis_out[(first + j) * 9 + i] = axis[i][j];
+      for (int i = 0; i < 9; i++) volume_gauss2_out[(first + j) * 9 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 9; i++) volume_lobatto2_out[(first + j) * 9 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 9; i++) axis_lobatto2_out[(first + j) * 9 + i] = axis_lobatto2[i][j];
     }
   }
 }
@@ -62,8 +101,11 @@ void beam3d_laws_law_svk(long m, const double *material_in, long material_stride
    correction (batch, 2): shear correction factors k1, k2
    volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
    axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+   volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
    Operations per element: 18. */
-void beam3d_laws_law_ecm(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out)
+void beam3d_laws_law_ecm(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
 {
   vd material[2];
   vd correction[2];
@@ -80,6 +122,12 @@ void beam3d_laws_law_ecm(long m, const double *material_in, long material_stride
     for (int i = 0; i < 9; i++) volume[i] = (vd){0};
     vd axis[9];
     for (int i = 0; i < 9; i++) axis[i] = (vd){0};
+    vd volume_gauss2[9];
+    for (int i = 0; i < 9; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[9];
+    for (int i = 0; i < 9; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[9];
+    for (int i = 0; i < 9; i++) axis_lobatto2[i] = (vd){0};
     const vd t0 = material[0]*(1.0/((1.0 + material[1])));
     const vd t1 = 0.5*t0;
     const vd t2 = 2.0*(material[1]*material[1]);
@@ -103,10 +151,133 @@ void beam3d_laws_law_ecm(long m, const double *material_in, long material_stride
     axis[6] = SPLAT(0.0);
     axis[7] = SPLAT(0.0);
     axis[8] = SPLAT(0.0);
+    volume_gauss2[0] = SPLAT(0.0);
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = SPLAT(0.0);
+    volume_gauss2[4] = SPLAT(0.0);
+    volume_gauss2[5] = SPLAT(0.0);
+    volume_gauss2[6] = SPLAT(0.0);
+    volume_gauss2[7] = SPLAT(0.0);
+    volume_gauss2[8] = SPLAT(0.0);
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = SPLAT(0.0);
+    volume_lobatto2[3] = SPLAT(0.0);
+    volume_lobatto2[4] = SPLAT(0.0);
+    volume_lobatto2[5] = SPLAT(0.0);
+    volume_lobatto2[6] = SPLAT(0.0);
+    volume_lobatto2[7] = SPLAT(0.0);
+    volume_lobatto2[8] = SPLAT(0.0);
+    axis_lobatto2[0] = SPLAT(0.0);
+    axis_lobatto2[1] = SPLAT(0.0);
+    axis_lobatto2[2] = SPLAT(0.0);
+    axis_lobatto2[3] = SPLAT(0.0);
+    axis_lobatto2[4] = SPLAT(0.0);
+    axis_lobatto2[5] = SPLAT(0.0);
+    axis_lobatto2[6] = SPLAT(0.0);
+    axis_lobatto2[7] = SPLAT(0.0);
+    axis_lobatto2[8] = SPLAT(0.0);
 
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 9; i++) volume_out[(first + j) * 9 + i] = volume[i][j];
       for (int i = 0; i < 9; i++) axis_out[(first + j) * 9 + i] = axis[i][j];
+      for (int i = 0; i < 9; i++) volume_gauss2_out[(first + j) * 9 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 9; i++) volume_lobatto2_out[(first + j) * 9 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 9; i++) axis_lobatto2_out[(first + j) * 9 + i] = axis_lobatto2[i][j];
+    }
+  }
+}
+
+/* Law coefficients per domain of ecm_sri: ecm with selective reduced integration along x: E11 and the transverse shears by 2-point Gauss, the cross-section strains and the Poisson part at the ends (no locking of slender beams).
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (batch, 2): shear correction factors k1, k2
+   volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+   axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+   volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+   volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+   axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
+   Operations per element: 18. */
+void beam3d_laws_law_ecm_sri(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out)
+{
+  vd material[2];
+  vd correction[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    if (first == 0 || correction_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) correction[i][j] = correction_in[lane[j] * correction_stride + i];
+    vd volume[9];
+    for (int i = 0; i < 9; i++) volume[i] = (vd){0};
+    vd axis[9];
+    for (int i = 0; i < 9; i++) axis[i] = (vd){0};
+    vd volume_gauss2[9];
+    for (int i = 0; i < 9; i++) volume_gauss2[i] = (vd){0};
+    vd volume_lobatto2[9];
+    for (int i = 0; i < 9; i++) volume_lobatto2[i] = (vd){0};
+    vd axis_lobatto2[9];
+    for (int i = 0; i < 9; i++) axis_lobatto2[i] = (vd){0};
+    const vd t0 = material[0]*(1.0/((1.0 + material[1])));
+    const vd t1 = 0.5*t0;
+    const vd t2 = 2.0*(material[1]*material[1]);
+    const vd t3 = -material[0]*t2*(1.0/((-1.0 + material[1] + t2)));
+    const vd t4 = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])));
+    volume[0] = SPLAT(0.0);
+    volume[1] = SPLAT(0.0);
+    volume[2] = SPLAT(0.0);
+    volume[3] = SPLAT(0.0);
+    volume[4] = SPLAT(0.0);
+    volume[5] = SPLAT(0.0);
+    volume[6] = SPLAT(0.0);
+    volume[7] = SPLAT(0.0);
+    volume[8] = SPLAT(0.0);
+    axis[0] = SPLAT(0.0);
+    axis[1] = SPLAT(0.0);
+    axis[2] = SPLAT(0.0);
+    axis[3] = SPLAT(0.0);
+    axis[4] = SPLAT(0.0);
+    axis[5] = SPLAT(0.0);
+    axis[6] = SPLAT(0.0);
+    axis[7] = SPLAT(0.0);
+    axis[8] = SPLAT(0.0);
+    volume_gauss2[0] = material[0];
+    volume_gauss2[1] = SPLAT(0.0);
+    volume_gauss2[2] = SPLAT(0.0);
+    volume_gauss2[3] = SPLAT(0.0);
+    volume_gauss2[4] = SPLAT(0.0);
+    volume_gauss2[5] = SPLAT(0.0);
+    volume_gauss2[6] = SPLAT(0.0);
+    volume_gauss2[7] = correction[0]*t1;
+    volume_gauss2[8] = correction[1]*t1;
+    volume_lobatto2[0] = SPLAT(0.0);
+    volume_lobatto2[1] = SPLAT(0.0);
+    volume_lobatto2[2] = SPLAT(0.0);
+    volume_lobatto2[3] = material[0];
+    volume_lobatto2[4] = SPLAT(0.0);
+    volume_lobatto2[5] = material[0];
+    volume_lobatto2[6] = t1;
+    volume_lobatto2[7] = SPLAT(0.0);
+    volume_lobatto2[8] = SPLAT(0.0);
+    axis_lobatto2[0] = t3;
+    axis_lobatto2[1] = t4;
+    axis_lobatto2[2] = t4;
+    axis_lobatto2[3] = t3;
+    axis_lobatto2[4] = t4;
+    axis_lobatto2[5] = t3;
+    axis_lobatto2[6] = SPLAT(0.0);
+    axis_lobatto2[7] = SPLAT(0.0);
+    axis_lobatto2[8] = SPLAT(0.0);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 9; i++) volume_out[(first + j) * 9 + i] = volume[i][j];
+      for (int i = 0; i < 9; i++) axis_out[(first + j) * 9 + i] = axis[i][j];
+      for (int i = 0; i < 9; i++) volume_gauss2_out[(first + j) * 9 + i] = volume_gauss2[i][j];
+      for (int i = 0; i < 9; i++) volume_lobatto2_out[(first + j) * 9 + i] = volume_lobatto2[i][j];
+      for (int i = 0; i < 9; i++) axis_lobatto2_out[(first + j) * 9 + i] = axis_lobatto2[i][j];
     }
   }
 }
@@ -116,6 +287,31 @@ void beam3d_laws_law_ecm(long m, const double *material_in, long material_stride
    correction (output, 2): default shear correction factors k1, k2
    Operations per element: 6. */
 void beam3d_laws_law_ecm_correction(long m, const double *material_in, long material_stride, double *correction_out)
+{
+  vd material[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    vd correction[2];
+    for (int i = 0; i < 2; i++) correction[i] = (vd){0};
+    const vd t0 = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1]);
+    correction[0] = t0;
+    correction[1] = t0;
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 2; i++) correction_out[(first + j) * 2 + i] = correction[i][j];
+    }
+  }
+}
+
+/* Default shear correction factors of ecm_sri.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (output, 2): default shear correction factors k1, k2
+   Operations per element: 6. */
+void beam3d_laws_law_ecm_sri_correction(long m, const double *material_in, long material_stride, double *correction_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {

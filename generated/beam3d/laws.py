@@ -10,12 +10,18 @@ def law_svk(material_in):
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
     axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+    volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
     Operations per element: 11.
     """
     material = np.ascontiguousarray(material_in.T)
     m = material.shape[1]
     volume = np.zeros((9, m))
     axis = np.zeros((9, m))
+    volume_gauss2 = np.zeros((9, m))
+    volume_lobatto2 = np.zeros((9, m))
+    axis_lobatto2 = np.zeros((9, m))
     t0 = material[0]*(1.0/((1.0 + material[1])))
     t1 = t0*(1.0/((-1.0 + 2.0*material[1])))
     t2 = t1*(-1.0 + material[1])
@@ -39,8 +45,35 @@ def law_svk(material_in):
     axis[6] = 0.0
     axis[7] = 0.0
     axis[8] = 0.0
+    volume_gauss2[0] = 0.0
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.0
+    volume_gauss2[4] = 0.0
+    volume_gauss2[5] = 0.0
+    volume_gauss2[6] = 0.0
+    volume_gauss2[7] = 0.0
+    volume_gauss2[8] = 0.0
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = 0.0
+    volume_lobatto2[3] = 0.0
+    volume_lobatto2[4] = 0.0
+    volume_lobatto2[5] = 0.0
+    volume_lobatto2[6] = 0.0
+    volume_lobatto2[7] = 0.0
+    volume_lobatto2[8] = 0.0
+    axis_lobatto2[0] = 0.0
+    axis_lobatto2[1] = 0.0
+    axis_lobatto2[2] = 0.0
+    axis_lobatto2[3] = 0.0
+    axis_lobatto2[4] = 0.0
+    axis_lobatto2[5] = 0.0
+    axis_lobatto2[6] = 0.0
+    axis_lobatto2[7] = 0.0
+    axis_lobatto2[8] = 0.0
 
-    return volume.T, axis.T
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
 def law_ecm(material_in, correction_in):
@@ -50,6 +83,9 @@ def law_ecm(material_in, correction_in):
     correction (batch, 2): shear correction factors k1, k2
     volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
     axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+    volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
     Operations per element: 18.
     """
     material = np.ascontiguousarray(material_in.T)
@@ -57,6 +93,9 @@ def law_ecm(material_in, correction_in):
     m = material.shape[1]
     volume = np.zeros((9, m))
     axis = np.zeros((9, m))
+    volume_gauss2 = np.zeros((9, m))
+    volume_lobatto2 = np.zeros((9, m))
+    axis_lobatto2 = np.zeros((9, m))
     t0 = material[0]*(1.0/((1.0 + material[1])))
     t1 = 0.5*t0
     t2 = 2.0*(material[1]*material[1])
@@ -80,12 +119,130 @@ def law_ecm(material_in, correction_in):
     axis[6] = 0.0
     axis[7] = 0.0
     axis[8] = 0.0
+    volume_gauss2[0] = 0.0
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.0
+    volume_gauss2[4] = 0.0
+    volume_gauss2[5] = 0.0
+    volume_gauss2[6] = 0.0
+    volume_gauss2[7] = 0.0
+    volume_gauss2[8] = 0.0
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = 0.0
+    volume_lobatto2[3] = 0.0
+    volume_lobatto2[4] = 0.0
+    volume_lobatto2[5] = 0.0
+    volume_lobatto2[6] = 0.0
+    volume_lobatto2[7] = 0.0
+    volume_lobatto2[8] = 0.0
+    axis_lobatto2[0] = 0.0
+    axis_lobatto2[1] = 0.0
+    axis_lobatto2[2] = 0.0
+    axis_lobatto2[3] = 0.0
+    axis_lobatto2[4] = 0.0
+    axis_lobatto2[5] = 0.0
+    axis_lobatto2[6] = 0.0
+    axis_lobatto2[7] = 0.0
+    axis_lobatto2[8] = 0.0
 
-    return volume.T, axis.T
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
+
+
+def law_ecm_sri(material_in, correction_in):
+    """Law coefficients per domain of ecm_sri: ecm with selective reduced integration along x: E11 and the transverse shears by 2-point Gauss, the cross-section strains and the Poisson part at the ends (no locking of slender beams).
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (batch, 2): shear correction factors k1, k2
+    volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+    axis (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis (Pa)
+    volume_gauss2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2 (Pa)
+    volume_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_lobatto2 (Pa)
+    axis_lobatto2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the axis_lobatto2 (Pa)
+    Operations per element: 18.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    correction = np.ascontiguousarray(correction_in.T)
+    m = material.shape[1]
+    volume = np.zeros((9, m))
+    axis = np.zeros((9, m))
+    volume_gauss2 = np.zeros((9, m))
+    volume_lobatto2 = np.zeros((9, m))
+    axis_lobatto2 = np.zeros((9, m))
+    t0 = material[0]*(1.0/((1.0 + material[1])))
+    t1 = 0.5*t0
+    t2 = 2.0*(material[1]*material[1])
+    t3 = -material[0]*t2*(1.0/((-1.0 + material[1] + t2)))
+    t4 = -material[1]*t0*(1.0/((-1.0 + 2.0*material[1])))
+    volume[0] = 0.0
+    volume[1] = 0.0
+    volume[2] = 0.0
+    volume[3] = 0.0
+    volume[4] = 0.0
+    volume[5] = 0.0
+    volume[6] = 0.0
+    volume[7] = 0.0
+    volume[8] = 0.0
+    axis[0] = 0.0
+    axis[1] = 0.0
+    axis[2] = 0.0
+    axis[3] = 0.0
+    axis[4] = 0.0
+    axis[5] = 0.0
+    axis[6] = 0.0
+    axis[7] = 0.0
+    axis[8] = 0.0
+    volume_gauss2[0] = material[0]
+    volume_gauss2[1] = 0.0
+    volume_gauss2[2] = 0.0
+    volume_gauss2[3] = 0.0
+    volume_gauss2[4] = 0.0
+    volume_gauss2[5] = 0.0
+    volume_gauss2[6] = 0.0
+    volume_gauss2[7] = correction[0]*t1
+    volume_gauss2[8] = correction[1]*t1
+    volume_lobatto2[0] = 0.0
+    volume_lobatto2[1] = 0.0
+    volume_lobatto2[2] = 0.0
+    volume_lobatto2[3] = material[0]
+    volume_lobatto2[4] = 0.0
+    volume_lobatto2[5] = material[0]
+    volume_lobatto2[6] = t1
+    volume_lobatto2[7] = 0.0
+    volume_lobatto2[8] = 0.0
+    axis_lobatto2[0] = t3
+    axis_lobatto2[1] = t4
+    axis_lobatto2[2] = t4
+    axis_lobatto2[3] = t3
+    axis_lobatto2[4] = t4
+    axis_lobatto2[5] = t3
+    axis_lobatto2[6] = 0.0
+    axis_lobatto2[7] = 0.0
+    axis_lobatto2[8] = 0.0
+
+    return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
 def law_ecm_correction(material_in):
     """Default shear correction factors of ecm.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (output, 2): default shear correction factors k1, k2
+    Operations per element: 6.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    m = material.shape[1]
+    correction = np.zeros((2, m))
+    t0 = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1])
+    correction[0] = t0
+    correction[1] = t0
+
+    return correction.T
+
+
+def law_ecm_sri_correction(material_in):
+    """Default shear correction factors of ecm_sri.
 
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     correction (output, 2): default shear correction factors k1, k2

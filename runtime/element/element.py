@@ -56,7 +56,9 @@ class Element:
     the axis part of a law uses the first order along the axis).
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
-    Poisson locking); shear_correction: the ECM shear-correction factors, one number for every
+    Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
+    of slender 2-node beams in large rotations; general invariants, straight or not);
+    shear_correction: the ECM shear-correction factors, one number for every
     transverse shear or a tuple (k1 on 2E13, k2 on 2E12 in 3D; k on 2E12 in 2D), default
     10 (1 + nu) / (12 + 11 nu); damping: Kelvin-Voigt alpha in s (stress = D (eps + alpha
     eps_dot)), used by ``damping_force``, ``damping_jacobians``, ``internal_force_and_jacobians``.
@@ -90,15 +92,17 @@ class Element:
         self.e0 = (self.kind.straight_reference(*self.geometry) if e0 is None
                    else self._coordinates(e0, "e0", batch=False))
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
-        self.variant = "straight" if self.straight else "general"
-        if self.variant not in self.kind.energy.variants:
+        self.law, self.damping = self._law(law), self._damping(damping)
+        # a law with reduced integration stores general invariants, straight or not
+        self.variant = ("straight" if self.straight
+                        and self.kind.laws[self.law].storage == "straight" else "general")
+        if ("straight" if self.straight else "general") not in self.kind.energy.variants:
             raise ValueError(f"e0: {self.kind.name} takes straight references only (rigid "
                              f"placements of the straight element): {self.kind.energy.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
         #: kernel families loaded (compiled on first use with backend c), in load order
         self.loaded_families: list[str] = []
-        self.law, self.damping = self._law(law), self._damping(damping)
         builders = self._family("invariants")
         start = time.perf_counter()
         self.shear_correction = self._shear_correction(shear_correction)
@@ -176,7 +180,7 @@ class Element:
     def _law_invariants(self, builders) -> dict:
         laws = self._family("laws")
         coefficients = self.law_coefficients()
-        if self.straight:
+        if self.variant == "straight":
             if not self.kind.energy.structural:  # a cable's J0 has no section to check
                 inv.checked_reference(self.kind, builders, self.geometry, self.e0,
                                       self.quadrature)

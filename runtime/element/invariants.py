@@ -35,12 +35,14 @@ def domain_rule(kind: ElementKind, geometry, orders: tuple[int, ...],
                 subdomain: str = "volume") -> tuple[np.ndarray, np.ndarray]:
     """Tensor Gauss-Legendre points (p, dim) in local coordinates and weights (p,) in m^3 over
     ``subdomain`` of the kind's reference domain (element.json ``domain``): a fixed axis of a
-    subdomain contributes one point at its value and its extent to the weights; a 2D
-    domain's thickness scales the weights."""
+    subdomain contributes one point at its value and its extent to the weights, an axis of
+    reduced integration its rule's points (whatever its order); a 2D domain's thickness
+    scales the weights."""
     domain = kind.domain
     geometry = tuple(float(v) for v in geometry)
     values = domain.values(geometry)
     fixed = domain.fixed_axes(subdomain)
+    reduced = domain.reduced_axes(subdomain)
     factor = float(domain.thickness_of(geometry))
     axes, weights = [], []
     for i, ((low, high), axis, order) in enumerate(zip(domain.bounds(geometry), domain.axes,
@@ -51,7 +53,7 @@ def domain_rule(kind: ElementKind, geometry, orders: tuple[int, ...],
             weights.append(np.array([1.0]))
             factor *= high - low
             continue
-        x, w = np.polynomial.legendre.leggauss(order)
+        x, w = reduced[i] if i in reduced else np.polynomial.legendre.leggauss(order)
         axes.append(low + (x + 1) * (high - low) / 2)
         weights.append(w * (high - low) / 2)
     points = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
@@ -526,6 +528,10 @@ def closed_law_invariants(kind: ElementKind, geometry, coefficients: dict[str, n
 def straight_law_invariants(family: KernelFamily, geometry, coefficients: dict[str, np.ndarray],
                             density: float) -> dict[str, np.ndarray]:
     """Closed-form invariants of a law for the straight reference (``law_invariants_straight``)."""
+    # the kernel takes the exactly integrated domains (laws with reduced integration store
+    # general invariants, so their coefficients there are zero)
+    taken = {a["name"] for a in family.signatures["law_invariants_straight"]["arrays"]}
     inputs = {"geometry": np.asarray(geometry, float)[None, :], "density": np.array([density]),
-              **{domain: np.asarray(value, float) for domain, value in coefficients.items()}}
+              **{domain: np.asarray(value, float) for domain, value in coefficients.items()
+                 if domain in taken}}
     return {name: value[0] for name, value in family("law_invariants_straight", inputs).items()}

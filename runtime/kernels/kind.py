@@ -15,6 +15,11 @@ import numpy as np
 
 from runtime.catalog import VARIANTS, generated_dir, generated_kinds
 
+#: Rules of reduced integration of a subdomain axis (element.json ``domain.subdomains`` names
+#: one in place of a fixed value; symgen.domains.AXIS_RULES): (points, weights) on [-1, 1].
+AXIS_RULES = {"gauss2": np.polynomial.legendre.leggauss(2),
+              "lobatto2": (np.array([-1.0, 1.0]), np.ones(2))}
+
 
 @dataclass(frozen=True)
 class Axis:
@@ -64,18 +69,28 @@ class Domain:
     def fixed_axes(self, subdomain: str) -> dict[int, float]:
         """{axis: fraction of its parameter} of the axes that ``subdomain`` holds fixed (the
         beam axis fixes y and z at 0; the volume fixes none)."""
-        return {axis: value[0] / value[1] for axis, value in self.subdomains[subdomain]}
+        return {axis: value[0] / value[1] for axis, value in self.subdomains[subdomain]
+                if not isinstance(value, str)}
+
+    def reduced_axes(self, subdomain: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """{axis: (points, weights) on [-1, 1]} of the axes that ``subdomain`` integrates by a
+        rule of reduced integration (the beam's ``volume_gauss2``: x by 2-point Gauss)."""
+        return {axis: AXIS_RULES[value] for axis, value in self.subdomains[subdomain]
+                if isinstance(value, str)}
 
 
 @dataclass(frozen=True)
 class LawInfo:
     """A material law as generated for a kind: its shear ``corrections`` (names of the
-    factors it takes), ``description`` and ``parts`` (each {name, domain})."""
+    factors it takes), ``description``, ``parts`` (each {name, domain}) and the ``storage``
+    variant of its invariants on a straight element (``straight``: closed form in the svk
+    patterns; ``general``: by quadrature, for laws with reduced integration)."""
 
     name: str
     corrections: tuple[str, ...]
     description: str
     parts: tuple[dict[str, str], ...]
+    storage: str = "straight"
 
 
 @dataclass(frozen=True)
@@ -147,7 +162,8 @@ class ElementKind:
                                    a["scale"]) for a in d["axes"]),
                         d["subdomains"], d["thickness"])
         laws = {name: LawInfo(name, tuple(law["corrections"]), law["description"],
-                              tuple(law["parts"])) for name, law in meta["laws"].items()}
+                              tuple(law["parts"]), law["storage"])
+                for name, law in meta["laws"].items()}
         return cls(meta["name"], meta["description"], meta["dim"], meta["n_shape"],
                    meta["ndof"], tuple(meta["position_vectors"]), tuple(meta["quadrature"]),
                    tuple(meta["exact_orders"]), domain, tuple(meta["nodes"]),

@@ -209,6 +209,10 @@ def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
         line = Line.parse(data, path, dim, why)
         return height, width, None, elements, line.start, line.end, None, None
     if "arc" in data:
+        energy = element_kind(kind).energy
+        if "general" not in energy.variants:
+            raise SceneError(f"{path}.arc: {kind} takes straight references only: "
+                             f"{energy.curved}; expected start and end (a straight body)")
         arc = Arc.parse(data["arc"], f"{path}.arc", dim, why)
         return height, width, None, elements, None, None, arc, None
     raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")

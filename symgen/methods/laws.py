@@ -70,7 +70,7 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
     pattern = derive.patterns(spec, "straight")
     size = len(laws.coefficient_layout(spec.dim))
     parts = [(derive.straight_domain_integrals(spec, domain), refs(domain, size))
-             for domain in derive.law_domains(spec)]
+             for domain in derive.straight_law_domains(spec)]
     density = ref("density", 0)
     values = derive.law_invariant_values(spec, pattern, parts,
                                          derive.straight_integrals(spec).mass, density)
@@ -84,7 +84,7 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
     names = ", ".join(laws.coefficient_names(spec.dim))
     arrays = [Array("geometry", 3, "batch", geometry_doc(spec)),
               *[Array(domain, size, "shared", f"law coefficients ({names}) on the {domain} "
-                      "(Pa)") for domain in derive.law_domains(spec)],
+                      "(Pa)") for domain in derive.straight_law_domains(spec)],
               Array("density", 1, "shared", "density rho (kg/m^3)"),
               *invariant_outputs(spec, pattern, "shape-level K1 (N/m), upper triangle",
                                  "energy of e = 0 (J)")]
