@@ -16,8 +16,8 @@ from runtime.studies.precision.plan import CODES, TARGETS, Problem
 CSV_COLUMNS = ("problem", "code", "kind", "elements", "step", "integrator", "newton",
                "load_steps", "role", "status", "error", "simulate_min_s", "simulate_median_s",
                "repeats", "newton_iterations", "message")
-#: Marker and colour of each code in the plot.
-STYLE = {"project": ("o", "C0"), "exudyn": ("x", "C3")}
+#: Marker of each code in the plot (colours tell the element kinds apart).
+MARKERS = {"project": "o", "exudyn": "x"}
 
 
 def write_csv(rows: list[dict], path: Path) -> None:
@@ -118,24 +118,26 @@ def plot(problems: tuple[Problem, ...], rows: list[dict], path: Path) -> None:
     per problem, one marker per code, the targets dashed."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     fig = Figure(figsize=(5.0 * len(problems), 4.6))
     FigureCanvasAgg(fig)
     for k, problem in enumerate(problems):
         ax = fig.add_subplot(1, len(problems), k + 1)
         points = _usable([r for r in rows if r["problem"] == problem.name])
-        for code in CODES:
-            mine = [r for r in points if r["code"] == code]
-            if mine:
-                marker, color = STYLE[code]
-                ax.loglog([r["simulate_min_s"] for r in mine], [r["error"] for r in mine],
-                          marker, color=color, ms=4, alpha=0.6, label=code)
+        kinds = list(dict.fromkeys((r["code"], r["kind"]) for r in points))
+        for i, (code, kind) in enumerate(kinds):
+            mine = [r for r in points if (r["code"], r["kind"]) == (code, kind)]
+            ax.loglog([r["simulate_min_s"] for r in mine], [r["error"] for r in mine],
+                      MARKERS[code], color=f"C{i % 10}", ms=4, alpha=0.6,
+                      label=f"{code} {kind}")
         for target in TARGETS:
             ax.axhline(target, color="grey", lw=0.7, ls="--")
         ax.set_title(problem.title, fontsize=8)
         ax.set_xlabel("simulate time (s, min of repeats)")
         ax.set_ylabel("error" if problem.static else "error (max over outputs, relative)")
         ax.grid(True, which="both", alpha=0.3)
+        ax.xaxis.set_minor_formatter(NullFormatter())   # decade labels only: no overlaps
         if points:
             ax.legend(fontsize=8)
     fig.tight_layout()
