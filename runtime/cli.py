@@ -267,7 +267,7 @@ def parser() -> argparse.ArgumentParser:
                           "plates seen obliquely)")
     run.set_defaults(run=cmd_run)
 
-    from runtime.studies import error_vs_time, stability
+    from runtime.studies import error_vs_time, precision, stability
 
     study = sub.add_parser("study", help="work-precision and stability studies")
     study_sub = study.add_subparsers(dest="what", required=True)
@@ -313,6 +313,7 @@ def parser() -> argparse.ArgumentParser:
     solvers.add_argument("--out", help="also write the Markdown tables to this file")
     solvers.add_argument("--quiet", action="store_true", help="no progress lines")
     solvers.set_defaults(run=cmd_bench_solvers)
+    precision.add_cli(bench_sub)
     return main
 
 

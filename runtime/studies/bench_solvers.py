@@ -35,6 +35,7 @@ from runtime.model.time_laws import Constant
 from runtime.progress import Bar, enabled
 from runtime.solve import engines
 from runtime.studies import peers
+from runtime.studies.repeats import interleave
 
 
 @dataclass
@@ -144,14 +145,17 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
 
 def measure(cases: list[Case], repeats: int, progress: bool = True) -> None:
     """Run every case ``repeats`` times, interleaved (round after round)."""
-    runs = [(case, case.prepare()) for case in cases]
-    with enabled(progress), Bar("bench solvers", repeats * len(runs), "cases") as bar:
-        for _ in range(repeats):
-            for case, go in runs:
-                seconds, iterations, jacobians, tip = go()
-                case.times.append(seconds)
-                case.counts, case.tip = (iterations, jacobians), tip
-                bar.advance(f"{case.table}: {case.label} {seconds:.3f} s")
+
+    def timed(go):
+        def run():
+            seconds, *rest = go()
+            return seconds, rest
+        return run
+
+    runs = [(f"{case.table}: {case.label}", timed(case.prepare())) for case in cases]
+    for case, (times, (iterations, jacobians, tip)) in zip(
+            cases, interleave(runs, repeats, "bench solvers", progress), strict=True):
+        case.times, case.counts, case.tip = times, (iterations, jacobians), tip
 
 
 def whole_run_table(cases: list[Case]) -> str:

@@ -48,6 +48,8 @@ CANTILEVER = {"length": 5.0, "height": 0.1, "width": 0.1, "E": 132e9, "rho": 824
 ROTATING_BEAM = {"length": 8.0, "area": 7.299e-5, "inertia": 8.215e-9, "E": 68.95e9,
                  "rho": 2766.67, "omega": 4.0, "t_ramp": 15.0}
 TOLERANCE = 1e-10           # Newton, relative to the model size, as the project's default
+#: The element of the planar peer models (rotating beam, cable cantilever, elastica)
+PEER_ELEMENT = "ANCFCable2D"
 #: Newton modes run with Exudyn, its default (modified Newton) first
 NEWTON = tuple(sorted(NEWTON_MODES, key=lambda mode: mode != "modified"))
 
@@ -64,6 +66,7 @@ class PeerRun:
     jacobian_evaluations: int
     tip_displacement: float
     note: str
+    history: tuple[np.ndarray, np.ndarray] | None = None   # (times s, tip value m), if asked
 
 
 @functools.cache
@@ -89,21 +92,24 @@ def _quiet() -> Iterator[None]:
         exu.config.printToConsole = saved
 
 
-def _check(newton: str, integrator: str) -> None:
+def _check(newton: str, integrator: str | None = None) -> None:
     if newton not in NEWTON:
         raise ValueError(f"newton: expected one of {', '.join(NEWTON)}, got {newton!r}")
-    if integrator not in INTEGRATORS:
+    if integrator is not None and integrator not in INTEGRATORS:
         raise ValueError(f"integrator: expected one of {', '.join(INTEGRATORS)}, "
                          f"got {integrator!r}")
 
 
-def _settings(size: float) -> Any:
-    """Exudyn settings without file output, console output or timers."""
+def _settings(size: float, every: float | None = None) -> Any:
+    """Exudyn settings without file output, console output or timers; sensors (stored in
+    memory, never written) record every ``every`` seconds when given."""
     import exudyn as exu
 
     s = exu.SimulationSettings()
     s.solution.file.write = False
-    s.solution.sensors.active = False
+    s.solution.sensors.active = every is not None
+    if every is not None:
+        s.solution.sensors.writePeriod = every
     s.show.globalTimers = False
     s.staticSolver.verboseMode = 0
     s.timeIntegration.verboseMode = 0
@@ -115,11 +121,12 @@ def _settings(size: float) -> Any:
 
 
 def _solve(mbs: Any, size: float, t_end: float, step: float, newton: str, integrator: str,
-           rho_inf: float) -> tuple[float, Any]:
-    """Run a fixed-step dynamic solve from rest; returns (wall time, Exudyn solver)."""
+           rho_inf: float, every: float | None = None) -> tuple[float, Any]:
+    """Run a fixed-step dynamic solve from rest (sensors recording every ``every`` s, if
+    given); returns (wall time, Exudyn solver)."""
     import exudyn as exu
 
-    s = _settings(size)
+    s = _settings(size, every)
     ti = s.timeIntegration
     ti.endTime = t_end
     ti.numberOfSteps = int(round(t_end / step))
@@ -165,7 +172,6 @@ def _cantilever(elements: int, ramp: bool) -> tuple[Any, Any, list]:
     container alive while the system is used."""
     import exudyn as exu
     import exudyn.itemInterface as ei
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
     p = CANTILEVER
     area = p["height"] * p["width"]
@@ -193,25 +199,34 @@ def _cantilever(elements: int, ramp: bool) -> tuple[Any, Any, list]:
         marker = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))
         mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[ground, marker],
                                               visualization=ei.VCoordinateConstraint(show=False)))
-    tip = mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[-1]))
-    load = [0.0, -p["force"], 0.0]
-    if ramp:
-        esym, tc = exu.symbolic, p["ramp"]
-
-        def cosine_ramp(mbs, t, load):
-            f = esym.IfThenElse(t <= tc, 0.5 * (1.0 - esym.cos(t * (math.pi / tc))),
-                                esym.Real(1.0))
-            return [load[0] * f, load[1] * f, load[2] * f]
-
-        law = CreateSymbolicUserFunction(mbs, cosine_ramp, "loadVectorUserFunction",
-                                         itemTypeName="LoadForceVector")
-        mbs.sys["peer_laws"] = [law]  # the expression tree must live as long as the system
-        mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load,
-                                       loadVectorUserFunction=law))
-    else:
-        mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load))
+    _tip_load(mbs, nodes[-1], [0.0, -p["force"], 0.0], p["ramp"] if ramp else None)
     mbs.Assemble()
     return container, mbs, nodes
+
+
+def _tip_load(mbs: Any, node: int, load: list[float], ramp: float | None) -> None:
+    """A force ``load`` on ``node``'s position: constant, or raised by the cosine ramp of
+    eq. 42 over ``ramp`` seconds (a symbolic user function)."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    tip = mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=node))
+    if ramp is None:
+        mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load))
+        return
+    esym = exu.symbolic
+
+    def cosine_ramp(mbs, t, load):
+        f = esym.IfThenElse(t <= ramp, 0.5 * (1.0 - esym.cos(t * (math.pi / ramp))),
+                            esym.Real(1.0))
+        return [load[0] * f, load[1] * f, load[2] * f]
+
+    law = CreateSymbolicUserFunction(mbs, cosine_ramp, "loadVectorUserFunction",
+                                     itemTypeName="LoadForceVector")
+    mbs.sys["peer_laws"] = [law]  # the expression tree must live as long as the system
+    mbs.AddLoad(ei.LoadForceVector(markerNumber=tip, loadVector=load,
+                                   loadVectorUserFunction=law))
 
 
 def exudyn_cantilever(elements: int, t_end: float = 4.0, step: float = 1e-3,
@@ -261,14 +276,68 @@ def exudyn_cantilever_frequencies(elements: int = 10, modes: int = 4) -> np.ndar
     return np.sort(1.0 / np.sqrt(mu))[:modes]
 
 
+# --------------------------------------------------------------------------- cables
+
+def _cable(elements: int, length: float, mass_per_length: float, bending: float,
+           axial: float) -> tuple[Any, Any, int, list]:
+    """A straight chain of ``elements`` ObjectANCFCable2D along x from the origin (bending
+    stiffness EI, axial stiffness EA).  Returns (container, system, ground marker, nodes),
+    not assembled."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground = mbs.AddMarker(ei.MarkerNodeCoordinate(
+        nodeNumber=mbs.AddNode(ei.NodePointGround()), coordinate=0))
+    h = length / elements
+    nodes = [mbs.AddNode(ei.NodePoint2DSlope1(referenceCoordinates=[i * h, 0, 1, 0],
+                                              visualization=ei.VNodePoint2DSlope1(show=False)))
+             for i in range(elements + 1)]
+    for a, b in zip(nodes, nodes[1:], strict=False):
+        mbs.AddObject(ei.ObjectANCFCable2D(
+            nodeNumbers=[a, b], length=h, massPerLength=mass_per_length,
+            bendingStiffness=bending, axialStiffness=axial,
+            visualization=ei.VObjectANCFCable2D(show=False)))
+    return container, mbs, ground, nodes
+
+
+def _hold(mbs: Any, ground: int, node: int, coordinate: int, **laws: Any) -> None:
+    """A coordinate constraint of ``node``'s ``coordinate`` (its displacement zero, or the
+    offset user functions ``laws``)."""
+    import exudyn.itemInterface as ei
+
+    marker = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=node, coordinate=coordinate))
+    mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[ground, marker],
+                                          visualization=ei.VCoordinateConstraint(show=False),
+                                          **laws))
+
+
+def _record(mbs: Any, nodes: list) -> list[int]:
+    """Sensors storing the coordinates of ``nodes`` in memory (call before Assemble)."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+
+    return [mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True, writeToFile=False,
+                                        outputVariableType=exu.OutputVariableType.Coordinates,
+                                        visualization=ei.VSensorNode(show=False)))
+            for node in nodes]
+
+
+def _positions(mbs: Any, node: int, sensor: int) -> tuple[np.ndarray, np.ndarray]:
+    """(times, coordinates + reference) recorded by a ``_record`` sensor of ``node``."""
+    data = np.asarray(mbs.GetSensorStoredData(sensor))
+    reference = np.asarray(mbs.GetNodeParameter(node, "referenceCoordinates"))
+    return data[:, 0], data[:, 1:] + reference
+
+
 # --------------------------------------------------------------------------- rotating beam
 
 def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
     """The paper rotating beam as Exudyn ANCFCable2D elements; the first node stays at the
     origin and its slope is driven to (cos a, sin a) by the spin-up law a(t) of eq. 45.
-    Returns (container, system, nodes)."""
+    Returns (container, system, nodes), not assembled."""
     import exudyn as exu
-    import exudyn.itemInterface as ei
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
     p = ROTATING_BEAM
@@ -297,24 +366,11 @@ def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
     def slope_y_t(mbs, t, item, offset):
         return esym.cos(angle(t)) * rate(t)
 
-    container = exu.SystemContainer()
-    mbs = container.AddSystem()
-    ground = mbs.AddMarker(ei.MarkerNodeCoordinate(
-        nodeNumber=mbs.AddNode(ei.NodePointGround()), coordinate=0))
-    h = p["length"] / elements
-    nodes = [mbs.AddNode(ei.NodePoint2DSlope1(referenceCoordinates=[i * h, 0, 1, 0],
-                                              visualization=ei.VNodePoint2DSlope1(show=False)))
-             for i in range(elements + 1)]
-    for a, b in zip(nodes, nodes[1:], strict=False):
-        mbs.AddObject(ei.ObjectANCFCable2D(
-            nodeNumbers=[a, b], length=h, massPerLength=p["rho"] * p["area"],
-            bendingStiffness=p["E"] * p["inertia"], axialStiffness=p["E"] * p["area"],
-            visualization=ei.VObjectANCFCable2D(show=False)))
+    container, mbs, ground, nodes = _cable(elements, p["length"], p["rho"] * p["area"],
+                                           p["E"] * p["inertia"], p["E"] * p["area"])
     mbs.sys["peer_laws"] = []  # the expression trees must live as long as the system
     laws = [None, None, (slope_x, slope_x_t), (slope_y, slope_y_t)]
     for coordinate, law in enumerate(laws):
-        marker = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=nodes[0],
-                                                       coordinate=coordinate))
         kwargs = {}
         if law is not None:
             kwargs = {name: CreateSymbolicUserFunction(mbs, f, name,
@@ -322,42 +378,136 @@ def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
                       for name, f in zip(("offsetUserFunction", "offsetUserFunction_t"), law,
                                          strict=True)}
             mbs.sys["peer_laws"].extend(kwargs.values())
-        mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[ground, marker],
-                                              visualization=ei.VCoordinateConstraint(show=False),
-                                              **kwargs))
-    mbs.Assemble()
+        _hold(mbs, ground, nodes[0], coordinate, **kwargs)
     return container, mbs, nodes
 
 
-def _tip_transverse(mbs: Any, nodes: list) -> float:
-    """Tip displacement across the hub frame (our sensor ``tip_transverse``): the frame is the
-    first node's slope, normalised, about the first node."""
-    import exudyn as exu
-
-    def coordinates(node):
-        return (np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
-                + np.asarray(mbs.GetNodeParameter(node, "referenceCoordinates")))
-
-    hub, tip = coordinates(nodes[0]), coordinates(nodes[-1])
-    axis = hub[2:] / np.linalg.norm(hub[2:])
-    return float(-axis[1] * (tip[0] - hub[0]) + axis[0] * (tip[1] - hub[1]))
+def _transverse(hub: np.ndarray, tip: np.ndarray) -> np.ndarray:
+    """Tip displacement across the hub frame (our sensor ``tip_transverse``) from node
+    coordinates (..., 4) of the hub and the tip: the frame is the hub's slope, normalised,
+    about the hub."""
+    axis = hub[..., 2:] / np.linalg.norm(hub[..., 2:], axis=-1, keepdims=True)
+    return (-axis[..., 1] * (tip[..., 0] - hub[..., 0])
+            + axis[..., 0] * (tip[..., 1] - hub[..., 1]))
 
 
 def exudyn_rotating_beam(elements: int = 10, t_end: float = 20.0, step: float = 1e-3,
                          newton: str = "modified", integrator: str = "generalized_alpha",
-                         rho_inf: float = 0.8) -> PeerRun:
+                         rho_inf: float = 0.8, every: float | None = None) -> PeerRun:
     """The paper rotating beam (scenes/rotating_beam.toml) run in Exudyn; ``tip_displacement`` is
-    the final tip deflection across the hub frame (m), as our sensor ``tip_transverse``.
+    the final tip deflection across the hub frame (m), as our sensor ``tip_transverse``, and
+    with ``every`` (s) ``history`` its time series at that interval.
     Generalized-alpha by default: Exudyn's undamped TrapezoidalIndex2 loses Newton convergence
     after the spin-up (t = 16.9 s with a 5e-3 s step; it holds with 1e-3 s)."""
+    import exudyn as exu
+
     _check(newton, integrator)
     with _quiet():
         start = time.perf_counter()
         container, mbs, nodes = _rotating_beam(elements)
+        sensors = _record(mbs, [nodes[0], nodes[-1]])
+        mbs.Assemble()
         build_s = time.perf_counter() - start
         simulate_s, solver = _solve(mbs, ROTATING_BEAM["length"], t_end, step, newton,
-                                    integrator, rho_inf)
-        tip = _tip_transverse(mbs, nodes)
+                                    integrator, rho_inf, every)
+        history = None
+        if every is not None:
+            t, hub = _positions(mbs, nodes[0], sensors[0])
+            history = (t, _transverse(hub, _positions(mbs, nodes[-1], sensors[1])[1]))
+        final = [np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+                 + np.asarray(mbs.GetNodeParameter(node, "referenceCoordinates"))
+                 for node in (nodes[0], nodes[-1])]
     return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
-                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount, tip,
-                   _note(f"ANCFCable2D x {elements}", newton, integrator, rho_inf, step))
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount,
+                   float(_transverse(*final)),
+                   _note(f"{PEER_ELEMENT} x {elements}", newton, integrator, rho_inf, step),
+                   history)
+
+
+# --------------------------------------------------------------------------- cable cantilever
+
+def _clamped_cable(elements: int, length: float, mass_per_length: float, bending: float,
+                   axial: float, load: list[float], ramp: float | None) -> tuple[Any, Any, list]:
+    """A cable clamped at the origin (position and slope held) with a tip force ``load``
+    (constant, or cosine-ramped over ``ramp`` s); returns (container, system, nodes), not
+    assembled."""
+    container, mbs, ground, nodes = _cable(elements, length, mass_per_length, bending, axial)
+    for coordinate in range(4):
+        _hold(mbs, ground, nodes[0], coordinate)
+    _tip_load(mbs, nodes[-1], [*load, 0.0], ramp)
+    return container, mbs, nodes
+
+
+def exudyn_cantilever_cable(elements: int, t_end: float = 4.0, step: float = 1e-3,
+                            newton: str = "modified", integrator: str = "trapezoidal",
+                            rho_inf: float = 0.8, every: float | None = None) -> PeerRun:
+    """The paper cantilever (scenes/cantilever.toml) as a planar ANCFCable2D chain (EA, EI of
+    the 0.1 x 0.1 section; the tip load in -y ramped over 3.5 s); ``tip_displacement`` is the
+    final tip y displacement (m), and with ``every`` (s) ``history`` its time series."""
+    import exudyn as exu
+
+    _check(newton, integrator)
+    p = CANTILEVER
+    area = p["height"] * p["width"]
+    with _quiet():
+        start = time.perf_counter()
+        container, mbs, nodes = _clamped_cable(
+            elements, p["length"], p["rho"] * area, p["E"] * p["width"] * p["height"] ** 3 / 12,
+            p["E"] * area, [0.0, -p["force"]], p["ramp"])
+        sensor = _record(mbs, [nodes[-1]])[0]
+        mbs.Assemble()
+        build_s = time.perf_counter() - start
+        simulate_s, solver = _solve(mbs, p["length"], t_end, step, newton, integrator,
+                                    rho_inf, every)
+        history = None
+        if every is not None:
+            data = np.asarray(mbs.GetSensorStoredData(sensor))
+            history = (data[:, 0], data[:, 2])
+        tip = mbs.GetNodeOutput(nodes[-1], exu.OutputVariableType.Coordinates)[1]
+    return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount, float(tip),
+                   _note(f"{PEER_ELEMENT} x {elements}", newton, integrator, rho_inf, step),
+                   history)
+
+
+@dataclass
+class PeerStatic:
+    """One Exudyn static solve: wall time (s) of the solve, Newton iterations, the tip
+    displacement (x, y) (m) and the settings used."""
+
+    simulate_s: float
+    newton_iterations: int
+    tip: tuple[float, float]
+    note: str
+
+
+def exudyn_elastica(elements: int, load_steps: int = 20, newton: str = "full", *,
+                    length: float, height: float, width: float, E: float,
+                    force: tuple[float, float]) -> PeerStatic:
+    """A clamped ANCFCable2D cantilever of ``length`` (m) along x, section ``height`` x
+    ``width`` (m, EI = E w h^3 / 12, EA = E w h), under a fixed-direction tip ``force`` (N),
+    solved statically in ``load_steps`` equal load increments with ``newton`` (``full`` or
+    ``modified``)."""
+    import exudyn as exu
+
+    _check(newton)
+    with _quiet():
+        container, mbs, nodes = _clamped_cable(elements, length, 1.0,
+                                               E * width * height ** 3 / 12.0,
+                                               E * width * height, list(force), None)
+        mbs.Assemble()
+        s = _settings(length)
+        s.staticSolver.numberOfLoadSteps = load_steps
+        s.staticSolver.newton.useModifiedNewton = newton == "modified"
+        start = time.perf_counter()
+        try:
+            mbs.SolveStatic(s)
+        except exu.SolverError as error:
+            raise RuntimeError(f"Exudyn static solve failed: {error}") from error
+        simulate_s = time.perf_counter() - start
+        iterations = mbs.sys["staticSolver"].it.newtonStepsCount
+        tip = mbs.GetNodeOutput(nodes[-1], exu.OutputVariableType.Coordinates)[:2]
+    mode = "modified" if newton == "modified" else "full"
+    note = (f"Exudyn {exudyn_version()} {PEER_ELEMENT} x {elements}; static, {load_steps} load "
+            f"steps; {mode} Newton; increment tolerance {TOLERANCE:g} x size; EigenSparse")
+    return PeerStatic(simulate_s, iterations, (float(tip[0]), float(tip[1])), note)
