@@ -94,6 +94,7 @@ class Model:
         self.method = method or scene.solver.method
         self.backend = backend or scene.solver.backend
         self.timing = {"compile_s": 0.0, "preprocess_s": 0.0}
+        self._free_motion_cache: dict[float, list[str]] = {}
         self.kernel_seconds = 0.0  # time inside element force/Jacobian kernels (s)
         # energy dissipated by damping since the start of the current dynamic run (J), set
         # by the engine at each output
@@ -425,6 +426,13 @@ class Model:
         return velocities
 
     def free_motions(self, tolerance: float = 1e-12) -> list[str]:
+        """The rigid motions the constraints leave free (see ``_free_motions``), computed
+        once per tolerance (the constraints of a model do not change)."""
+        if tolerance not in self._free_motion_cache:
+            self._free_motion_cache[tolerance] = self._free_motions(tolerance)
+        return list(self._free_motion_cache[tolerance])
+
+    def _free_motions(self, tolerance: float) -> list[str]:
         """One sentence per body that the constraints leave free to move rigidly, e.g.
         "body 'beam' is free to translate along x and y and to rotate about z" (empty when
         the model is held): the null space of the constrained stiffness at the reference.

@@ -63,12 +63,14 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
     """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
     solves one load increment (default ``newton_static``, in Python; the compiled engine's
     ``CompiledStatic`` is the other)."""
-    if newton is None:
-        def newton(q, fraction, multipliers):
-            return newton_static(model, q, fraction * model.nominal_load(), settings,
-                                 multipliers)
-    with single_threaded_blas():
+    if newton is not None:     # generated code: no BLAS threads to hold back
         return _solve_static(model, settings, newton)
+
+    def python_newton(q, fraction, multipliers):
+        return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers)
+
+    with single_threaded_blas():
+        return _solve_static(model, settings, python_newton)
 
 
 def _solve_static(model: Model, settings, newton) -> StaticResult:
