@@ -199,7 +199,12 @@ class LineForce(Load):
         fractions = kind.node_fractions
         on_edge = np.isin(body.mesh.connectivity, self.edge.nodes)
         out = np.zeros(model.size)
-        for e in np.flatnonzero(on_edge.sum(axis=1) > 1):
+        sides: set[frozenset] = set()   # an interior line's sides belong to two elements:
+        for e in np.flatnonzero(on_edge.sum(axis=1) > 1):   # integrate each side once
+            side = frozenset(body.mesh.connectivity[e][on_edge[e]].tolist())
+            if side in sides:
+                continue
+            sides.add(side)
             points = np.zeros((t.size, kind.dim))   # mid-surface (z = 0) of the side
             points[:, axis] = fractions[np.flatnonzero(on_edge[e])[0], axis] * \
                 element.geometry[axis]
