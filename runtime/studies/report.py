@@ -26,7 +26,7 @@ from runtime.app.run import run
 from runtime.catalog import METHODS, generated_kinds
 from runtime.kernels import naming
 from runtime.studies import bench_kernels as bench
-from runtime.studies import bench_solvers, error_vs_time, paper, stability
+from runtime.studies import bench_solvers, error_vs_time, paper, precision, stability
 from runtime.studies import invariant_comparison as invariant_report
 
 #: the shipped scenes run for section 4
@@ -144,6 +144,11 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
     stability.write(rows, work / "stability")
     parts.append(_failures(rows))
     parts.append(_demote(stability.markdown(rows), 2))
+    parts += ["## 8. Fastest to a given accuracy, beside Exudyn (`ancf bench precision`)", "",
+              _demote(precision.study(quick, work / "precision", repeats=1 if quick else 3,
+                                      progress=False), 1),
+              "![work precision](figures/precision.png)", ""]
+    shutil.copyfile(work / "precision" / "precision.png", figures / "precision.png")
     parts.append(f"\nReport generated in {time.perf_counter() - start:.0f} s.\n")
     path = out / "report.md"
     path.write_text("\n".join(parts))
