@@ -139,6 +139,17 @@ Z = (0.0,)
     ([body("a"), body("b", start=(1.0, 0.0), end=(1.0, 1.0))],
      [Clamp("a:0"), Weld(("a:-1", "b:0"))], [], 0),
     ([body()], [Hub("beam:0", SpinUp(1.0, 1.0))], [], 0),
+    # a 3D cable's spin about its own axis moves none of its coordinates (r, r_x): never a
+    # free motion, at any inclination (a clamped diagonal cable was "free to rotate about
+    # (0.707, 0.707, 0)", a pinned one along x "about (nan, nan, nan)")
+    ([body(element="cable3d", start=(0, 0, 0), end=(1, 1, 0))], [Clamp("beam:0")], [], 0),
+    ([body(element="cable3d", start=(0, 0, 0), end=(1, 0, 0))], [Pin("beam:0")],
+     ["body 'beam' is free to rotate about y and z"], 2),
+    ([body(element="cable3d", start=(0, 0, 0), end=(1, 1, 0))], [Pin("beam:0")],
+     ["body 'beam' is free to rotate about (0, 0, 1) and (0.707, -0.707, 0)"], 2),
+    ([body(element="cable3d", start=(0, 0, 0), end=(0, 1, 1))], [],
+     ["body 'beam' is free to translate along x, y and z and to rotate about "
+      "(0, 0.707, -0.707) and (1, 0, 0)"], 5),
 ])
 def test_free_motions_name_the_null_space_of_the_constrained_stiffness(
         bodies, constraints, expected, nullity):

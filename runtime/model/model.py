@@ -447,20 +447,34 @@ class Model:
         rotations = 1 if self.dim == 2 else 3
         per_body = self.dim + rotations
         positions = self.reference[self.position_dofs()]
-        columns, norms = [], []
-        for name, mesh in self.bodies.items():
+        columns, norms, absent = [], [], []
+        for b, (name, mesh) in enumerate(self.bodies.items()):
             centre = positions[mesh.first_node:mesh.first_node + mesh.nodes].mean(axis=0)
-            for unit in np.eye(per_body):
-                column = self.rigid_field(unit[:self.dim], unit[self.dim:] if rotations == 3
-                                          else unit[self.dim], centre, name)
-                norms.append(np.linalg.norm(column))
-                columns.append(scipy.sparse.csc_matrix(column[:, None] / (norms[-1] or 1.0)))
+            fields = np.column_stack([
+                self.rigid_field(unit[:self.dim], unit[self.dim:] if rotations == 3
+                                 else unit[self.dim], centre, name)
+                for unit in np.eye(per_body)])
+            scale = np.linalg.norm(fields, axis=0)
+            scale[scale == 0] = 1.0
+            unit_fields = fields / scale
+            norms.extend(scale)
+            columns.append(scipy.sparse.csc_matrix(unit_fields))
+            # motions the coordinates do not carry (a 3D cable's spin about its own axis, at
+            # any inclination: its nodes hold no section) move nothing: counted as held,
+            # orthogonal to the others in the body's parameters (m and rad), so that the free
+            # rotations named are those about axes perpendicular to the spin
+            # (a normalised parameter vector u is the physical p = u / scale: p . (v / scale)
+            # = 0 with v = vector / scale the physical spin)
+            values, vectors = np.linalg.eigh(unit_fields.T @ unit_fields)
+            for vector in vectors[:, values <= tolerance].T:
+                row = np.zeros(per_body * len(self.bodies))
+                row[b * per_body:(b + 1) * per_body] = vector / scale**2
+                absent.append(row / np.linalg.norm(row))
         basis = scipy.sparse.hstack(columns).tocsr()
         held = np.concatenate([self.fixed, self.prescribed])
-        # a motion the coordinates do not carry (a 3D cable's spin about its own axis: its
-        # nodes hold no section) moves nothing: counted as held
-        absent = scipy.sparse.csr_matrix(np.diag(np.asarray(norms) == 0).astype(float))
-        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis, absent])
+        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis,
+                                           scipy.sparse.csr_matrix(
+                                               np.reshape(absent, (-1, basis.shape[1])))])
         values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())
         null = vectors[:, values <= tolerance]
         sentences = []
@@ -502,13 +516,15 @@ def _motions(null: np.ndarray, norms: np.ndarray, dim: int) -> str:
 
 def _directions(basis: np.ndarray) -> str:
     """Names of the span of orthonormal columns: coordinate axes ("x and y") when they span
-    it, else the columns as vectors."""
+    it, else the columns as vectors (parts of round-off size written as 0)."""
     names = "xyz"[:basis.shape[0]]
     inside = [names[i] for i in range(basis.shape[0])
               if np.sum(basis[i] ** 2) > 1.0 - RANK_TOLERANCE]
     if len(inside) != basis.shape[1]:   # vectors, each with its first non-zero part positive
         signs = [np.sign(column[np.argmax(np.abs(column) > RANK_TOLERANCE)]) for column in
                  basis.T]
-        inside = ["(" + ", ".join(f"{x:.3g}" for x in sign * column + 0.0) + ")"
+        inside = ["(" + ", ".join(f"{x:.3g}" for x in
+                            np.where(np.abs(column) > RANK_TOLERANCE, sign * column, 0.0) + 0.0)
+                  + ")"
                   for sign, column in zip(signs, basis.T, strict=True)]
     return inside[0] if len(inside) == 1 else ", ".join(inside[:-1]) + " and " + inside[-1]
