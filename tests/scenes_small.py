@@ -1,6 +1,6 @@
 """Small scenes for the solver tests, built with the scene API (``runtime.Scene`` and its
-parts), and an in-memory runner that records sensor time series (and, if asked, the full
-states) without writing files or plots.
+parts), an in-memory runner that records sensor time series (and, if asked, the full
+states) without writing files or plots, and the comparison of the two engines on a scene.
 
 Closed-form beam values used by the tests are written out here from textbook formulas, never
 taken from the code under test.
@@ -8,6 +8,7 @@ taken from the code under test.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -29,9 +30,9 @@ from runtime import (
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.time_laws import Law
-from runtime.solve import modal
+from runtime.solve import engines, modal
 from runtime.solve import static as analysis
-from runtime.solve.python_engine import INTEGRATORS
+from runtime.solve.python_engine import INTEGRATORS, Divergence
 
 # first root of 1 + cos(x) cosh(x) = 0 (clamped-free beam), more digits than the paper's 1.8751
 BETA1_L = 1.8751040687119611
@@ -147,3 +148,50 @@ def simulate(scene_: Scene, method: str | None = None, backend: str | None = Non
         out.t = np.array(times)
         out.series = {name: np.array([r[name] for r in rows]) for name in sensors.names}
     return out
+
+
+# --------------------------------------------------------------------------- engines
+
+def engine_history(model: Model, settings, engine: str):
+    """(states [(t, q_full, v_full)], counters, divergence or None) of one engine."""
+    runner = engines.make(engine, model, settings, model.reference)
+    states = []
+    failure = None
+    try:
+        runner.run(settings.t_end, settings.step,
+                   lambda t, q, v: states.append((t, q.copy(), v.copy())))
+    except Divergence as error:
+        failure = (error.time, error.cause)
+    return states, dataclasses.asdict(runner.counters), failure
+
+
+def compare_engines(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
+                    sensor_rtol: float | None = None,
+                    **dynamic) -> tuple[dict, list, tuple | None]:
+    """Run both engines; assert equal counters and failures, and states equal to q_rtol of
+    the largest coordinate and velocities to v_rtol of the largest velocity; with
+    ``sensor_rtol``, every sensor of the scene equal to sensor_rtol of its largest value over
+    the run (a sensor that stays 0, as a constraint violation may, to 1e-15 of the model's
+    length scale).  Returns the Python engine's (counters, states, failure)."""
+    settings = dataclasses.replace(scene_.dynamic, **dynamic)
+    model = Model(scene_)
+    python = engine_history(model, settings, "python")
+    compiled = engine_history(model, settings, "compiled")
+    assert compiled[1] == python[1]          # steps, Newton iterations, evaluations
+    assert compiled[2] == python[2]          # divergence time and cause (or none)
+    assert len(compiled[0]) == len(python[0]) >= 1
+    q_scale = max(np.abs(q).max() for _, q, _ in python[0])
+    v_scale = max(max(np.abs(v).max() for _, _, v in python[0]), 1e-3)
+    for (tp, qp, vp), (tc, qc, vc) in zip(python[0], compiled[0], strict=True):
+        assert tc == tp
+        assert np.abs(qc - qp).max() <= q_rtol * q_scale
+        assert np.abs(vc - vp).max() <= v_rtol * v_scale
+    if sensor_rtol is not None:
+        sensors = Sensors(model)
+        series = [np.array([[row[name] for name in sensors.names] for row in
+                            (sensors.values(q, v, t) for t, q, v in states[0])])
+                  for states in (python, compiled)]
+        bound = np.maximum(sensor_rtol * np.abs(series[0]).max(axis=0),
+                           1e-15 * model.length_scale())
+        assert np.all(np.abs(series[1] - series[0]) <= bound)
+    return python[1], python[0], python[2]

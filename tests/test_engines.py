@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 import pytest
-from scenes_small import body, cantilever, scene
+from scenes_small import body, cantilever, compare_engines, engine_history, scene
 
 import scenes
 from runtime import (
@@ -38,7 +38,6 @@ from runtime import (
 from runtime.app.run import run
 from runtime.model.model import Model
 from runtime.solve import engines
-from runtime.solve.python_engine import Divergence
 
 ALUMINIUM = Material("m", E=7.0e10, nu=0.0, rho=2700.0)
 
@@ -69,39 +68,6 @@ def _curved(integrator: str) -> Scene:
                  dynamic=Dynamic(t_end=0.1, step=1e-3, integrator=integrator))
 
 
-def _history(model: Model, settings, engine: str):
-    """(states [(t, q_full, v_full)], counters, divergence or None) of one engine."""
-    runner = engines.make(engine, model, settings, model.reference)
-    states = []
-    failure = None
-    try:
-        runner.run(settings.t_end, settings.step,
-                   lambda t, q, v: states.append((t, q.copy(), v.copy())))
-    except Divergence as error:
-        failure = (error.time, error.cause)
-    return states, dataclasses.asdict(runner.counters), failure
-
-
-def _compare(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
-             **dynamic) -> tuple[dict, list, tuple | None]:
-    """Run both engines; assert equal counters and failures, and states equal to q_rtol of
-    the largest coordinate and velocities to v_rtol of the largest velocity."""
-    settings = dataclasses.replace(scene_.dynamic, **dynamic)
-    model = Model(scene_)
-    python = _history(model, settings, "python")
-    compiled = _history(model, settings, "compiled")
-    assert compiled[1] == python[1]          # steps, Newton iterations, evaluations
-    assert compiled[2] == python[2]          # divergence time and cause (or none)
-    assert len(compiled[0]) == len(python[0]) >= 1
-    q_scale = max(np.abs(q).max() for _, q, _ in python[0])
-    v_scale = max(max(np.abs(v).max() for _, _, v in python[0]), 1e-3)
-    for (tp, qp, vp), (tc, qc, vc) in zip(python[0], compiled[0], strict=True):
-        assert tc == tp
-        assert np.abs(qc - qp).max() <= q_rtol * q_scale
-        assert np.abs(vc - vp).max() <= v_rtol * v_scale
-    return python[1], python[0], python[2]
-
-
 @pytest.mark.parametrize("name", scenes.names())
 def test_engines_agree_on_the_shipped_scenes(name):
     # The whole run: thousands of steps of schemes that do not damp (trapezoidal), in which
@@ -109,7 +75,7 @@ def test_engines_agree_on_the_shipped_scenes(name):
     # rotating beam after the spin-up by about 5x per 2 s.  Positions still agree to 1e-11
     # of their scale (worst seen: 4e-13), velocities to 1e-6 of theirs (worst: 1.5e-7, the
     # quasi-static cantilever, where they are 1e-4 m/s), the Newton counters exactly.
-    _compare(_shipped(name), q_rtol=1e-11, v_rtol=1e-6)
+    compare_engines(_shipped(name), q_rtol=1e-11, v_rtol=1e-6)
 
 
 
@@ -119,25 +85,25 @@ def test_engines_agree_on_the_shipped_scenes(name):
     ("beam2d", Revolute), ("beam3d", Spherical),
     ("beam2d", Weld), ("beam3d", Weld)])
 def test_engines_agree_with_joints(element, joint, integrator):
-    counters, states, _ = _compare(_two_bodies(element, joint, integrator))
+    counters, states, _ = compare_engines(_two_bodies(element, joint, integrator))
     assert counters["newton_iterations"] > counters["steps"]   # a real nonlinear motion
     assert np.abs(states[-1][1] - states[0][1]).max() > 1e-2   # it swung
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_with_a_hub_and_a_joint(integrator):
-    _compare(_two_bodies("beam2d", Revolute, integrator, hub=True))
+    compare_engines(_two_bodies("beam2d", Revolute, integrator, hub=True))
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_on_a_curved_body(integrator):
-    _compare(_curved(integrator))
+    compare_engines(_curved(integrator))
 
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_with_modified_newton(integrator):
-    full, full_states, _ = _compare(_two_bodies("beam2d", Revolute, integrator))
-    modified, modified_states, _ = _compare(_two_bodies("beam2d", Revolute, integrator),
+    full, full_states, _ = compare_engines(_two_bodies("beam2d", Revolute, integrator))
+    modified, modified_states, _ = compare_engines(_two_bodies("beam2d", Revolute, integrator),
                                          newton="modified")
     # fewer Jacobians and factorisations than iterations, and fewer than full Newton
     assert modified["factorisations"] == modified["jacobian_evaluations"]
@@ -153,7 +119,7 @@ def test_engines_report_the_same_newton_failure():
     # the load grows until three iterations no longer reach the tolerance
     data = cantilever(elements=3, force=[0.0, -2e6], sensors=[], law=LinearRamp(0.1),
                       dynamic=Dynamic(t_end=0.1, step=2e-3))
-    _, states, failure = _compare(data, max_iterations=3)
+    _, states, failure = compare_engines(data, max_iterations=3)
     assert failure is not None and "did not converge" in failure[1]
     # it failed after some steps, and every output before the failure is kept
     assert failure[0] >= 2 * 2e-3 and states[-1][0] == pytest.approx(failure[0] - 2e-3)
@@ -164,7 +130,7 @@ def test_engines_report_the_same_blow_up():
     data = cantilever(elements=2, force=[0.0, -1e305], sensors=[],
                       dynamic=Dynamic(t_end=0.01, step=1e-3))
     model = Model(data)
-    results = [_history(model, data.dynamic, name) for name in ("python", "compiled")]
+    results = [engine_history(model, data.dynamic, name) for name in ("python", "compiled")]
     assert results[0][2] is not None and results[0][2] == results[1][2]
     assert results[0][1] == results[1][1]
 
@@ -226,7 +192,7 @@ def test_engines_agree_on_mixed_element_kinds(integrator):
               Body("b", "beam3d_3node", "m", 0.02, 0.02, 2, (0.5, 0, 0), (1.0, 0, 0)),
               Body("p", "plate3d", "m", rectangle=Rectangle((1.0, 0.0, 0.0), (0.3, 0.1), (2, 1)),
                    thickness=0.01)]
-    _compare(scene(bodies, [Pin("a:0"), Spherical(("a:-1", "b:0")),
+    compare_engines(scene(bodies, [Pin("a:0"), Spherical(("a:-1", "b:0")),
                             Spherical(("b:-1", "p:0,0"))], [Gravity([0.0, 0.0, -9.81])],
                    [Position("tip_z", "p:-1", "z")], ALUMINIUM,
                    dynamic=Dynamic(t_end=0.05, step=1e-3, integrator=integrator)))
