@@ -225,3 +225,9 @@ def test_hub_on_cable3d_turns_it_as_the_planar_cable(axis, integrator):
     assert np.abs(series[in_plane] - sign * planar["tip_y"]).max() <= 1e-12 * 8.0
     assert np.abs(series[out]).max() <= 1e-15
 
+
+def test_hub_about_the_axis_of_a_cable3d_is_refused():
+    # it turned nothing (the node carries only r, r_x): silently a clamp before
+    with pytest.raises(ValueError, match=r"constraint\[0\]\.axis: a rotation about the axis "
+                                         r"of body 'beam' \(cable3d"):
+        _spun("cable3d", "trapezoidal", (-1.0, 0.0, 0.0))

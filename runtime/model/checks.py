@@ -19,9 +19,10 @@ import math
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body
 from runtime.model.errors import SceneError, number_text, show
-from runtime.model.items.constraints import Constraint, Joint, NodeConstraint, Weld
+from runtime.model.items.constraints import Constraint, Hub, Joint, NodeConstraint, Weld
 from runtime.model.items.loads import Load
 from runtime.model.items.sensors import Sensor
+from runtime.model.placements import Line
 from runtime.model.schema import NodeRef
 from runtime.model.settings import MULTIPLE_TOLERANCE, Dynamic
 
@@ -57,6 +58,9 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
                              f"constraint[{i}] ({c.type}) on node {node}: {why}")
 
     by_name = {b.name: b for b in bodies}
+    for i, c in enumerate(constraints):
+        if isinstance(c, Hub):
+            check_hub_axis(f"constraint[{i}].axis", c, by_name[c.node.body])
     scale = max(b.placement.extent() for b in bodies)
     # joints tie node positions together; held nodes are tied to the ground (None)
     parent: dict[NodeRef | None, NodeRef | None] = {}
@@ -104,6 +108,23 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
             ra, rb = rb, ra
         parent[ra] = rb
         ties[rb] = [*ties.get(rb, []), *ties.pop(ra, []), i]
+
+
+def check_hub_axis(path: str, hub: Hub, body: Body) -> None:
+    """A prescribed rotation of a 3D cable node (it carries r, r_x only) about the cable's own
+    axis would turn nothing: the node stays clamped.  Refused (cables are straight lines)."""
+    kind = element_kind(body.element)
+    if kind.dim != 3 or len(kind.vectors) != 2 or not isinstance(body.placement, Line):
+        return
+    axis = hub.axis or (0.0, 0.0, 1.0)
+    along = [e - s for s, e in zip(body.placement.start, body.placement.end, strict=True)]
+    cross = [axis[1] * along[2] - axis[2] * along[1], axis[2] * along[0] - axis[0] * along[2],
+             axis[0] * along[1] - axis[1] * along[0]]
+    if math.hypot(*cross) <= 1e-9 * math.hypot(*axis) * math.hypot(*along):
+        raise SceneError(f"{path}: a rotation about the axis of body {body.name!r} "
+                         f"({kind.name}, its nodes carry only r, r_x: no section, no torsion) "
+                         f"turns none of its coordinates; expected an axis not parallel to the "
+                         f"cable, or a clamp")
 
 
 def check_weld(path: str, a: Body, b: Body) -> None:
