@@ -18,7 +18,7 @@ from runtime import Body, Clamp, Displacement, Material, PointForce, Scene, Stat
 from runtime.model.scene import load_scene
 from runtime.studies import peers
 from runtime.studies.precision import elastica
-from runtime.studies.precision.plan import ELASTICA, Config, Problem
+from runtime.studies.precision.plan import ELASTICA, PEER_MODEL, Config, Problem, model
 from runtime.studies.repeats import best, interleave
 
 
@@ -167,7 +167,7 @@ def measure(problem: Problem, configs: list[Config], references: list[Config],
                          for c in configs], repeats, f"bench precision {problem.name}",
                         progress)
     runs = list(zip([*references, *configs], timed, strict=True))
-    own = {c.code: outcome for c, (_, outcome) in runs if c.reference}
+    own = {(c.code, model(c)): outcome for c, (_, outcome) in runs if c.reference}
     exact = exact_tip() if problem.static else None
     rows = []
     for config, (times, outcome) in runs:
@@ -175,8 +175,8 @@ def measure(problem: Problem, configs: list[Config], references: list[Config],
         if outcome.status == "ok":
             if problem.static:
                 error = static_error(outcome.tip, exact, ELASTICA["length"])
-            elif not config.reference and own[config.code].status == "ok":
-                ref = own[config.code]
+            elif not config.reference and own[config.code, model(config)].status == "ok":
+                ref = own[config.code, model(config)]
                 error = history_error(outcome.t, outcome.y, ref.t, ref.y)
         fastest, median = best(times)
         fields = {k: v for k, v in dataclasses.asdict(config).items() if k != "reference"}
@@ -185,10 +185,11 @@ def measure(problem: Problem, configs: list[Config], references: list[Config],
                      "simulate_min_s": fastest, "simulate_median_s": median,
                      "repeats": len(times), "newton_iterations": outcome.iterations,
                      "message": outcome.message.splitlines()[0] if outcome.message else ""})
-    if not problem.static and len(own) == 2 and all(o.status == "ok" for o in own.values()):
-        distance = history_error(own["exudyn"].t, own["exudyn"].y, own["project"].t,
-                                 own["project"].y)
-        for row in rows:
-            if row["role"] == "reference":
-                row["error"] = distance
+    peer = own.get(("exudyn", PEER_MODEL))
+    if not problem.static and peer is not None and peer.status == "ok":
+        # each project reference's distance to the peer's (like models should agree)
+        for config, row in zip([c for c, _ in runs], rows, strict=True):
+            ours = own.get(("project", model(config)))
+            if row["role"] == "reference" and ours is not None and ours.status == "ok":
+                row["error"] = history_error(peer.t, peer.y, ours.t, ours.y)
     return rows

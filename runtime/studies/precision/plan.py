@@ -129,12 +129,30 @@ def configurations(problem: Problem, with_peer: bool) -> list[Config]:
     return configs
 
 
+#: the mechanical model of the peer's element (an Euler-Bernoulli cable)
+PEER_MODEL = "cable"
+
+
+def model(config: Config) -> str:
+    """The mechanical model a configuration discretises: the project kind's energy
+    (``continuum``: shear-deformable beams; ``cable``: Euler-Bernoulli), the peer's cable."""
+    return element_kind(config.kind).energy.name if config.code == "project" else PEER_MODEL
+
+
 def references(problem: Problem, with_peer: bool) -> list[Config]:
-    """The converged reference run of each code (dynamic problems: the scene's kind, or the
-    peer's element, on the finest mesh and step, REFERENCE_INTEGRATOR, full Newton); none
-    for the static elastica, whose reference is exact, but the finest run of each code to
-    show how close the converged models come to it."""
-    codes = [("project", reference_kind(problem))]
+    """The converged reference run of each code and model, so that each run is measured
+    against the converged solution of the model it discretises (dynamic problems: the scene's
+    kind for the project's continuum beams and the first kind of each other energy, the
+    peer's element; on the finest mesh and step, REFERENCE_INTEGRATOR, full Newton); for the
+    static elastica, whose reference is exact, the finest run of each code, to show how close
+    the converged models come to it."""
+    if problem.static:
+        kinds = [reference_kind(problem)]
+    else:
+        by_model = {element_kind(k).energy.name: k for k in reversed(line_kinds(problem.dim))}
+        by_model[element_kind(reference_kind(problem)).energy.name] = reference_kind(problem)
+        kinds = [by_model[name] for name in sorted(by_model)]
+    codes = [("project", kind) for kind in kinds]
     if with_peer:
         codes.append(("exudyn", peers.PEER_ELEMENT))
     if problem.static:
