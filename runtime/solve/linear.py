@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
@@ -19,9 +21,15 @@ def single_threaded_blas():
     The banded and small dense factorisations of the analyses gain nothing from threads:
     measured on 2 cores, a 10,000-element step took 86 ms single-threaded, 168 ms with
     OpenBLAS threads, and minutes when another process kept the other core busy (threads
-    spinning against each other).
+    spinning against each other).  The loaded BLAS libraries are found once per process
+    (a fresh search costs 1-2 ms, a fixed cost of every analysis otherwise).
     """
-    return threadpoolctl.threadpool_limits(limits=1, user_api="blas")
+    return _blas_controller().limit(limits=1, user_api="blas")
+
+
+@functools.cache
+def _blas_controller() -> threadpoolctl.ThreadpoolController:
+    return threadpoolctl.ThreadpoolController()
 
 
 class SaddleSolver:
