@@ -28,46 +28,40 @@ def build(spec: ElementSpec, variant: str) -> list[Kernel]:
             _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
 
 
-def _shape_values_kernel(spec: ElementSpec) -> Kernel:
+def _point_kernel(spec: ElementSpec, name: str, doc: str, output: str, output_doc: str,
+                  values: list) -> Kernel:
+    """A kernel that evaluates ``values`` (expressions in the local coordinates and the
+    domain parameters) at a batch of local points into ``output``."""
     arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
               Array("geometry", 3, "shared", geometry_doc(spec)),
-              Array("values", spec.n_shape, "output", "shape functions s_k")]
+              Array(output, len(values), "output", output_doc)]
     subs = {**geometry_subs(spec, "geometry"),
             **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
     body: list = []
-    emit_cse(body, [(f"values[{k}]", s.subs(subs), False)
-                    for k, s in enumerate(spec.shape_functions)], Temporaries())
-    return Kernel("shape_values", "Shape functions at local points.", arrays, body)
+    emit_cse(body, [(f"{output}[{k}]", value.subs(subs), False)
+                    for k, value in enumerate(values)], Temporaries())
+    return Kernel(name, doc, arrays, body)
+
+
+def _shape_values_kernel(spec: ElementSpec) -> Kernel:
+    return _point_kernel(spec, "shape_values", "Shape functions at local points.", "values",
+                         "shape functions s_k", list(spec.shape_functions))
 
 
 def _shape_gradients_kernel(spec: ElementSpec) -> Kernel:
-    pattern = derive.gradient_pattern(spec)
     grads = derive.shape_gradients(spec)
-    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
-              Array("geometry", 3, "shared", geometry_doc(spec)),
-              Array("gradients", len(pattern), "output",
-                    "structurally nonzero ds_k/dx_alpha, in gradient-pattern order")]
-    subs = {**geometry_subs(spec, "geometry"),
-            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
-    body: list = []
-    emit_cse(body, [(f"gradients[{j}]", grads[k, c].subs(subs), False)
-                    for j, (k, c) in enumerate(pattern)], Temporaries())
-    return Kernel("shape_gradients", "Local shape-function gradients at local points.",
-                  arrays, body)
+    return _point_kernel(spec, "shape_gradients",
+                         "Local shape-function gradients at local points.", "gradients",
+                         "structurally nonzero ds_k/dx_alpha, in gradient-pattern order",
+                         [grads[k, c] for k, c in derive.gradient_pattern(spec)])
 
 
 def _shape_curvatures_kernel(spec: ElementSpec) -> Kernel:
     """d2 s_k / dx2 (the bending part of the cable energy, ``symgen.energies``)."""
-    arrays = [Array("point", spec.dim, "batch", "local coordinates (x, y[, z]) in m"),
-              Array("geometry", 3, "shared", geometry_doc(spec)),
-              Array("curvatures", spec.n_shape, "output", "d2 s_k / dx2 (1/m^2)")]
-    subs = {**geometry_subs(spec, "geometry"),
-            **dict(zip(spec.coordinates, refs("point", spec.dim), strict=True))}
-    body: list = []
-    emit_cse(body, [(f"curvatures[{k}]", sp.diff(s, spec.coordinates[0], 2).subs(subs), False)
-                    for k, s in enumerate(spec.shape_functions)], Temporaries())
-    return Kernel("shape_curvatures", "Second shape-function derivatives along x at local "
-                  "points.", arrays, body)
+    return _point_kernel(spec, "shape_curvatures",
+                         "Second shape-function derivatives along x at local points.",
+                         "curvatures", "d2 s_k / dx2 (1/m^2)",
+                         [sp.diff(s, spec.coordinates[0], 2) for s in spec.shape_functions])
 
 
 def _section_kernel(spec: ElementSpec) -> Kernel:
