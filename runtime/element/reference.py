@@ -42,8 +42,15 @@ def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
         other = columns["y" if missing[0] == "x" else "x"]
         sign = 1.0 if missing[0] == "x" else -1.0
         columns[missing[0]] = sign * np.stack([other[..., 1], -other[..., 0]], axis=-1)
-    basis, upper = np.linalg.qr(np.stack([columns[a] for a in axes], axis=-1))
-    return basis * np.sign(np.diagonal(upper, axis1=-2, axis2=-1))[..., None, :]
+    # modified Gram-Schmidt, vectorised over a block (a QR factorisation with a positive
+    # diagonal: np.linalg.qr of many small matrices costs microseconds each)
+    basis: list[np.ndarray] = []
+    for a in axes:
+        column = columns[a]
+        for unit in basis:
+            column = column - np.sum(column * unit, axis=-1, keepdims=True) * unit
+        basis.append(column / np.linalg.norm(column, axis=-1, keepdims=True))
+    return np.stack(basis, axis=-1)
 
 
 def straight_reference(kind: ElementKind, start, end) -> np.ndarray:
