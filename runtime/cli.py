@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import contextlib
 import difflib
+import multiprocessing
+import os
 import signal
 import sys
 import tempfile
@@ -22,18 +25,33 @@ from runtime.studies.options import add_list_option, announce, default_out
 
 def _generate_into(elements: list[str], backends: list[str], methods: list[str] | None,
                    out: Path) -> list[Path]:
-    from symgen import emit
-    from symgen.elements import get
-    from symgen.methods import METHOD_FAMILIES
-
+    """Generate the kernels of ``elements`` into ``out``, one process per element and core
+    (SymPy runs on one core; the elements write to their own folders)."""
     families = None
     if methods:
+        from symgen.methods import METHOD_FAMILIES
+
         families = [f for m in methods for f in METHOD_FAMILIES[m]]
-    written = []
-    for name in elements:
-        with progress.phase(f"generating {name} (SymPy derivations and rendering)"):
-            written += emit.generate(get(name), out, backends=backends, families=families)
-    return written
+    workers = min(len(elements), os.cpu_count() or 1)
+    if workers <= 1:
+        return [path for name in elements
+                for path in _generate_element(name, backends, families, out)]
+    context = multiprocessing.get_context("spawn")   # no fork of a threaded parent
+    with progress.phase(f"generating {', '.join(elements)} (SymPy derivations and "
+                        f"rendering, {workers} processes)"), \
+            concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:
+        jobs = [pool.submit(_generate_element, name, backends, families, out)
+                for name in elements]
+        return [path for job in jobs for path in job.result()]
+
+
+def _generate_element(name: str, backends: list[str], families: list[str] | None,
+                      out: Path) -> list[Path]:
+    from symgen import emit
+    from symgen.elements import get
+
+    with progress.phase(f"generating {name} (SymPy derivations and rendering)"):
+        return emit.generate(get(name), out, backends=backends, families=families)
 
 
 def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:
