@@ -107,6 +107,36 @@ def cmd_generate(args) -> int:
     return 0
 
 
+def cmd_compile(args) -> int:
+    """Compile the C kernel families of the given kinds into the kernel cache now (what a
+    first run would compile on use), one process per core."""
+    from runtime.catalog import generated_kinds
+    from runtime.kernels.kind import element_kind
+
+    known = generated_kinds()
+    kinds = args.element or known
+    unknown = [k for k in kinds if k not in known]
+    if unknown:
+        raise ValueError(f"--element: unknown {', '.join(unknown)}; known: {', '.join(known)}")
+    jobs = [(kind, family) for kind in kinds for family in element_kind(kind).families]
+    start = time.perf_counter()
+    context = multiprocessing.get_context("spawn")
+    with progress.phase(f"compiling {len(jobs)} kernel families of {', '.join(kinds)} "
+                        f"({os.cpu_count() or 1} processes)"), \
+            concurrent.futures.ProcessPoolExecutor(os.cpu_count() or 1,
+                                                   mp_context=context) as pool:
+        seconds = sum(pool.map(_compile_family, jobs))
+    print(f"ancf compile: {len(jobs)} kernel families ready in the cache "
+          f"({seconds:.0f} s of compiling, {time.perf_counter() - start:.0f} s)")
+    return 0
+
+
+def _compile_family(job: tuple[str, str]) -> float:
+    from runtime.kernels.loader import kernel_family
+
+    return kernel_family(*job, "c").compile_s
+
+
 def cmd_invariants(args) -> int:
     from runtime.studies.invariant_comparison import compare, report
 
@@ -256,6 +286,12 @@ def parser() -> argparse.ArgumentParser:
     gen.add_argument("--check", action="store_true",
                      help="compare with the output folder instead of writing; exit 1 on a diff")
     gen.set_defaults(run=cmd_generate)
+
+    compile_ = sub.add_parser("compile", help="compile the C kernels into the cache now "
+                              "(what first runs would compile on use)")
+    add_list_option(compile_, "--element", "element kinds (default all)", metavar="NAME")
+    compile_.add_argument("--quiet", action="store_true", help="no progress lines")
+    compile_.set_defaults(run=cmd_compile)
 
     invariants = sub.add_parser("invariants", help="symbolic vs quadrature invariants")
     invariants.add_argument("--element", default="beam3d")
