@@ -7,11 +7,15 @@ gradient vectors that define its frame, are linear in the element coordinates q_
 functions.  Every formula below is written once with ``Dual`` numbers (a value and its
 derivative with respect to q_e), so the Jacobian is exact (to round-off) by construction.
 
-Frames (as ``frame =`` sensors, ``runtime.element.reference.gradient_frame``): in 3D the
-modified Gram-Schmidt frame of an ordered pair (a, b): ``u = a/|a|``, ``v`` the unit part of
-b normal to u, ``w = u x v``; the pair is (r_x, r_y) with columns (t1, t2, t3) = (u, v, w),
-or (r_y, r_z) with (t1, t2, t3) = (w, u, v) (nodes without r_x).  In 2D the frame of one
-vector a (r_x, or r_y turned by -90 degrees): ``t1 = a/|a|``, ``t2 = t1`` turned by +90.
+Frames: in 3D the modified Gram-Schmidt frame of an ordered pair (a, b) of gradients:
+``u = a/|a|``, ``v`` the unit part of b normal to u, ``w = u x v``; the pair (r_x, r_y) gives
+the columns (t1, t2, t3) = (u, v, w) (the frame of ``frame =`` sensors,
+``runtime.element.reference.gradient_frame``), (r_y, r_z) gives (w, u, v) and (r_z, r_x)
+gives (v, w, u) (cyclic).  Forces follow the first frame (the second on nodes without r_x);
+moments act on a section, the frame of the section's gradients: (r_y, r_z) at a beam or
+plate node and along a plate edge x = const, (r_z, r_x) along an edge y = const.  In 2D
+the frame of one vector a: ``t1 = a/|a|``, ``t2 = t1`` turned by +90 degrees (forces: a =
+r_x, or r_y turned by -90 degrees; moments: the angle of a = r_y, of r_x on a cable).
 
 Rotation of the frame (its virtual rotation d theta, with d t = d theta x t for every column):
 
@@ -113,7 +117,7 @@ class PointMaps:
     """Points of ``m`` coordinate groups (elements, or single nodes), ``p`` per group: the
     global coordinates ``dofs`` (m, n) and per point the linear maps (m or 1, p, dim, n) of
     the position ``position`` and of the frame's gradients ``a`` and ``b`` (``b`` None in 2D),
-    the frame ``order`` ("xy": (t1, t2, t3) = (u, v, w); "yz": (w, u, v); "" in 2D), and the
+    the frame ``order`` (the axes of (a, b): "xy", "yz" or "zx"; "" in 2D), and the
     weights ``weights`` (m or 1, p) (m, m^2 or 1 per point)."""
 
     dofs: np.ndarray
@@ -136,7 +140,11 @@ class PointMaps:
         length = normal.norm()
         v = normal / length
         w = u.cross(v)
-        return ([u, v, w] if self.order == "xy" else [w, u, v]), a, b, length
+        first = "xyz".index(self.order[0])
+        columns = [u, u, u]
+        for k, vector in enumerate((u, v, w)):
+            columns[(first + k) % 3] = vector
+        return columns, a, b, length
 
     def apply(self, vector: Dual, maps: np.ndarray, jacobian: bool):
         """Weighted sums over the points of maps^T vector: forces (m, n) and Jacobians
@@ -183,10 +191,9 @@ class FrameLoad:
             force, jac = maps.apply(a.perp() * self.moment / a.dot(a), maps.a, jacobian)
             return Patches(maps.dofs, force, jac)
         # M . d theta = alpha . da + beta . db with M.u, M.v, M.w the constant components
-        u, v, w = (frame[0], frame[1], frame[2]) if maps.order == "xy" else \
-            (frame[1], frame[2], frame[0])
-        mu, mv, mw = (self.moment[..., i:i + 1] for i in
-                      ((0, 1, 2) if maps.order == "xy" else (1, 2, 0)))
+        axes = ["xyz".index(maps.order[0]) + k for k in range(3)]
+        u, v, w = (frame[i % 3] for i in axes)
+        mu, mv, mw = (self.moment[..., i % 3:i % 3 + 1] for i in axes)
         alpha = (v * mw - w * mv - w * (b.dot(u) / length) * mu) / a.norm()
         beta = w * mu / length
         force, jac = maps.apply(alpha, maps.a, jacobian)

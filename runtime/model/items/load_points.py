@@ -68,21 +68,27 @@ def edge_sides(body: BodyView, edge: EdgeRef):
         yield e, points, ds, values, grads
 
 
-def _frame_maps(grads: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray | None]:
-    """Maps of the field gradients that define a point's frame: r_x and r_y in 3D, r_x in 2D."""
-    a = field_map(grads[:, :, 0], dim)
-    return a, (field_map(grads[:, :, 1], dim) if dim == 3 else None)
+def _frame_maps(grads: np.ndarray, dim: int,
+                order: str = "xy") -> tuple[np.ndarray, np.ndarray | None]:
+    """Maps of the field gradients that define a point's frame: the pair ``order`` in 3D
+    (default r_x and r_y), r_x in 2D."""
+    if dim == 2:
+        return field_map(grads[:, :, 0], dim), None
+    a, b = ("xyz".index(axis) for axis in order)
+    return field_map(grads[:, :, a], dim), field_map(grads[:, :, b], dim)
 
 
-def edge_maps(body: BodyView, edge: EdgeRef) -> PointMaps:
-    """The Gauss points of the sides of a plate grid line (weights: ds in m)."""
+def edge_maps(body: BodyView, edge: EdgeRef, section: bool = False) -> PointMaps:
+    """The Gauss points of the sides of a plate grid line (weights: ds in m), with the
+    frame of the mid-surface (r_x, r_y), or with ``section`` that of the section across the
+    line ((r_y, r_z) on x = const, (r_z, r_x) on y = const)."""
     sides = list(edge_sides(body, edge))
     dim = body.kind.dim
-    _, _, _, values, grads = sides[0]
+    order = ("yz" if edge.axis == "x" else "zx") if section else "xy"
     position = np.stack([field_map(s[3], dim) for s in sides])
-    a, b = zip(*(_frame_maps(s[4], dim) for s in sides), strict=True)
+    a, b = zip(*(_frame_maps(s[4], dim, order) for s in sides), strict=True)
     return PointMaps(body.element_dofs[[s[0] for s in sides]], position, np.stack(a),
-                     np.stack(b), "xy", np.stack([s[2] for s in sides]))
+                     np.stack(b), order, np.stack([s[2] for s in sides]))
 
 
 def _box_rule(body: BodyView, axes: tuple[int, ...], order: int):
@@ -137,9 +143,11 @@ def frame_gradients(kind: ElementKind) -> str | None:
     return "yz" if "r_y" in vectors and "r_z" in vectors else None
 
 
-def node_maps(model: ModelView, node: int, kind: ElementKind) -> PointMaps:
+def node_maps(model: ModelView, node: int, kind: ElementKind,
+              section: bool = False) -> PointMaps:
     """One point at a node: its own coordinates (1, per_node), the selections of its
-    position and of the gradients of its frame (``frame_gradients``), weight 1."""
+    position and of the gradients of its frame (``frame_gradients``; with ``section`` those
+    of its section: r_y and r_z in 3D, r_y in 2D, r_x on a 2D cable), weight 1."""
     dim, vectors = model.dim, model.node_vectors(node)
     n = len(vectors) * dim
 
@@ -150,7 +158,11 @@ def node_maps(model: ModelView, node: int, kind: ElementKind) -> PointMaps:
         return out
 
     rule = frame_gradients(kind)
-    if rule == "y":      # 2D, r_x completed from r_y turned by -90 degrees
+    if section and "r_y" in vectors:
+        rule = "yz" if dim == 3 else "section"
+    if rule == "section":   # 2D: the angle of r_y
+        a, b = select("r_y"), None
+    elif rule == "y":      # 2D, r_x completed from r_y turned by -90 degrees
         a, b = np.array([[0.0, 1.0], [-1.0, 0.0]]) @ select("r_y"), None
     elif rule in ("x", None):
         a, b = select("r_x"), None

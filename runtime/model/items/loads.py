@@ -137,8 +137,9 @@ class PointForce(NodeLoad):
         return FrameLoad(maps, force=maps.local(model.reference, self.force))
 
 
-def _node_maps(model: ModelView, ref: NodeRef):
-    return load_points.node_maps(model, model.node_index(ref), model.bodies[ref.body].kind)
+def _node_maps(model: ModelView, ref: NodeRef, section: bool = False):
+    return load_points.node_maps(model, model.node_index(ref), model.bodies[ref.body].kind,
+                                 section)
 
 
 def _moment_key(value: Any, path: str, context: Context) -> float | tuple[float, ...]:
@@ -199,7 +200,7 @@ class PointMoment(NodeLoad):
         return self.follower
 
     def state_force(self, model: ModelView) -> StateForce:
-        maps = _node_maps(model, self.node)
+        maps = _node_maps(model, self.node, section=True)
         return FrameLoad(maps, moment=_moment_components(maps, model, self.moment))
 
     def nominal(self, model: ModelView) -> np.ndarray:
@@ -258,7 +259,8 @@ class EdgeLoad(Load):
         return self.edge.refs()
 
     def _maps(self, model: ModelView):
-        return load_points.edge_maps(model.bodies[self.edge.body], self.edge)
+        return load_points.edge_maps(model.bodies[self.edge.body], self.edge,
+                                     self.on_gradients)
 
 
 @dataclass(frozen=True)
