@@ -7,9 +7,10 @@
 ``q_p`` the prescribed coordinates (hub rotations: known values, rates and accelerations
 at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values).
 ``F`` is the elastic force of the element groups plus the external loads, each a constant
-vector times a time law, or a state-dependent generalised force f(q) (follower loads,
-``StateLoads``) times its time law, whose exact Jacobian joins the elastic one in the CSR
-pattern of ``Model.pattern`` (non-symmetric: ``DAESystem.symmetric`` is then False).
+vector times a time law, or a state-dependent generalised force (follower loads f(q),
+Python loads f(t, q, v): ``StateLoads``) times its time law, whose Jacobians join the
+elastic ones in the CSR pattern of ``Model.pattern`` (non-symmetric: ``DAESystem.symmetric``
+is then False; df/dv joins the damping part of the Newton matrix).
 A ``DAESystem`` is built once from a ``Model`` and holds only arrays and the element groups;
 the Python engine (``runtime.solve.python_engine``) and the compiled engine
 (``runtime.solve.compiled_engine``) both consume it, nothing else of the model.
@@ -23,6 +24,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
+from runtime.model.errors import SceneError
+from runtime.model.items.python_loads import PythonForce
 from runtime.model.model import Model
 
 
@@ -178,11 +181,12 @@ class DAESystem:
 
 
 class StateLoads:
-    """The loads of a model that depend on its coordinates (``Load.follows``): their
-    generalised forces f(q) and Jacobians df/dq, each scaled by its load factor, assembled
-    over the whole model (force (size,)) and into the free-free CSR pattern of the model's
-    elastic Jacobian (``Model.pattern``: a load acts within an element's coordinates or a
-    node's, which the pattern holds).  ``len`` is the number of such loads."""
+    """The loads of a model that depend on its state (``Load.follows``): follower loads
+    f(q) and Python loads f(t, q, v) (``runtime.model.items.python_loads``), each scaled
+    by its load factor, assembled over the whole model (force (size,)) with their Jacobians
+    df/dq and df/dv in the free-free CSR pattern of the model's elastic Jacobian
+    (``Model.pattern``: a load acts within an element's coordinates or a node's, which the
+    pattern holds).  ``len`` is the number of such loads."""
 
     def __init__(self, model: Model) -> None:
         self.size, self.nnz = model.size, model.pattern.nnz
@@ -199,32 +203,52 @@ class StateLoads:
             if not load.follows:
                 continue
             evaluate = load.state_force(model)
-            dofs = evaluate.maps.dofs
+            dofs = evaluate.dofs if isinstance(evaluate, PythonForce) else evaluate.maps.dofs
             rows, cols = position[dofs][:, :, None], position[dofs][:, None, :]
             flat = rows * nf + cols
             slots = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
             inside = (rows >= 0) & (cols >= 0)
             if keys.size and not np.all(keys[slots[inside]] == flat[inside]):
+                if isinstance(evaluate, PythonForce):
+                    raise SceneError(f"load[{index}].nodes: a Python load's nodes must share "
+                                     "an element (its Jacobian couples their coordinates, "
+                                     "which must lie in one element's); list the nodes of one "
+                                     "element, or split the load")
                 raise AssertionError("a follower load acts outside the Jacobian pattern")
             self.loads.append((index, evaluate, np.where(inside, slots, -1)))
 
     def __len__(self) -> int:
         return len(self.loads)
 
-    def evaluate(self, q_full: np.ndarray, factors: np.ndarray, jacobian: bool):
-        """Force (size,) in N and, if asked, the Jacobian data (pattern nnz,) at coordinates
-        q_full (size,) with the load factors of every scene load ``factors`` (loads,)."""
+    @property
+    def python_loads(self) -> list[PythonForce]:
+        """The state forces of its Python loads."""
+        return [evaluate for _, evaluate, _ in self.loads if isinstance(evaluate, PythonForce)]
+
+    def evaluate(self, q_full: np.ndarray, factors: np.ndarray, jacobian: bool,
+                 v_full: np.ndarray | None = None, t: float = 0.0):
+        """Force (size,) in N and, if asked, the Jacobian data (pattern nnz,) with respect to
+        q and to v (None when no load reads velocities) at coordinates q_full and velocities
+        v_full (size,; None: at rest) at time t (s), with the load factors of every scene
+        load ``factors`` (loads,)."""
         force = np.zeros(self.size)
         data = np.zeros(self.nnz) if jacobian else None
+        data_dot = None
         for index, evaluate, slots in self.loads:
             factor = factors[index]
-            patches = evaluate(q_full, jacobian)
+            if isinstance(evaluate, PythonForce):
+                patches = evaluate(q_full, jacobian, v_full, t)
+            else:
+                patches = evaluate(q_full, jacobian)
             force += np.bincount(patches.dofs.ravel(), factor * patches.force.ravel(),
                                  self.size)
             if jacobian:
                 keep = slots >= 0
                 data += np.bincount(slots[keep], factor * patches.jacobian[keep], self.nnz)
-        return force, data
+                if isinstance(evaluate, PythonForce):
+                    data_dot = (np.zeros(self.nnz) if data_dot is None else data_dot) + \
+                        np.bincount(slots[keep], factor * patches.jacobian_dot[keep], self.nnz)
+        return force, data, data_dot
 
 
 def rotations(dim: int, axis: np.ndarray, theta: np.ndarray):

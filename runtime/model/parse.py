@@ -380,7 +380,8 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     for i, body in enumerate(bodies):   # element sizes once the counts are known to fit
         body.placement.check_counts(body.counts, f"body[{i}]")
         _check_initial_motion(body, f"body[{i}]", materials[body.material].rho)
-    context = Context(bodies[0].dim, Nodes(tuple(bodies)))
+    context = Context(bodies[0].dim, Nodes(tuple(bodies)),
+                      None if source == "<scene>" else str(Path(source).resolve().parent))
 
     constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)
                         for i, c in enumerate(_array_of_tables(data, "constraint")))

@@ -277,10 +277,13 @@ def _index(text: str, n: int, path: str, value: str, noun: str, owner: str,
 
 @dataclass(frozen=True)
 class Context:
-    """What a record's values are checked against: the scene's dimension and bodies."""
+    """What a record's values are checked against: the scene's dimension and bodies, and
+    the folder of its file (``None`` for a scene built in Python), where the modules of
+    Python functions are looked for first."""
 
     dim: int
     node: Nodes
+    folder: str | None = None
 
     @property
     def body_names(self) -> tuple[str, ...]:
@@ -357,7 +360,7 @@ def edge_key(value: Any, path: str, context: Context) -> EdgeRef:
 
 def law_key(value: Any, path: str, context: Context) -> Law:
     """A time law table."""
-    return parse_law(value, path)
+    return parse_law(value, path, context.folder)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,11 @@ angle in rad (``rate`` in 1/s or rad/s, ``acceleration`` in 1/s^2 or rad/s^2).
 Ramps (``cosine_ramp``, ``linear_ramp``, ``spin_up``) are zero, at rest, for t < 0; at the end
 of a ramp the formula of the ramp is used (``t <= duration``), as in eqs. 42 and 45.
 
+``python`` laws are Python functions of time, ``f(t: ndarray) -> ndarray`` (s -> value),
+evaluated vectorised over the step times of a block as the other laws are sampled: in TOML
+``{type = "python", function = "module:function"}`` (the module imported from the scene's
+folder, then ``sys.path``), in the Python API the callable itself (``time_law=f``).
+
 ``parse_law`` builds one from a scene's TOML table ``{type = "...", ...}``; its errors are
 ``SceneError`` naming the key path.
 """
@@ -15,8 +20,12 @@ of a ramp the formula of the ramp is used (``t <= duration``), as in eqs. 42 and
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
+import sys
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -30,9 +39,12 @@ __all__ = [
     "CosineRamp",
     "Law",
     "LinearRamp",
+    "LoadFunctionError",
+    "PythonLaw",
     "Sine",
     "SpinUp",
     "Table",
+    "import_function",
     "parse_law",
 ]
 
@@ -214,8 +226,131 @@ class ConstantRate(Law):
         return self.omega * t, zero + self.omega, zero
 
 
+class LoadFunctionError(ValueError):
+    """A Python load function or time law that cannot be used (it raised, or returned a
+    wrong shape or non-finite values); the message names its scene key (and the time)."""
+
+
+def import_function(spec: Any, path: str, folder: str | Path | None = None) -> Callable:
+    """The function named ``"module:function"`` by ``spec`` (or ``spec`` itself when it is a
+    callable), its module imported from ``folder`` (the scene's) first, then ``sys.path``.
+
+    Raises SceneError naming the key path ``path`` for a malformed name, a missing module or
+    function, an import that fails, or something that is not callable.
+    """
+    if callable(spec):
+        return spec
+    parts = spec.split(":") if isinstance(spec, str) else []
+    if len(parts) != 2 or not all(part.strip() for part in parts):
+        raise SceneError(f'{path}: expected "module:function" (a Python function), got '
+                         f"{show(spec)}")
+    module_name, name = (part.strip() for part in parts)
+    where = f"the scene's folder {folder} and sys.path" if folder else "sys.path"
+    added = [str(folder)] if folder else []
+    sys.path[:0] = added
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as error:
+        if error.name is not None and module_name.startswith(error.name):
+            raise SceneError(f"{path}: no module {show(module_name)} (looked in {where})") \
+                from None
+        raise SceneError(f"{path}: importing module {show(module_name)} failed: {error}") \
+            from None
+    except Exception as error:
+        raise SceneError(f"{path}: importing module {show(module_name)} failed: "
+                         f"{type(error).__name__}: {error}") from None
+    finally:
+        del sys.path[:len(added)]
+    function = getattr(module, name, None)
+    if function is None:
+        raise SceneError(f"{path}: module {show(module_name)} "
+                         f"({getattr(module, '__file__', '?')}) has no function {show(name)}")
+    if not callable(function):
+        raise SceneError(f"{path}: {show(spec)} is not a function (a "
+                         f"{type(function).__name__})")
+    return function
+
+
+#: relative steps of the central differences that give a Python law's rate and acceleration
+RATE_STEP = float(np.cbrt(np.finfo(float).eps))
+ACCELERATION_STEP = float(np.finfo(float).eps ** 0.25)
+
+
+@dataclass(frozen=True)
+class PythonLaw(Law):
+    """A Python function of time ``function(t: ndarray (n,)) -> ndarray (n,)`` (the unit of
+    its use), called once per block of step times.  It may return ``(value, rate,
+    acceleration)`` (three such arrays); given only the value, the rate and acceleration
+    (prescribed angles need them) are central differences of steps ``RATE_STEP`` and
+    ``ACCELERATION_STEP`` times max(1, |t|) s.  ``function`` is a callable or
+    ``"module:function"``; ``where`` (the key path) names it in errors."""
+
+    type: ClassVar[str] = "python"
+    function: Callable | str
+    where: str = dataclasses.field(default="time_law", compare=False, repr=False)
+    call: Callable | None = dataclasses.field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.call is None:
+            object.__setattr__(self, "call", import_function(self.function,
+                                                             f"{self.where}.function"))
+
+    def _values(self, t: np.ndarray):
+        try:
+            out = self.call(t.copy())
+        except Exception as error:
+            raise LoadFunctionError(f"{self.where}.function: {_named(self.function)} raised "
+                                    f"{type(error).__name__}: {error}") from None
+        parts = out if isinstance(out, tuple) else (out,)
+        if len(parts) not in (1, 3):
+            raise LoadFunctionError(f"{self.where}.function: {_named(self.function)} returned "
+                                    f"{len(parts)} arrays; expected the value (or value, "
+                                    "rate and acceleration)")
+        arrays = []
+        for part in parts:
+            try:
+                array = np.asarray(part, float)
+            except (TypeError, ValueError):
+                array = None
+            if array is None or array.shape != t.shape:
+                shape = "?" if array is None else array.shape
+                raise LoadFunctionError(
+                    f"{self.where}.function: {_named(self.function)} returned shape {shape} "
+                    f"for times of shape {t.shape}; expected one value per time "
+                    "(f(t: ndarray) -> ndarray of the same shape)")
+            bad = ~np.isfinite(array)
+            if bad.any():
+                raise LoadFunctionError(
+                    f"{self.where}.function: {_named(self.function)} returned a non-finite "
+                    f"value {array[bad][0]} at t = {t[bad][0]:.6g} s")
+            arrays.append(array)
+        return arrays
+
+    def sample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        t = np.asarray(t, float)
+        arrays = self._values(t)
+        if len(arrays) == 3:
+            return tuple(arrays)
+        value = arrays[0]
+        scale = np.maximum(1.0, np.abs(t))
+        h, k = RATE_STEP * scale, ACCELERATION_STEP * scale
+        rate = (self._values(t + h)[0] - self._values(t - h)[0]) / (2 * h)
+        acceleration = (self._values(t + k)[0] - 2 * value + self._values(t - k)[0]) / (k * k)
+        return value, rate, acceleration
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.type, "function": self.function}
+
+
+def _named(function: Callable | str) -> str:
+    """How a Python function is named in messages: its "module:function" or its name."""
+    if isinstance(function, str):
+        return show(function)
+    return getattr(function, "__qualname__", repr(function))
+
+
 LAWS: dict[str, type[Law]] = {cls.type: cls for cls in (
-    Constant, CosineRamp, LinearRamp, Sine, Table, SpinUp, ConstantRate)}
+    Constant, CosineRamp, LinearRamp, Sine, Table, SpinUp, ConstantRate, PythonLaw)}
 
 
 def _check_number(value: Any, path: str, check: str) -> float:
@@ -243,12 +378,27 @@ def _check_points(value: Any, path: str) -> tuple[tuple[float, float], ...]:
     return tuple(points)
 
 
-def parse_law(data: Any, path: str) -> Law:
-    """Build a law from its TOML table ``{type = "...", ...}`` found at key path ``path``.
+def _python_law(function: Any, path: str, folder: str | Path | None) -> PythonLaw:
+    """A ``PythonLaw`` of ``function`` (a callable or "module:function"), tried at t = 0 and
+    1 s (its shape and finiteness; SceneError naming ``path``)."""
+    law = PythonLaw(function, path, import_function(function, f"{path}.function", folder))
+    try:
+        law.sample(np.array([0.0, 1.0]))
+    except LoadFunctionError as error:
+        raise SceneError(str(error)) from None
+    return law
+
+
+def parse_law(data: Any, path: str, folder: str | Path | None = None) -> Law:
+    """Build a law from its TOML table ``{type = "...", ...}`` found at key path ``path``
+    (or from a Python callable: a ``python`` law); ``folder``: the scene's, where the modules
+    of ``python`` laws are looked for first.
 
     Raises SceneError naming the key path for a non-table, a missing or unknown ``type``, an
     unknown or missing key, or a value of the wrong kind.
     """
+    if callable(data):
+        return _python_law(data, path, folder)
     known = ", ".join(LAWS)
     if not isinstance(data, dict):
         raise SceneError(f'{path}: expected a table like {{type = "constant"}} (types: {known}), '
@@ -259,6 +409,15 @@ def parse_law(data: Any, path: str) -> Law:
     if not isinstance(name, str) or name not in LAWS:
         raise SceneError(f"{path}.type: unknown time law {show(name)}; expected one of {known}")
     cls = LAWS[name]
+    if cls is PythonLaw:
+        for key in data:
+            if key not in ("type", "function"):
+                raise SceneError(f"{path}.{key}: unknown key for a python law; expected one "
+                                 "of type, function")
+        if "function" not in data:
+            raise SceneError(f'{path}.function: missing required key of a python law '
+                             f'("module:function")')
+        return _python_law(data["function"], path, folder)
     fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)}
     for key in data:
         if key != "type" and key not in fields:

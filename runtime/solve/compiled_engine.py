@@ -21,6 +21,7 @@ from runtime.kernels import abi, jit
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.model.settings import Dynamic
+from runtime.model.time_laws import LoadFunctionError
 from runtime.solve.linear import single_threaded_blas
 from runtime.solve.python_engine import (
     CONTRACTION,
@@ -226,24 +227,29 @@ class CompiledEngine:
         m.follower_rows = self._buffer(rows, "int")
         m.follower_cols = self._buffer(pattern.indices[slots], "int")
         m.follower_data = self._work(slots.size)
+        m.follower_data_dot = self._work(slots.size)
         size, nloads = dae.size, len(dae.load_laws)
 
-        def evaluate(q_full, loads, jacobian, f_full, data) -> None:
+        def evaluate(q_full, v_full, t, loads, jacobian, f_full, data, data_dot) -> None:
             forces = np.frombuffer(ffi.buffer(f_full, 8 * size))
             try:
                 q = np.frombuffer(ffi.buffer(q_full, 8 * size))
+                v = np.frombuffer(ffi.buffer(v_full, 8 * size))
                 factors = np.frombuffer(ffi.buffer(loads, 8 * nloads))
-                force, values = dae.state_loads.evaluate(q, factors, bool(jacobian))
+                force, values, dots = dae.state_loads.evaluate(q, factors, bool(jacobian), v, t)
                 forces += force
                 if jacobian:
                     np.frombuffer(ffi.buffer(data, 8 * slots.size))[:] = values[slots]
+                    np.frombuffer(ffi.buffer(data_dot, 8 * slots.size))[:] = \
+                        0.0 if dots is None else dots[slots]
             except Exception as error:   # reported after the call (a non-finite force)
                 self._callback_error = error
                 forces[:] = np.nan
 
         self._callback_error: Exception | None = None
-        self._callback = ffi.callback("void(*)(const double *, const double *, int, double *, "
-                                      "double *)", evaluate)
+        self._callback = ffi.callback("void(*)(const double *, const double *, double, "
+                                      "const double *, int, double *, double *, double *)",
+                                      evaluate)
         m.follower = self._callback
 
     def raise_callback_error(self) -> None:
@@ -356,7 +362,10 @@ class CompiledEngine:
         last step done.  Raises Divergence after observing the outputs before it."""
         dae = self.dae
         times = np.arange(first, last + 1) * step
-        block = [*dae.prescribed_motion(times), dae.load_factors(times)]
+        try:
+            block = [*dae.prescribed_motion(times), dae.load_factors(times)]
+        except LoadFunctionError as error:   # a Python time law failed in this block
+            raise Divergence(float(times[0]), str(error)) from None
         numbers = np.arange(first, last + 1)
         output_steps = numbers[(numbers % stride == 0) | (numbers == steps)]
         nf = dae.free.size
@@ -367,7 +376,10 @@ class CompiledEngine:
                                         *map(self._block_array, block), stride, steps,
                                         *map(self._block_array, (out_q, out_v, out_dissipated)))
         self._sync(s)
-        self.raise_callback_error()
+        try:
+            self.raise_callback_error()
+        except LoadFunctionError as error:   # a Python load failed at s.failed_at
+            raise Divergence(s.failed_at, str(error)) from None
         done = first - 1 + (s.steps - before)
         written = int(np.count_nonzero(output_steps <= done))
         if written:

@@ -25,6 +25,7 @@ from runtime import catalog
 from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
+from runtime.model.time_laws import LoadFunctionError
 from runtime.solve.linear import SaddleSolver, SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
@@ -103,7 +104,11 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     factors = dae.load_factors([t])[0]
     force = force[dae.free] + factors @ dae.load_vectors
     if dae.state_loads:
-        force += dae.state_loads.evaluate(q_full, factors, False)[0][dae.free]
+        try:
+            force += dae.state_loads.evaluate(q_full, factors, False,
+                                              dae.full_velocities(v, vp), t)[0][dae.free]
+        except LoadFunctionError as error:   # a Python load failed at the start
+            raise Divergence(t, str(error)) from None
     solver = SchurSolver(dae.mass_band, dae.joints_free)
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
@@ -137,16 +142,18 @@ class Integrator:
         velocities v, and the Jacobian data (d/dq, d/dv or None) or None."""
         dae = self.dae
         qp, vp, _ = prescribed
-        q_full = dae.full_coordinates(q, qp)
-        force, data, data_dot = dae.internal_forces(q_full, dae.full_velocities(v, vp),
-                                                    jacobian)
+        q_full, v_full = dae.full_coordinates(q, qp), dae.full_velocities(v, vp)
+        force, data, data_dot = dae.internal_forces(q_full, v_full, jacobian)
         self.counters.force_evaluations += 1
         total = force[dae.free] + loads @ dae.load_vectors
-        if dae.state_loads:     # follower loads: their force and load stiffness
-            state_force, state_data = dae.state_loads.evaluate(q_full, loads, jacobian)
+        if dae.state_loads:     # follower and Python loads: force, stiffness, damping
+            state_force, state_data, state_dot = dae.state_loads.evaluate(
+                q_full, loads, jacobian, v_full, t)
             total += state_force[dae.free]
             if jacobian:
                 data = data + state_data
+            if state_dot is not None:
+                data_dot = state_dot if data_dot is None else data_dot + state_dot
         if not np.all(np.isfinite(total)):
             raise Divergence(t, NON_FINITE)
         if jacobian:
@@ -275,6 +282,8 @@ class Integrator:
         try:
             prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
             state = self.step(state, t, h, prescribed, self.dae.load_factors([t])[0])
+        except LoadFunctionError as error:   # a Python load or time law failed at t
+            raise Divergence(t, str(error)) from None
         finally:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels

@@ -77,7 +77,7 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
     factors = np.ones(len(model.scene.loads))
 
     def python_newton(q, fraction, multipliers):
-        follower = (lambda q: state_loads.evaluate(q, fraction * factors, True)) \
+        follower = (lambda q: state_loads.evaluate(q, fraction * factors, True)[:2]) \
             if state_loads else None
         return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers,
                              follower)

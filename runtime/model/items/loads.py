@@ -21,6 +21,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
+from runtime.model.items.python_loads import PythonForce, PythonFunction
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -40,7 +41,7 @@ from runtime.model.schema import (
 from runtime.model.time_laws import Constant, Law
 
 __all__ = ["LOADS", "DistributedForce", "Gravity", "LineForce", "LineMoment", "Load",
-           "NodeLoad", "PointForce", "PointMoment", "Pressure"]
+           "NodeLoad", "PointForce", "PointMoment", "Pressure", "PythonLoad"]
 
 StateForce = Callable[[np.ndarray, bool], Patches]
 
@@ -413,5 +414,56 @@ class DistributedForce(Load):
         return FrameLoad(maps, force=maps.local(model.reference, self.force_per_length))
 
 
+def _function_key(value: Any, path: str, context: Context) -> PythonFunction:
+    return PythonFunction.parse(value, path, context.folder)
+
+
+def _nodes_key(value: Any, path: str, context: Context) -> tuple[NodeRef, ...]:
+    if not isinstance(value, list | tuple) or not value:
+        raise SceneError(f'{path}: expected a non-empty list of nodes ["BODY:INDEX", ...], '
+                         f"got {show(value)}")
+    refs = tuple(node_key(item, f"{path}[{i}]", context) for i, item in enumerate(value))
+    for i, ref in enumerate(refs):
+        if ref in refs[:i]:
+            raise SceneError(f"{path}[{i}]: node {show(value[i])} is listed twice")
+    return refs
+
+
+@dataclass(frozen=True)
+class PythonLoad(Load):
+    """A generalised force written as a Python function ``function(t, q, v) -> (size,)``
+    (N per coordinate) of the time and the full coordinates and velocities, for controllers
+    (``runtime.model.items.python_loads``), times its ``time_law``.  ``nodes``: the nodes
+    whose coordinates it acts on and reads (default: every coordinate), which must share an
+    element (the Jacobian stays inside the model's pattern); ``jacobian(t, q, v) -> (df/dq,
+    df/dv)``, else central finite differences over those coordinates.  TOML names the
+    functions "module:function"; the Python API takes the callables."""
+
+    type: ClassVar[str] = "python"
+    noun: ClassVar[str] = "Python load"
+    function: PythonFunction | str | Callable = key(_function_key)
+    jacobian: PythonFunction | str | Callable | None = key(_function_key, None)
+    nodes: tuple[NodeRef, ...] | None = key(_nodes_key, None)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Load:
+        record = super().parse(data, path, context)
+        object.__setattr__(record, "_where", path)   # names it in errors at run time
+        return record
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def state_force(self, model: ModelView) -> PythonForce:
+        dofs = (np.arange(model.size) if self.nodes is None else np.concatenate(
+            [model.node_dofs(model.node_index(ref)) for ref in self.nodes]))
+        return PythonForce(self.function, self.jacobian, dofs, model.size,
+                           getattr(self, "_where", "load"))
+
+
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
-                                        Pressure, DistributedForce)
+                                        Pressure, DistributedForce, PythonLoad)
