@@ -19,6 +19,7 @@ from runtime.model.items.loads import (
     PointForce,
     PointMoment,
     Pressure,
+    PythonLoad,
 )
 from runtime.model.items.sensors import (
     ConstraintViolation,
@@ -41,6 +42,7 @@ from runtime.model.time_laws import (
     ConstantRate,
     CosineRamp,
     LinearRamp,
+    PythonLaw,
     Sine,
     SpinUp,
     Table,
@@ -51,6 +53,7 @@ __all__ = [
     "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
     "DistributedForce", "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef",
     "Output", "Pin", "PointForce", "PointMoment", "Position", "PotentialEnergy", "Pressure",
+    "PythonLaw", "PythonLoad",
     "Rectangle", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine", "Solver",
     "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy", "Velocity",
     "Weld", "load_scene", "run_scene",
