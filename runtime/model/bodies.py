@@ -52,8 +52,8 @@ class Spin:
 
 @dataclass(frozen=True)
 class Body:
-    """A mesh of elements of kind ``element`` sharing nodes (numbered by the kind's node layout:
-    ``n_nodes`` of them, see ``runtime.model.mesh.structured_mesh``).
+    """A mesh of elements of kind ``element`` sharing nodes (placed and numbered by the kind's
+    node layout: ``n_nodes`` of them, see ``runtime.model.mesh``).
 
     Beam kinds (a line of ``elements`` elements): section ``height`` and ``width`` (m; TOML
     ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or
@@ -99,15 +99,22 @@ class Body:
 
     @property
     def grid_shape(self) -> tuple[int, ...]:
-        """Node points along each meshed axis: (nodes,) for a line, (columns along x, rows
-        along y) for a rectangle."""
-        return meshing.grid_shape(element_kind(self.element), self.counts)
+        """Points of the node lattice along each meshed axis (``runtime.model.mesh``): (nodes,)
+        for a line, (columns along x, rows along y) for a rectangle; with mid-side nodes the
+        lattice has two steps per element."""
+        return meshing.lattice_shape(element_kind(self.element), self.counts)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
-        (nx + 1)(ny + 1) for 4-node plates."""
+        (nx + 1)(ny + 1) for 4-node plates, what the layout places for others (computed
+        without meshing)."""
         return meshing.node_count(element_kind(self.element), self.counts)
+
+    @property
+    def mesh(self) -> meshing.Mesh:
+        """The body's structured mesh (built once per kind and counts)."""
+        return meshing.structured_mesh(element_kind(self.element), self.counts)
 
     @property
     def section(self) -> tuple[float, ...]:
@@ -123,7 +130,7 @@ class Body:
 
     def node_position(self, index: int) -> tuple[float, ...]:
         """Reference position (m) of node ``index``, as the model meshes the body."""
-        return self.placement.node_position(index, self.grid_shape)
+        return self.placement.node_position(tuple(self.mesh.points[index]), self.counts)
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[[body]]``: what the body was given, so that the parser rejects

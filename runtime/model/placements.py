@@ -52,9 +52,11 @@ class Placement:
                                  f"expected elements of at least {1 / MAGNITUDE:g} m (at most "
                                  f"{most} elements), got {n}")
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        """Reference position (m) of node ``index`` of the structured mesh whose node grid has
-        ``shape`` (nodes evenly spaced along a line or arc, on the grid of a rectangle)."""
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        """Reference position (m) of the mesh point ``point`` (element units along each
+        meshed axis, ``runtime.model.mesh.Mesh.points``) of a structured mesh of ``counts``
+        elements: along a line or arc, on a rectangle."""
         raise NotImplementedError
 
     def extent(self) -> float:
@@ -98,8 +100,9 @@ class Line(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return (math.dist(self.start, self.end) / counts[0],)
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        f = index / (shape[0] - 1)
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        f = point[0] / counts[0]
         return tuple(a + (b - a) * f for a, b in zip(self.start, self.end, strict=True))
 
     def extent(self) -> float:
@@ -153,8 +156,9 @@ class Arc(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return (self.radius * math.radians(abs(self.angle_deg)) / counts[0],)
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        f = index / (shape[0] - 1)
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        f = point[0] / counts[0]
         theta = math.radians(self.start_angle_deg) + f * math.radians(self.angle_deg)
         x, y = self.center[0], self.center[1]
         return (x + self.radius * math.cos(theta), y + self.radius * math.sin(theta),
@@ -216,9 +220,9 @@ class Rectangle(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return tuple(side / n for side, n in zip(self.size, counts, strict=True))
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        i, j = index % shape[0], index // shape[0]
-        x, y = (i / (shape[0] - 1)) * self.size[0], (j / (shape[1] - 1)) * self.size[1]
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        x, y = (p / n * side for p, n, side in zip(point, counts, self.size, strict=True))
         return (self.corner[0] + x, self.corner[1] + y, self.corner[2])
 
     def extent(self) -> float:

@@ -23,6 +23,7 @@ import numpy as np
 
 from runtime.element.element import MAGNITUDE
 from runtime.model.errors import SceneError, is_finite, show
+from runtime.model.mesh import Mesh
 from runtime.model.time_laws import Law, parse_law
 
 # what a missing required key should hold, for error messages
@@ -188,8 +189,8 @@ def rotation_vector(value: Any, path: str, dim: int, what: str) -> float | tuple
 
 
 class MeshedBody(Protocol):
-    """What node references are resolved against: a body's name, element kind and node grid
-    (``runtime.model.bodies.Body``)."""
+    """What node references are resolved against: a body's name, element kind, node lattice
+    and mesh (``runtime.model.bodies.Body``)."""
 
     name: str
     element: str
@@ -200,10 +201,14 @@ class MeshedBody(Protocol):
     @property
     def n_nodes(self) -> int: ...
 
+    @property
+    def mesh(self) -> Mesh: ...
+
 
 class Nodes:
-    """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies) and
-    edges ``"BODY:x=I"`` / ``"BODY:y=J"`` against the bodies of a scene."""
+    """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies: the node
+    at point (I, J) of the node lattice, ``runtime.model.mesh``) and edges ``"BODY:x=I"`` /
+    ``"BODY:y=J"`` (the nodes on that lattice line) against the bodies of a scene."""
 
     def __init__(self, bodies: tuple[MeshedBody, ...]) -> None:
         self.bodies = {b.name: b for b in bodies}
@@ -225,11 +230,18 @@ class Nodes:
             if len(parts) != 2:
                 raise SceneError(f'{path}: expected a grid index "BODY:I,J" (two integers), '
                                  f"got {show(value)}")
-            i, j = (_index(part, n, path, value, f"grid index {axis}",
-                           f"body {show(body.name)} with {n} node {what}")
-                    for part, n, axis, what in zip(parts, shape, "IJ", ("columns", "rows"),
-                                                   strict=True))
-            index = j * shape[0] + i
+            grid = tuple(_index(part, n, path, value, f"grid index {axis}",
+                                f"body {show(body.name)} with {n} node {what}")
+                         for part, n, axis, what in zip(parts, shape, "IJ", ("columns", "rows"),
+                                                        strict=True))
+            index = body.mesh.node_at(grid)
+            if index is None:
+                near = ", ".join(f'"{body.name}:{i},{j}" (node {k})' for k in
+                                 body.mesh.nearest(grid) for i, j in [body.mesh.lattice[k]])
+                raise SceneError(f"{path}: no node at grid point {grid[0]},{grid[1]} of body "
+                                 f"{show(body.name)} ({body.element} elements place nodes on "
+                                 f"part of its {shape[0]} x {shape[1]} node lattice); nearest "
+                                 f"nodes: {near}")
             return NodeRef(body.name, index, None if text == str(index) else text)
         n = body.n_nodes
         index = _index(text, n, path, value, "node index",
@@ -237,7 +249,8 @@ class Nodes:
         return NodeRef(body.name, index, None if text == str(index) else text)
 
     def edge(self, value: Any, path: str) -> EdgeRef:
-        """An edge (a grid line) ``"BODY:x=I"`` or ``"BODY:y=J"`` of a rectangle body."""
+        """An edge (a node lattice line) ``"BODY:x=I"`` or ``"BODY:y=J"`` of a rectangle
+        body: the nodes on it, in order along it."""
         form = 'an edge "BODY:x=I" or "BODY:y=J" (a grid line of a rectangle body)'
         body, text = self._body(value, path, form)
         shape = body.grid_shape
@@ -252,9 +265,7 @@ class Nodes:
         n = shape[a]
         line = _index(text[2:], n, path, value, f"grid line {axis}",
                       f"body {show(body.name)} with {n} node {('columns', 'rows')[a]}")
-        nx, ny = shape
-        nodes = (tuple(j * nx + line for j in range(ny)) if axis == "x"
-                 else tuple(line * nx + i for i in range(nx)))
+        nodes = tuple(int(i) for i in body.mesh.on_line(a, line))
         return EdgeRef(body.name, axis, line, nodes, None if text[2:] == str(line) else text[2:])
 
 

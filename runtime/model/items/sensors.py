@@ -92,15 +92,14 @@ def _component_key(value: Any, path: str, context: Context) -> str:
 
 
 def _frame_key(value: Any, path: str, context: Context) -> NodeRef:
-    """A node whose gradients define a frame (at least dim - 1 of them: a 3D cable node,
-    carrying r_x only, has no section orientation)."""
+    """A node whose gradients define a frame (``ElementKind.frame_gap``: at least dim - 1 of
+    them; a 3D cable node's r_x or a shell node's r_z fixes one direction only)."""
     ref = node_key(value, path, context)
     kind = element_kind(context.node.bodies[ref.body].element)
-    if len(kind.vectors) - 1 < kind.dim - 1:
+    gap = kind.frame_gap()
+    if gap is not None:
         raise SceneError(f"{path}: node {show(value)} of body {show(ref.body)} ({kind.name}) "
-                         f"carries only {', '.join(kind.vectors)}: too few gradients for a "
-                         f"frame in {kind.dim}D (a cable node has no section orientation); "
-                         "expected a node of a kind with a frame")
+                         f"has no frame: {gap}; expected a node of a kind with a frame")
     return ref
 
 
