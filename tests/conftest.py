@@ -107,8 +107,9 @@ def arc_reference(kind: str, radius: float = ARC_RADIUS, angle: float = ARC_ANGL
 
     Beams: the arc lies in the x-y plane, starts at the origin tangent to x and turns towards
     +y; at each node r_x is the unit tangent, r_y the unit normal (pointing to the centre)
-    and, in 3D, r_z = (0, 0, 1).  Kinds meshing two axes (plates, shells): a cylindrical panel, x bent in the x-z plane
-    towards +z about an axis parallel to y: r_x the tangent, r_y = (0, 1, 0), r_z the normal.
+    and, in 3D, r_z = (0, 0, 1).  Kinds meshing two axes (plates, shells): a cylindrical
+    panel, x bent in the x-z plane towards +z about an axis parallel to y: r_x the tangent,
+    r_y = (0, 1, 0), r_z the normal.
     """
     assert abs(radius * angle - LENGTH) < 1e-12 or angle != ARC_ANGLE
     d = dim_of(kind)

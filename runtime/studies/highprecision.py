@@ -2,13 +2,13 @@
 (and of the cable energy of Berzeri and Shabana for cable kinds).
 
 Shares no code with the generator or the kernels: the shape functions of every shipped kind
-are typed here from the literature (``LITERATURE``: docs/design.md section 4 for the 2-node beams,
-Project Chrono's ANCF-3333 beam, ANCF-3443 plate and ANCF-3833 shell in their normalised
-coordinates for the others), differentiated once by SymPy into mpmath functions, and the energy is integrated by
-Gauss quadrature in 50-digit arithmetic.  What an element states as data is read from its
-metadata (``generated/<kind>/element.json``): the dimension, the domain (the span of each
-local axis in the geometry parameters, the thickness of a planar element) and the Gauss orders
-that integrate the straight element exactly.
+are typed here from the literature (``LITERATURE``: docs/design.md section 4 for the 2-node
+beams, Project Chrono's ANCF-3333 beam, ANCF-3443 plate and ANCF-3833 shell in their
+normalised coordinates for the others), differentiated once by SymPy into mpmath functions,
+and the energy is integrated by Gauss quadrature in 50-digit arithmetic.  What an element
+states as data is read from its metadata (``generated/<kind>/element.json``): the dimension,
+the domain (the span of each local axis in the geometry parameters, the thickness of a planar
+element) and the Gauss orders that integrate the straight element exactly.
 
 A kind without literature shape functions (a new element file) is integrated with the element
 file's own (``symgen/elements``): the arithmetic stays independent of the invariants and the
