@@ -14,12 +14,14 @@ from runtime import (
     Body,
     Clamp,
     Displacement,
+    Hub,
     LineForce,
     Material,
     PointMoment,
     Rectangle,
     Scene,
     SceneError,
+    SpinUp,
     Static,
     run_scene,
 )
@@ -188,3 +190,21 @@ def test_lattice_steps_follow_the_node_fractions():
             fractions = info.node_fractions[:, a] * steps
             assert np.allclose(fractions, np.round(fractions), atol=1e-12)
             assert math.gcd(steps, *np.round(fractions).astype(int)) == 1
+
+
+@pytest.mark.parametrize("kind", [k for k in FRAMELESS if element_kind(k).dim == 3])
+def test_a_hub_about_the_one_direction_a_node_carries_is_refused(kind):
+    # its only gradient (a cable's tangent, a shell's normal) would not turn: a silent clamp
+    info = element_kind(kind)
+    surface = len(info.mesh_axes) == 2
+    body = (_plate(kind) if surface else
+            Body("beam", kind, "steel", 0.02, 0.02, 2, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
+    along = (0.0, 0.0, 2.0) if surface else (0.0, -3.0, 0.0)
+    across = (1.0, 0.0, 0.0)
+    name = body.name
+    with pytest.raises(SceneError, match=r"^constraint\[0\]\.axis: a rotation about the "
+                                         f"{'normal' if surface else 'axis'} of body '{name}'"):
+        Scene(materials=[STEEL], bodies=[body], constraints=[Hub(f"{name}:1", SpinUp(1.0, 1.0),
+                                                                 axis=along)])
+    Scene(materials=[STEEL], bodies=[body], constraints=[Hub(f"{name}:1", SpinUp(1.0, 1.0),
+                                                             axis=across)])
