@@ -50,8 +50,8 @@ PER_ELEMENT = 4
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 #: frames of an animation at most (output times are subsampled evenly beyond)
 MAX_FRAMES = 100
-#: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2)
-CELL_TYPES = {1: "line", 2: "quad"}
+#: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2, bricks 3)
+CELL_TYPES = {1: "line", 2: "quad", 3: "hexahedron"}
 #: sample points are matched on a grid of 2**-20 element units (as meshing.structured_mesh)
 _KEY = 2**20
 
@@ -81,7 +81,7 @@ class Shape:
             axes = kind.mesh_axes
             if len(axes) not in CELL_TYPES:
                 raise ValueError(f"shape: cannot draw {kind.name}, meshed over {len(axes)} "
-                                 f"axes (meshes over 1 or 2 axes are drawn)")
+                                 f"axes (meshes over 1 to 3 axes are drawn)")
             fractions = _sample_fractions(kind, axes, per_element)
             local = _grid(fractions)                                # (samples, axes)
             values = _shape_values(body, axes, local)
@@ -155,20 +155,45 @@ def _indices(fractions: list[np.ndarray]) -> np.ndarray:
 
 def _grid_cells(fractions: list[np.ndarray]) -> np.ndarray:
     """Local cells (cells, corners) of the sample grid: segments along a line, quads
-    (counter-clockwise in the local x-y plane) over a surface."""
+    (counter-clockwise in the local x-y plane) over a surface, hexahedra in a volume (the
+    bottom quad, then the top one: VTK's corner order)."""
     index = _indices(fractions)
     if index.ndim == 1:
         return np.column_stack([index[:-1], index[1:]])
-    return np.stack([index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]],
-                    axis=-1).reshape(-1, 4)
+    if index.ndim == 2:
+        return np.stack([index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]],
+                        axis=-1).reshape(-1, 4)
+    low, high = index[:-1], index[1:]              # z layers (index is (nz, ny, nx))
+    return np.stack([layer[:, a, b] for layer in (low, high) for a, b in (
+        (np.s_[:-1], np.s_[:-1]), (np.s_[:-1], np.s_[1:]), (np.s_[1:], np.s_[1:]),
+        (np.s_[1:], np.s_[:-1]))], axis=-1).reshape(-1, 8)
 
 
 def _grid_loop(fractions: list[np.ndarray]) -> np.ndarray:
     """Local sample indices along the element's edges: the line itself; a surface's
-    boundary as a closed loop (y = 0, x = 1, y = 1, x = 0)."""
+    boundary as a closed loop (y = 0, x = 1, y = 1, x = 0); a volume's twelve edges as one
+    path (the bottom loop, then up each vertical edge and along the top, three verticals
+    drawn twice)."""
     index = _indices(fractions)
     if index.ndim == 1:
         return index
+    if index.ndim == 2:
+        return _loop(index)
+    bottom, top = _loop(index[0]), _loop(index[-1])
+    corners = [0, len(fractions[0]) - 1, len(fractions[0]) + len(fractions[1]) - 2,
+               2 * len(fractions[0]) + len(fractions[1]) - 3]   # loop positions of the corners
+    vertical = [index[:, 0, 0], index[:, 0, -1], index[:, -1, -1], index[:, -1, 0]]
+    path = [bottom, vertical[0][1:]]
+    for k in range(4):     # along the top to corner k + 1, down its vertical and back up
+        stop = corners[k + 1] if k < 3 else len(top) - 1
+        path.append(top[corners[k] + 1:stop + 1])
+        if k < 3:
+            path += [vertical[k + 1][-2::-1], vertical[k + 1][1:]]
+    return np.concatenate(path)
+
+
+def _loop(index: np.ndarray) -> np.ndarray:
+    """The boundary of a (ny, nx) sample grid as a closed loop (y = 0, x = 1, y = 1, x = 0)."""
     return np.concatenate([index[0, :-1], index[:-1, -1], index[-1, :0:-1], index[::-1, 0]])
 
 

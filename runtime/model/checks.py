@@ -8,7 +8,7 @@
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
 * loads: a point force acts on a node whose position is free, a point moment on a node whose
-  section can turn;
+  section can turn, a line force on a grid line of a rectangle (not on a box's face);
 * the frequency estimate of a dynamic analysis has a sensor and enough output samples.
 """
 
@@ -147,9 +147,18 @@ def check_weld(path: str, a: Body, b: Body) -> None:
                              f"every gradient, or a spherical joint")
 
 
-def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...]) -> None:
+def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
+                bodies: tuple[Body, ...]) -> None:
     """A load must act on coordinates that its nodes' constraints leave free (on one node of
-    an edge at least)."""
+    an edge at least); a line force acts along a grid line of a rectangle body, not on the
+    face of a box body (no face load is built)."""
+    boxes = {b.name for b in bodies if b.box is not None}
+    for i, load in enumerate(loads):
+        edge = getattr(load, "edge", None)
+        if edge is not None and edge.body in boxes:
+            raise SceneError(f"load[{i}].edge: {edge} is a face of the box body "
+                             f"{show(edge.body)}; a {load.noun} acts along a grid line of a "
+                             f"rectangle body (loads on faces are not built yet)")
     held = {node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)
             for node in c.targets()}
     for i, load in enumerate(loads):

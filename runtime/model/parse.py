@@ -34,8 +34,9 @@ from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
 from runtime.model.items.sensors import SENSORS, Sensor
-from runtime.model.placements import PLACEMENTS, Arc, Line, Rectangle
+from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
+    HINTS,
     Context,
     Nodes,
     boolean,
@@ -114,8 +115,8 @@ def _material(name: str, data: Any) -> Material:
 
 def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
     path = f"body[{i}]"
-    keys(data, path, ("name", "element", "material", "section"),
-         ("elements", *(key for placement in PLACEMENTS for key in placement.keys),
+    keys(data, path, ("name", "element", "material"),
+         ("section", "elements", *(key for placement in PLACEMENTS for key in placement.keys),
           "quadrature", "initial_velocity", "initial_angular_velocity"))
     name = checked_name(data["name"], f"{path}.name", "a body name")
     if ":" in name:
@@ -135,9 +136,16 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                          f"{show(law)}, which does not apply to {kind} elements ({why}); "
                          f"expected a material with one of the laws "
                          f"{', '.join(meta.laws)}")
-    plate = len(meta.mesh_axes) == 2
-    shape = _plate_shape if plate else _line_shape
-    height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
+    shape = (_line_shape, _plate_shape, _box_shape)[len(meta.mesh_axes) - 1]
+    if shape is not _box_shape:
+        if "box" in data:
+            raise SceneError(f"{path}.box: {kind} is not a solid element; boxes are for "
+                             f"elements meshing three axes (bricks)")
+        if "section" not in data:
+            raise SceneError(f"{path}.section: missing required key; expected "
+                             f"{HINTS['section']}")
+    height, width, thickness, elements, start, end, arc, rectangle, box = shape(
+        data, path, kind, dim)
 
     quadrature = None
     if "quadrature" in data:
@@ -161,7 +169,7 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                                     "in rad/s"),
                     vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
     return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
-                velocity, spin, rectangle, thickness)
+                velocity, spin, rectangle, thickness, box)
 
 
 def _check_initial_motion(body: Body, path: str, rho: float) -> None:
@@ -207,14 +215,14 @@ def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
         raise SceneError(f"{path}: expected either start and end or arc, got both")
     if straight:
         line = Line.parse(data, path, dim, why)
-        return height, width, None, elements, line.start, line.end, None, None
+        return height, width, None, elements, line.start, line.end, None, None, None
     if "arc" in data:
         energy = element_kind(kind).energy
         if "general" not in energy.variants:
             raise SceneError(f"{path}.arc: {kind} takes straight references only: "
                              f"{energy.curved}; expected start and end (a straight body)")
         arc = Arc.parse(data["arc"], f"{path}.arc", dim, why)
-        return height, width, None, elements, None, None, arc, None
+        return height, width, None, elements, None, None, arc, None, None
     raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
 
 
@@ -236,7 +244,24 @@ def _plate_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
                    "a table {thickness = T}")
     thickness = size(section["thickness"], f"{path}.section.thickness", "a thickness in m")
     rectangle = Rectangle.parse(data["rectangle"], f"{path}.rectangle", dim, f"{kind} is {dim}D")
-    return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle)
+    return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle, None)
+
+
+def _box_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Element count and placement (a ``Box``) of a solid body (kinds meshing three axes)."""
+    for key in ("section", *Line.keys, *Arc.keys, *Rectangle.keys):
+        if key in data:
+            raise SceneError(f"{path}.{key}: {kind} is a solid element; a solid body is a "
+                             f"box = {{corner = [x, y, z], size = [a, b, c], grid = "
+                             f"[nx, ny, nz]}} (its elements' sides are its geometry)")
+    if "elements" in data:
+        raise SceneError(f"{path}.elements: the box's grid sets the elements of a solid "
+                         f"body; remove elements")
+    if "box" not in data:
+        raise SceneError(f"{path}.box: missing required key; expected {{corner = [x, y, z], "
+                         f"size = [a, b, c], grid = [nx, ny, nz]}} ({kind} is a solid element)")
+    box = Box.parse(data["box"], f"{path}.box", dim, f"{kind} is {dim}D")
+    return (None, None, None, math.prod(box.grid), None, None, None, None, box)
 
 
 def _table_fields(data: Any, path: str, spec: dict[str, Callable[[Any, str], Any]],
@@ -387,7 +412,7 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     check_constraints(constraints, tuple(bodies))
     loads = tuple(parse_record(LOADS, "load", x, f"load[{i}]", context)
                   for i, x in enumerate(_array_of_tables(data, "load")))
-    check_loads(loads, constraints)
+    check_loads(loads, constraints, tuple(bodies))
     raw_sensors = _array_of_tables(data, "sensor")
     if len(raw_sensors) > LIMITS["sensors"]:
         raise SceneError(f"sensor: expected at most {LIMITS['sensors']} sensors (one CSV "
