@@ -95,7 +95,7 @@ def gram_sum_scale(el: Element) -> float:
 def u0_formula(kind: str, volume: float) -> float:
     """U0 of eqs. 40-41: (9 lam + 6 G)/8 V in 3D, (lam + G)/2 V in 2D; a cable (element.json
     ``energy``) has eps = -1/2 along its axis at e = 0: EA l / 8 = E V / 8."""
-    if element_kind(kind).energy.name == "cable":
+    if element_kind(kind).energy.structural:
         return E_MODULUS * volume / 8
     lam, shear = lame()
     return (9 * lam + 6 * shear) / 8 * volume if dim_of(kind) == 3 else (lam + shear) / 2 * volume

@@ -5,14 +5,15 @@ An element's position field is ``r(p) = S(p) e`` at local points ``p`` of its re
 domain, with the shape functions ``S`` of the element kind (the generated ``shape_values``
 kernel of its invariants family).  :class:`Shape` samples it on a small grid per element over
 the axes the kind's mesh tiles (``ElementKind.mesh_axes``), at the middle of the other axes: the
-centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate.  The grid
+centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate or shell, the
+volume of a solid.  The grid
 holds the element's nodes, so every model node is a sample point.  Displacements, velocities
 and mode shapes (all linear in the coordinates) are sampled the same way.
 
 Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
-* :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates,
-  point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given (points at
+* :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates and
+  shells, hexahedra for solids, point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given (points at
   the reference configuration: Warp By Vector applies the displacement once);
 * :func:`write_pvd` - a ParaView collection of VTU files with their times;
 * :class:`VtkSeries` - a run observer writing ``vtk/dynamic_NNNNNN.vtu`` at every output time
@@ -20,7 +21,7 @@ Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 * :class:`Frames` (a run observer) and :func:`write_animation` - a GIF of the deformed shape
   projected on a plane; :func:`write_snapshot` - a PNG of one state against the reference.
   Both draw the element edges (:attr:`Shape.outline`): a beam's centre line, the wireframe
-  of a plate's elements.
+  of a plate's or a solid's elements.
 """
 
 from __future__ import annotations
