@@ -13,8 +13,9 @@ and mode shapes (all linear in the coordinates) are sampled the same way.
 Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
 * :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates and
-  shells, hexahedra for solids, point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given (points at
-  the reference configuration: Warp By Vector applies the displacement once);
+  shells, hexahedra for solids, point data ``displacement`` (m) and ``velocity`` (m/s), or
+  any vectors given (points at the reference configuration: Warp By Vector applies the
+  displacement once);
 * :func:`write_pvd` - a ParaView collection of VTU files with their times;
 * :class:`VtkSeries` - a run observer writing ``vtk/dynamic_NNNNNN.vtu`` at every output time
   and ``vtk/dynamic.pvd``, plus ``vtk/static.vtu`` and ``vtk/mode_K.vtu`` / ``vtk/modes.pvd``;
