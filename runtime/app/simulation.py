@@ -29,7 +29,7 @@ from runtime.progress import Bar, enabled, warn
 from runtime.solve import engines
 from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
-from runtime.solve.python_engine import Divergence
+from runtime.solve.python_engine import Divergence, OutputDynamics
 
 __all__ = ["Simulation", "requested", "run_scene"]
 
@@ -67,6 +67,7 @@ class Simulation:
         self._states: tuple[list, list] = ([], [])
         self._built: set[str] = set()   # modules built for this run beyond the kernels
         self._setup_s = 0.0   # seconds building engines during the analyses (not simulating)
+        self._dynamics: OutputDynamics | None = None   # equations of motion at the outputs
 
     def build(self) -> Model:
         """Build the model (kernels compiled or loaded) and its sensors; choose the engine.
@@ -107,7 +108,7 @@ class Simulation:
                 self.phase = "static analysis"
                 found = self._solve_static(scene.static)
                 self.static_q = found.q
-                summary.record_static(self.sensors.values(found.q, t=None), found.iterations,
+                summary.record_static(self._static_sensors(found), found.iterations,
                                       found.load_steps)
                 for observer in self.observers:
                     observer.static(found.q)
@@ -132,6 +133,16 @@ class Simulation:
                     f"{b.element.kind.name}/{f}/{model.backend}" for b in model.bodies.values()
                     for f in b.element.loaded_families}))
         return 0
+
+    def _static_sensors(self, found: analysis.StaticResult) -> dict[str, float]:
+        """The sensors at the static equilibrium: at rest, loads at their nominal value, the
+        joint multipliers of the solution (reactions)."""
+        if not self.sensors.dynamics:
+            return self.sensors.values(found.q, t=None)
+        model = self.model
+        force = model.internal_forces(found.q, jacobian=False)[0] + model.nominal_load()
+        return self.sensors.values(found.q, t=None, a=np.zeros(model.size),
+                                   multipliers=found.multipliers, force=force)
 
     def _solve_static(self, settings) -> analysis.StaticResult:
         """The static equilibrium with the chosen engine's Newton solve."""
@@ -167,7 +178,8 @@ class Simulation:
     def _observe(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                  dissipated: np.ndarray) -> None:
         """A block of output times (k,): states (k, size), dissipated energy (k,)."""
-        values = self.sensors.block(Samples(times, q, v, dissipated))
+        dynamics = self._dynamics(times, q, v) if self._dynamics is not None else ()
+        values = self.sensors.block(Samples(times, q, v, dissipated, *dynamics))
         # the history first: it is never behind what an observer wrote (``keep_outputs``
         # cuts it back to what they did write)
         self.history["t"].extend(times.tolist())
@@ -209,6 +221,7 @@ class Simulation:
         names = self.sensors.names
         start = time.perf_counter()
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
+        self._dynamics = OutputDynamics(engine.dae) if self.sensors.dynamics else None
         self._charge_setup(engine, time.perf_counter() - start)
         self.history = {name: [] for name in ["t", *names]}
         for observer in self.observers:

@@ -33,7 +33,7 @@ from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.sensors import SENSORS, Sensor
+from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
 from runtime.model.placements import PLACEMENTS, Arc, Line, Rectangle
 from runtime.model.schema import (
     Context,
@@ -402,6 +402,7 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
             raise SceneError(f"sensor[{i}].name: duplicate sensor name {show(sensor.name)}"
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
+    check_reactions(tuple(sensors), constraints)
 
     analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
     static = _static(analysis["static"]) if "static" in analysis else None

@@ -107,6 +107,38 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
                                    "power": dae.dissipation_power(q, v, qp, vp)})
 
 
+class OutputDynamics:
+    """The equations of motion at output states, for the sensors that need them
+    (accelerations, reactions): ``M_ff a + A_f^T lambda = F_free - M_fp a_p`` with
+    ``A_f a = -A_p a_p``, solved at each state of a block (the consistent accelerations of
+    its positions and velocities, as ``initial_state`` solves them at t = 0).  Both engines'
+    output states go through it, so their sensors differ only as their states do."""
+
+    def __init__(self, dae: DAESystem) -> None:
+        self.dae = dae
+        self.solver = SchurSolver(dae.mass_band, dae.joints_free)
+        loads = dae.model.nominal_loads()
+        self.load_vectors = (np.array([vector for _, vector in loads]) if loads
+                             else np.zeros((0, dae.size)))
+
+    def __call__(self, times: np.ndarray, q_full: np.ndarray,
+                 v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
+        the states (k, size) of the output times (k,) (s)."""
+        dae = self.dae
+        _, _, ap = dae.prescribed_motion(times)
+        force = dae.load_factors(times) @ self.load_vectors
+        for row in range(len(times)):
+            force[row] += dae.internal_forces(q_full[row], v_full[row], jacobian=False)[0]
+        rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
+        a, lam = self.solver.solve(rhs.T, -(dae.joints_prescribed @ ap.T) if dae.joints
+                                   else None)
+        accelerations = np.zeros_like(force)
+        accelerations[:, dae.free] = a.T
+        accelerations[:, dae.prescribed] = ap
+        return accelerations, np.asarray(lam).T.reshape(len(times), dae.joints), force
+
+
 class Integrator:
     """Shared machinery: forces, Newton linear solves, initial accelerations, the loop."""
 
