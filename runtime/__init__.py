@@ -13,14 +13,19 @@ from runtime.model.errors import SceneError
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
 from runtime.model.items.loads import Gravity, LineForce, PointForce, PointMoment
 from runtime.model.items.sensors import (
+    Acceleration,
     ConstraintViolation,
     Displacement,
     DissipatedEnergy,
     KineticEnergy,
     Position,
     PotentialEnergy,
+    Reaction,
+    SectionForce,
     Sensor,
+    Strain,
     StrainEnergy,
+    Stress,
     TotalEnergy,
     Velocity,
 )
@@ -39,10 +44,11 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
-    "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
-    "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
-    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
-    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static",
-    "StrainEnergy", "Table", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
+    "Acceleration", "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
+    "CosineRamp", "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub",
+    "KineticEnergy", "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output",
+    "Pin", "PointForce", "PointMoment", "Position", "PotentialEnergy", "Reaction", "Rectangle",
+    "Result", "Revolute", "Scene", "SceneError", "SectionForce", "Sensor", "Sine", "Solver",
+    "Spherical", "Spin", "SpinUp", "Static", "Strain", "StrainEnergy", "Stress", "Table",
+    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
 ]

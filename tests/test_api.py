@@ -61,7 +61,14 @@ from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.sensors import SENSORS
+from runtime.model.items.sensors import (
+    SENSORS,
+    Acceleration,
+    Reaction,
+    SectionForce,
+    Strain,
+    Stress,
+)
 from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.3, rho=7800.0)
@@ -235,7 +242,8 @@ def test_registries_are_keyed_by_type():
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
-                             "constraint_violation", "velocity"]
+                             "constraint_violation", "velocity", "acceleration", "reaction",
+                             "strain", "stress", "section"]
 
 
 def test_output_table():
@@ -439,7 +447,16 @@ def random_scene(rng: random.Random) -> Scene:
             StrainEnergy(name, rng.choice([None, body.name])),
             KineticEnergy(name, rng.choice([None, body.name])),
             PotentialEnergy(name), TotalEnergy(name), DissipatedEnergy(name),
-            ConstraintViolation(name), Velocity(name, node, rng.choice(components))]
+            ConstraintViolation(name), Velocity(name, node, rng.choice(components)),
+            Acceleration(name, node, rng.choice(components)),
+            *_point_sensors(rng, name, body, dim, plate)]
+        supports = [f"{b}:{i}" for b, i in sorted(held)] + [
+            n for c in constraints if hasattr(c, "nodes") for n in c.nodes]
+        if supports:
+            quantity = rng.choice(["force", "moment"])
+            options.append(Reaction(name, rng.choice(supports), quantity,
+                                    rng.choice(components if dim == 3 or quantity == "force"
+                                               else ("z", "norm"))))
         sensors.append(rng.choice(options))
 
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
@@ -464,6 +481,26 @@ def random_scene(rng: random.Random) -> Scene:
     return Scene(title=rng.choice(TITLES), materials=materials, bodies=bodies,
                  constraints=constraints, loads=loads, sensors=sensors, static=static,
                  modal=modal, dynamic=dynamic, solver=solver, output=output)
+
+
+def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -> list:
+    """A strain or stress sensor at a random point of a random element of ``body`` (on the
+    axis of a cable) and, on a beam, a section sensor."""
+    kind = element_kind(body.element)
+    bounds = kind.domain.bounds(body.geometry)
+    point = [rng.uniform(low, high) for low, high in bounds]
+    if kind.energy.structural:
+        point[1:] = [0.0] * (dim - 1)
+    element = rng.randrange(int(np.prod(body.counts)))
+    tensors = ("xx", "yy", "xy") if dim == 2 else ("xx", "yy", "zz", "yz", "xz", "xy")
+    out = [Strain(name, body.name, element, tuple(point), rng.choice(tensors)),
+           Stress(name, body.name, element, tuple(point),
+                  rng.choice([*tensors, "von_mises"]), rng.choice(["cauchy", "pk2"]))]
+    if body is not plate:
+        sections = (("N", "M3", "M") if dim == 2 else ("N", "M")) if kind.energy.structural \
+            else (("N", "Q2", "M3", "M") if dim == 2 else ("N", "Q2", "Q3", "T", "M2", "M3"))
+        out.append(SectionForce(name, body.name, element, point[0], rng.choice(sections)))
+    return out
 
 
 def test_random_scenes_round_trip_through_toml(tmp_path):
