@@ -1,7 +1,8 @@
 """The ``reaction`` sensor against closed forms: the equilibrium of a cantilever (static and
 at rest after a damped dynamic run, both engines), a weld's multipliers, the pin of a
-pendulum at the bottom of its swing (m (g + r_c omega^2)), and the driving torque and
-centripetal force of a prescribed hub (I theta'', m r_c omega^2)."""
+pendulum at the bottom of its swing (m (g + r_c omega^2)), the driving torque and
+centripetal force of a prescribed hub (I theta'', m r_c omega^2), and the resultant held by
+a clamped plate edge."""
 
 from __future__ import annotations
 
@@ -15,11 +16,13 @@ from runtime import (
     Dynamic,
     Gravity,
     Hub,
+    LineForce,
     Material,
     Pin,
     PointForce,
     Position,
     Reaction,
+    Rectangle,
     Scene,
     Solver,
     SpinUp,
@@ -162,3 +165,26 @@ def test_hub_reaction_is_the_driving_torque_and_the_centripetal_force():
     after = t > 1.0       # constant speed: the hub pulls the rod in by m (L / 2) omega^2
     np.testing.assert_allclose(radial[after], -mass * length / 2 * omega[after] ** 2,
                                rtol=1e-3)
+
+
+@pytest.mark.parametrize("engine", ["compiled", "python"])
+def test_reaction_of_a_clamped_plate_edge_is_the_resultant_of_the_line_load(engine):
+    # a strip a x b clamped along x = 0, a line load q (N/m) down along x = a: the edge
+    # holds q b up and the moment of the load about its first node (the corner at the
+    # origin): (q b^2 / 2, -q a b, 0) (a small deflection: the lever arms of the reference)
+    a, b, q = 1.0, 0.2, 100.0
+    scene = Scene(materials=[Material("steel", E=2.1e11, nu=0.0, rho=7850.0)],
+                  bodies=[Body("plate", "plate3d", "steel", thickness=0.01,
+                               rectangle=Rectangle((0.0, 0.0, 0.0), (a, b), (4, 2)))],
+                  constraints=[Clamp(edge="plate:x=0")],
+                  loads=[LineForce(edge="plate:x=-1", force_per_length=(0.0, 0.0, -q))],
+                  sensors=[Reaction(f"{quantity}_{c}", None, quantity, c, edge="plate:x=0")
+                           for quantity in ("force", "moment") for c in "xyz"]
+                  + [Reaction("corner", "plate:0,0", "force", "z")],
+                  static=Static(), solver=Solver(engine=engine))
+    values = run_scene(scene, progress=False).summary["static"]["sensors"]
+    np.testing.assert_allclose([values[f"force_{c}"] for c in "xyz"], [0.0, 0.0, q * b],
+                               rtol=1e-9, atol=1e-9 * q * b)
+    np.testing.assert_allclose([values[f"moment_{c}"] for c in "xyz"],
+                               [q * b**2 / 2, -q * a * b, 0.0], rtol=1e-5, atol=1e-9 * q * a * b)
+    assert 0.0 < values["corner"] < q * b    # one node's share

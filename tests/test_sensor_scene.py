@@ -89,6 +89,14 @@ def _scene(sensors, kind: str = "beam2d", **extra) -> Scene:
     ("beam2d", Reaction("r", "beam:0", "torque", "z"),
      'sensor[0].quantity: unknown quantity "torque"; expected one of force, moment'),
     ("beam2d", Acceleration("a", "beam:9", "y"), "sensor[0].node: node index 9 out of range"),
+    ("beam3d", Reaction("r", "beam:0", "force", "y", edge="sheet:x=0"),
+     'sensor[0]: expected either node = "BODY:INDEX" or edge = "BODY:x=I" (a grid line of a '
+     "rectangle body), got node and edge"),
+    ("beam3d", Reaction("r", None, "force", "y"),
+     'sensor[0]: expected either node = "BODY:INDEX" or edge'),
+    ("beam3d", Reaction("r", None, "force", "z", edge="sheet:x=0"),
+     "sensor[0].edge: node sheet:0 of edge sheet:x=0 is held by no clamp, pin or "
+     "prescribed_rotation and in no joint"),
 ])
 def test_keys_of_the_new_sensors_are_checked_with_their_path(kind, sensor, message):
     with pytest.raises(SceneError, match=re.escape(message)):

@@ -25,9 +25,11 @@ from runtime.model.items.constraints import Joint
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
+    EdgeRef,
     NodeRef,
     Record,
     choice,
+    edge_key,
     key,
     node_key,
     number,
@@ -233,17 +235,20 @@ class Reaction(Sensor):
     coordinates they hold or prescribe) and its joints (``-A^T lambda`` on its free
     coordinates).  The force acts on the position r; the moment about the node's position
     is ``sum_k r_k x f_k`` over its gradients r_k with their generalised forces f_k (the
-    virtual work of a small rotation w: delta r_k = w x r_k).  One ``component`` (x | y |
-    z | norm; a 2D moment is about z: z | norm) in global axes or, with ``frame``, in that
-    node's frame."""
+    virtual work of a small rotation w: delta r_k = w x r_k).  With ``edge`` instead of
+    ``node`` (a grid line of a rectangle body, ``"BODY:x=0"``): the resultant over its nodes,
+    the moment about the edge's first node (``(r_n - r_0) x f_n`` added per node).  One
+    ``component`` (x | y | z | norm, the default; a 2D moment is about z: z | norm) in global
+    axes or, with ``frame``, in that node's frame; ``quantity`` defaults to force."""
 
     type: ClassVar[str] = "reaction"
     energy: ClassVar[bool] = False
     dynamics: ClassVar[bool] = True
-    node: NodeRef | str = key(node_key)
-    quantity: str = key(_quantity_key)
-    component: str = key(_any_component_key)
+    node: NodeRef | str | None = key(node_key, None)
+    quantity: str = key(_quantity_key, "force")
+    component: str = key(_any_component_key, "norm")
     frame: NodeRef | str | None = key(_frame_key, None)
+    edge: EdgeRef | str | None = key(edge_key, None)
 
     @property
     def unit(self) -> str:   # type: ignore[override]
@@ -251,6 +256,11 @@ class Reaction(Sensor):
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
+        given = [name for name in ("node", "edge") if name in data]
+        if len(given) != 1:
+            raise SceneError(f'{path}: expected either node = "BODY:INDEX" or edge = '
+                             f'"BODY:x=I" (a grid line of a rectangle body), got '
+                             f"{' and '.join(given) if given else 'neither'}")
         sensor = super().parse(data, path, context)
         allowed = ("x", "y", "z", "norm") if context.dim == 3 else \
             ("x", "y", "norm") if sensor.quantity == "force" else ("z", "norm")
@@ -262,28 +272,42 @@ class Reaction(Sensor):
                              f"{', '.join(allowed)}")
         return sensor
 
+    def targets(self) -> list[NodeRef]:
+        """The nodes whose reactions it sums."""
+        return [self.node] if self.edge is None else self.edge.refs()
+
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
-        node = model.node_index(self.node)
-        dofs = model.node_dofs(node)
-        held = (samples.a @ model.mass[:, dofs] - samples.force[:, dofs])
-        joints = samples.multipliers @ model.joints[:, dofs] if model.joints.shape[0] else \
-            np.zeros_like(held)
-        generalised = np.where(np.isin(dofs, model.free), -np.asarray(joints), held)
-        dim, names = model.dim, model.node_vectors(node)
-        per_vector = generalised.reshape(len(samples.q), len(names), dim)
-        if self.quantity == "force":
-            vector = per_vector[:, names.index("r")]
-        else:
-            vector = np.zeros((len(samples.q), 3))
-            for k, name in enumerate(names):
+        dim, k = model.dim, len(samples.q)
+        nodes = [model.node_index(ref) for ref in self.targets()]
+        vector = np.zeros((k, dim if self.quantity == "force" else 3))
+        origin = samples.q[:, model.node_dofs(nodes[0], "r")]
+        for node in nodes:
+            names = model.node_vectors(node)
+            per_vector = _constraint_force(model, samples, model.node_dofs(node)).reshape(
+                k, len(names), dim)
+            force = per_vector[:, names.index("r")]
+            if self.quantity == "force":
+                vector += force
+                continue
+            vector += _cross3(samples.q[:, model.node_dofs(node, "r")] - origin, force)
+            for index, name in enumerate(names):
                 if name != "r":
                     vector += _cross3(samples.q[:, model.node_dofs(node, name)],
-                                      per_vector[:, k])
-        if self.frame is not None:
+                                      per_vector[:, index])
+        if self.frame is not None and (self.quantity == "force" or dim == 3):
             frame = model.node_frame(samples.q, model.node_index(self.frame))
-            if self.quantity == "force" or dim == 3:
-                vector[:, :dim] = np.einsum("kji,kj->ki", frame, vector[:, :dim])
+            vector = np.einsum("kji,kj->ki", frame, vector)
         return _component(vector, self.component)
+
+
+def _constraint_force(model: ModelView, samples: Samples, dofs: np.ndarray) -> np.ndarray:
+    """(k, dofs) generalised force of the constraints on coordinates ``dofs``: M a - F where
+    they are held or prescribed, -A^T lambda where they are free."""
+    held = samples.a @ model.mass[:, dofs] - samples.force[:, dofs]
+    if not model.joints.shape[0]:
+        return np.where(np.isin(dofs, model.free), 0.0, held)
+    joints = np.asarray(samples.multipliers @ model.joints[:, dofs])
+    return np.where(np.isin(dofs, model.free), -joints, held)
 
 
 def _cross3(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
@@ -300,7 +324,14 @@ def check_reactions(sensors: tuple[Sensor, ...], constraints: tuple) -> None:
     held = {ref for c in constraints for ref in
             (c.nodes if isinstance(c, Joint) else c.targets())}
     for i, sensor in enumerate(sensors):
-        if isinstance(sensor, Reaction) and sensor.node not in held:
+        if not isinstance(sensor, Reaction):
+            continue
+        free = [ref for ref in sensor.targets() if ref not in held]
+        if free and sensor.edge is not None:
+            raise SceneError(f"sensor[{i}].edge: node {free[0]} of edge {sensor.edge} is held "
+                             f"by no clamp, pin or prescribed_rotation and in no joint; "
+                             f"expected an edge held by a [[constraint]]")
+        if free:
             raise SceneError(f"sensor[{i}].node: node {sensor.node} is held by no clamp, pin "
                              f"or prescribed_rotation and in no joint (no reaction to "
                              f"measure); expected a node of a [[constraint]]")
