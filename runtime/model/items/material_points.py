@@ -32,6 +32,7 @@ T = m.t1, M2 = m.t2, M3 = m.t3 (2D: N, Q2, M3).  For cables ``N = |r_x| E A E11`
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,6 +48,7 @@ __all__ = ["SECTION_ORDER", "Fields", "Section", "section_forces", "shear_pairs_
 #: Gauss points per cross-section axis of the section resultants (exact for the quartic
 #: integrands of the linear-section kinds)
 SECTION_ORDER = 4
+_SECTION_RULE = np.polynomial.legendre.leggauss(SECTION_ORDER)
 
 
 @dataclass(frozen=True)
@@ -119,7 +121,9 @@ def von_mises(cauchy: np.ndarray) -> np.ndarray:
 
 
 class _Tables:
-    """Shape-function tables of one body's kind at local points."""
+    """Shape-function tables of one body's kind at local points, each computed once per
+    set of points (``tables`` keeps them with the body's element), and the law's
+    coefficients."""
 
     def __init__(self, body: BodyView) -> None:
         self.body = body
@@ -127,24 +131,51 @@ class _Tables:
         self.element = body.element
         self.geometry = np.asarray(self.element.geometry, float)
         self.family = kernel_family(self.kind.name, "invariants", self.element.backend)
+        self.coefficients = {domain: np.asarray(value, float) for domain, value in
+                             self.element.law_coefficients().items()}
+        self._memo: dict[tuple[str, bytes], np.ndarray] = {}
+
+    def _table(self, name: str, points: np.ndarray, compute) -> np.ndarray:
+        key = (name, np.ascontiguousarray(points, float).tobytes())
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
 
     def values(self, points: np.ndarray) -> np.ndarray:
         """Shape values (p, n) at local points (p, dim)."""
-        return self.family("shape_values", {"point": points, "geometry": self.geometry})["values"]
+        return self._table("values", points, lambda: self.family(
+            "shape_values", {"point": points, "geometry": self.geometry})["values"])
 
     def gradients(self, points: np.ndarray) -> np.ndarray:
         """Local shape gradients ds/dx (p, n, dim)."""
-        return full_gradients(self.kind, shape_gradient_table(self.kind, self.family,
-                                                              self.geometry, points))
+        return self._table("gradients", points, lambda: full_gradients(
+            self.kind, shape_gradient_table(self.kind, self.family, self.geometry, points)))
 
     def curvatures(self, points: np.ndarray) -> np.ndarray:
         """d2s/dx2 (p, n) along the axis (cable kinds)."""
-        return self.family("shape_curvatures", {"point": points,
-                                                "geometry": self.geometry})["curvatures"]
+        return self._table("curvatures", points, lambda: self.family(
+            "shape_curvatures", {"point": points, "geometry": self.geometry})["curvatures"])
+
+    def section(self) -> tuple[float, float]:
+        """Area (m^2) and second moment (m^4) of a cable's section."""
+        area, inertia = self._table("section", np.zeros(0), lambda: self.family(
+            "section", {"geometry": self.geometry[None, :]})["section"][0])
+        return float(area), float(inertia)
 
     def nodal(self, q: np.ndarray, elements: np.ndarray) -> np.ndarray:
         """Nodal vectors (k, m, n, dim) of ``elements`` at coordinates q (k, size)."""
         return _relative(self.kind, q[:, self.body.element_dofs[elements]])
+
+
+_TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _tables_of(body: BodyView) -> _Tables:
+    """The tables of ``body`` (kept while its element lives)."""
+    found = _TABLES.get(body.element)
+    if found is None or found.body is not body:
+        found = _TABLES[body.element] = _Tables(body)
+    return found
 
 
 def _relative(kind: ElementKind, coordinates: np.ndarray) -> np.ndarray:
@@ -189,7 +220,7 @@ def strain_stress(body: BodyView, elements: np.ndarray, points: np.ndarray,
                   q: np.ndarray) -> Fields:
     """Strain and stresses (``Fields``) of ``body``'s ``elements`` (m,) at local points
     (p, dim) (m; inside the element's box) for coordinates q (k, size)."""
-    tables = _Tables(body)
+    tables = _tables_of(body)
     kind, dim = tables.kind, tables.kind.dim
     elements = np.asarray(elements, int)
     if kind.energy.structural:
@@ -197,7 +228,7 @@ def strain_stress(body: BodyView, elements: np.ndarray, points: np.ndarray,
     deformation, current, _ = _mapping(tables, q, elements, points)
     strain = _green_lagrange(deformation)
     voigt = np.zeros((*strain.shape[:-2], dim + len(shear_pairs_of(dim))))
-    for domain, coefficient in tables.element.law_coefficients().items():
+    for domain, coefficient in tables.coefficients.items():
         if not np.any(coefficient):
             continue
         moved = _law_points(kind, tables.geometry, domain, points)
@@ -213,7 +244,7 @@ def strain_stress(body: BodyView, elements: np.ndarray, points: np.ndarray,
 
 def _axial_modulus(tables: _Tables) -> float:
     """E of a cable (the E11 coefficient of its axis law, Pa)."""
-    return float(tables.element.law_coefficients()["axis"][0])
+    return float(tables.coefficients["axis"][0])
 
 
 def _cable_fields(tables: _Tables, elements: np.ndarray, points: np.ndarray,
@@ -274,13 +305,13 @@ def _cross(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
 def section_forces(body: BodyView, element: int, x: float, q: np.ndarray) -> Section:
     """Section forces (``Section``) of a beam ``body`` at local axial position ``x`` (m) of
     ``element``, for coordinates q (k, size)."""
-    tables = _Tables(body)
+    tables = _tables_of(body)
     kind, dim = tables.kind, tables.kind.dim
     elements = np.array([element])
     if kind.energy.structural:
         return _cable_section(tables, elements, x, q)
     bounds = kind.domain.bounds(tuple(tables.geometry))
-    t, w = np.polynomial.legendre.leggauss(SECTION_ORDER)
+    t, w = _SECTION_RULE
     across = [low + (t + 1) * (high - low) / 2 for low, high in bounds[1:]]
     weights = [w * (high - low) / 2 for low, high in bounds[1:]]
     grid = np.meshgrid(*across, indexing="ij")
@@ -309,7 +340,7 @@ def _cable_section(tables: _Tables, elements: np.ndarray, x: float, q: np.ndarra
     nodal = tables.nodal(q, elements)[:, 0]
     tangent = np.einsum("kna,n->ka", nodal, tables.gradients(point)[0, :, 0])
     second = np.einsum("kna,n->ka", nodal, tables.curvatures(point)[0])
-    area, inertia = tables.family("section", {"geometry": tables.geometry[None, :]})["section"][0]
+    area, inertia = tables.section()
     modulus = _axial_modulus(tables)
     stretch = np.linalg.norm(tangent, axis=1)
     unit = tangent / stretch[:, None]
