@@ -28,6 +28,8 @@ from runtime import (
     load_scene,
 )
 from runtime.app.run import run
+from runtime.model.items.sensors import Sensors
+from runtime.model.model import Model
 
 STEEL = Material("steel", E=2.1e11, nu=0.0, rho=7800.0)
 
@@ -149,3 +151,10 @@ def test_new_sensors_round_trip_through_toml_and_write_their_columns_and_units(t
     assert header.split(",") == ["t", *(s.name for s in sensors)]
     assert set(summary["static"]["sensors"]) == {s.name for s in sensors}
     assert (tmp_path / "out" / "sig.png").is_file()
+
+
+def test_sensors_needing_the_equations_of_motion_say_so_without_them():
+    model = Model(_scene([Reaction("Fy", "beam:0", "force", "y"),
+                          Acceleration("ay", "beam:-1", "y")]))
+    with pytest.raises(ValueError, match="sensors Fy, ay: need the accelerations"):
+        Sensors(model).values(model.reference)

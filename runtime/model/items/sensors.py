@@ -628,5 +628,12 @@ class Sensors:
         return {name: float(value[0]) for name, value in self.block(samples).items()}
 
     def block(self, samples: Samples) -> dict[str, np.ndarray]:
-        """{sensor name: values (k,)} over a block of output states."""
+        """{sensor name: values (k,)} over a block of output states (ValueError when a
+        sensor needs the accelerations, multipliers and forces and they are not given)."""
+        if self.dynamics and (samples.a is None or samples.force is None
+                              or samples.multipliers is None):
+            names = ", ".join(s.name for s in self.sensors if s.dynamics)
+            raise ValueError(f"sensors {names}: need the accelerations, multipliers and "
+                             f"forces of the states (Samples.a, multipliers, force: "
+                             f"runtime.solve.python_engine.OutputDynamics)")
         return {s.name: s.values(self.model, samples) for s in self.sensors}
