@@ -188,3 +188,26 @@ def test_reaction_of_a_clamped_plate_edge_is_the_resultant_of_the_line_load(engi
     np.testing.assert_allclose([values[f"moment_{c}"] for c in "xyz"],
                                [q * b**2 / 2, -q * a * b, 0.0], rtol=1e-5, atol=1e-9 * q * a * b)
     assert 0.0 < values["corner"] < q * b    # one node's share
+
+
+def test_clamp_reaction_balances_a_follower_tip_force_in_the_tip_frame():
+    # the tip force turns with the tip (follower, its components in the tip's frame): at
+    # equilibrium the clamp holds minus that force, whose components in the tip's frame are
+    # those of the load, and its moment is that of the load about the clamp
+    load = (0.0, -2e4)
+    scene = Scene(materials=[STEEL],
+                  bodies=[Body("beam", "beam2d", "steel", height=0.05, width=0.05, elements=8,
+                               start=(0.0, 0.0), end=(2.0, 0.0))],
+                  constraints=[Clamp("beam:0")],
+                  loads=[PointForce("beam:-1", load, follower=True)],
+                  sensors=[Reaction("Rx", "beam:0", "force", "x", frame="beam:-1"),
+                           Reaction("Ry", "beam:0", "force", "y", frame="beam:-1"),
+                           Reaction("R", "beam:0", "force", "norm"),
+                           Reaction("Fx_global", "beam:0", "force", "x")],
+                  static=Static(load_steps=4))
+    values = run_scene(scene, progress=False).summary["static"]["sensors"]
+    np.testing.assert_allclose([values["Rx"], values["Ry"]], [0.0, 2e4], rtol=1e-8,
+                               atol=1e-8 * 2e4)
+    np.testing.assert_allclose(values["R"], 2e4, rtol=1e-10)
+    # the tip turned down: the load (along its -t2) points back towards -x, the clamp +x
+    assert values["Fx_global"] > 100.0

@@ -21,6 +21,7 @@ from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
 from runtime.catalog import INTEGRATORS
 from runtime.kernels.kind import element_kind
+from runtime.model.dae import StateLoads
 from runtime.model.items.sensors import Samples, Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
@@ -141,6 +142,9 @@ class Simulation:
             return self.sensors.values(found.q, t=None)
         model = self.model
         force = model.internal_forces(found.q, jacobian=False)[0] + model.nominal_load()
+        followers = StateLoads(model)
+        if followers:
+            force += followers.evaluate(found.q, np.ones(len(self.scene.loads)), False)[0]
         return self.sensors.values(found.q, t=None, a=np.zeros(model.size),
                                    multipliers=found.multipliers, force=force)
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from runtime.model.dae import StateLoads
 from runtime.model.model import Model
 from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
 
@@ -39,18 +40,24 @@ class StaticResult:
 
 
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
-                  multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """Solve F_int(q) + load - A^T mu = 0, A q = 0 for the free coordinates from ``q``."""
+                  multipliers: np.ndarray, state_load=None) -> tuple[np.ndarray, np.ndarray, int]:
+    """Solve F_int(q) + load + f(q) - A^T mu = 0, A q = 0 for the free coordinates from
+    ``q``; ``state_load(q)`` gives the follower loads f (size,) and their Jacobian data
+    (``StateLoads.evaluate``; None: none), which make the matrix non-symmetric."""
     free, joints = model.free, model.joints_free
     scale = model.length_scale()
     q = q.copy()
     for iteration in range(1, settings.max_iterations + 1):
         force, data = model.internal_forces(q)
+        if state_load is not None:
+            follower, follower_data = state_load(q)
+            force, data = force + follower, data + follower_data
         residual = (force + load)[free] - joints.T @ multipliers
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")
         # J dq - A^T dmu = -R and A dq = -A q, written with the positive definite -J
-        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q))
+        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q),
+                            state_load is None)
         q[free] += step
         multipliers = multipliers + dual
         if np.abs(step).max() <= settings.tolerance * scale:
@@ -66,8 +73,14 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
     if newton is not None:     # generated code: no BLAS threads to hold back
         return _solve_static(model, settings, newton)
 
+    state_loads = StateLoads(model)
+    factors = np.ones(len(model.scene.loads))
+
     def python_newton(q, fraction, multipliers):
-        return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers)
+        follower = (lambda q: state_loads.evaluate(q, fraction * factors, True)) \
+            if state_loads else None
+        return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers,
+                             follower)
 
     with single_threaded_blas():
         return _solve_static(model, settings, python_newton)
@@ -102,11 +115,12 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
 
 
 def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
-           rhs_constraints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+           rhs_constraints: np.ndarray, symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Solve [[c J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free coordinates
     (J from ``Model.internal_forces`` data).  Without joints the matrix is banded and
-    symmetric: banded Cholesky, O(n b^2), linear in the number of elements."""
-    if model.joints.shape[0]:
+    symmetric: banded Cholesky, O(n b^2), linear in the number of elements; a non-symmetric
+    J (follower loads) goes through the general LU of ``SaddleSolver``."""
+    if model.joints.shape[0] or not symmetric:
         matrix = jacobian_coef * model.jacobian_matrix(data)
         return SaddleSolver(matrix, model.joints_free).solve(rhs, rhs_constraints)
     return solve_symmetric_banded(jacobian_coef * model.banded(data), rhs), np.zeros(0)
