@@ -1,4 +1,16 @@
-"""Static equilibrium of a model: Newton with load stepping, joints through multipliers."""
+"""Static equilibrium of a model: Newton with load stepping, joints through multipliers.
+
+Convergence is tested on the correction and on the residual (``Convergence``): the largest
+correction within ``tolerance`` times the model's length scale, and the largest residual
+within ``tolerance`` times the force scale of the iterate (the largest of the applied load,
+the internal forces and the reactions) plus the rounding floor of the residual,
+eps |K| L: near equilibrium the residual of a model of stiffness |K| (N/m) and size L (m)
+cannot fall below rounding, so a stiff model still converges in the usual number of
+iterations.  A model whose rounding noise eps |K| L is above its forces (a shear correction
+of 1e30, say: the residual is noise, not a digit of it resolved) has no equilibrium to find
+in double precision: that is an ``IllConditionedError``, a divergence that load stepping
+does not retry.
+"""
 
 from __future__ import annotations
 
@@ -9,9 +21,18 @@ import numpy as np
 from runtime.model.model import Model
 from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
 
+#: safety factor on the rounding floor eps |K| L of the residual (measured floors are
+#: 0.3 - 1 of eps |K| L on the shipped scenes)
+FLOOR_FACTOR = 10.0
+
 
 class ConvergenceError(RuntimeError):
     """Newton did not converge (the message says where and why)."""
+
+
+class IllConditionedError(ConvergenceError):
+    """The residual's rounding noise is above the forces: no equilibrium can be resolved in
+    double precision (a smaller load increment does not help)."""
 
 
 class FreeMechanismError(ValueError):
@@ -28,6 +49,74 @@ def check_held(model: Model) -> None:
             f"(add a clamp, a pin or a joint to a held body), or remove [analysis.static]")
 
 
+@dataclass(frozen=True)
+class Convergence:
+    """The convergence test of a static Newton solve of ``model`` with relative
+    ``tolerance``: corrections within ``correction`` (m), residuals within
+    ``tolerance * force_scale + floor`` (N), where ``floor = FLOOR_FACTOR eps |K| L`` is the
+    rounding floor of the residual (``stiffness`` |K| (N/m) the largest diagonal entry of the
+    tangent stiffness at the reference, ``length`` L (m) the model's length scale)."""
+
+    tolerance: float
+    correction: float
+    stiffness: float
+    length: float
+
+    @classmethod
+    def of(cls, model: Model, tolerance: float) -> Convergence:
+        """The test for ``model``: its stiffness measured once, at the reference."""
+        _, data = model.internal_forces(model.reference)
+        band = model.banded(data)
+        stiffness = float(np.abs(band[-1]).max(initial=0.0))
+        length = model.length_scale()
+        return cls(tolerance, tolerance * length, stiffness, length)
+
+    @property
+    def noise(self) -> float:
+        """The rounding noise of the residual, eps |K| L (N)."""
+        return np.finfo(float).eps * self.stiffness * self.length
+
+    @property
+    def floor(self) -> float:
+        """The rounding floor of the residual (N): ``FLOOR_FACTOR`` times its noise."""
+        return FLOOR_FACTOR * self.noise
+
+    def residual_tolerance(self, force_scale: float) -> float:
+        """The largest residual (N) accepted at an iterate of force scale ``force_scale``."""
+        return self.tolerance * force_scale + self.floor
+
+    def converged(self, correction: float, residual: float, force_scale: float) -> bool:
+        """Whether a correction (m) and the residual (N) it corrected are small enough."""
+        return (correction <= self.correction
+                and residual <= self.residual_tolerance(force_scale))
+
+    def check_resolved(self, force_scale: float) -> None:
+        """IllConditionedError when the rounding noise is above the forces (N) at a
+        converged iterate."""
+        if self.noise > force_scale:
+            raise IllConditionedError(
+                f"static: no equilibrium can be resolved in double precision: the rounding "
+                f"noise of the residual, eps x stiffness {self.stiffness:.3g} N/m x size "
+                f"{self.length:.3g} m = {self.noise:.3g} N, is above the forces "
+                f"({force_scale:.3g} N); check the materials' E and shear_correction and "
+                f"the sections")
+
+    def not_converged(self, iterations: int, correction: float, residual: float,
+                      force_scale: float) -> ConvergenceError:
+        """The error of a solve that did not converge in ``iterations``, worded identically
+        by both engines."""
+        return ConvergenceError(
+            f"static: Newton did not converge in {iterations} iterations (last step "
+            f"{correction:.3g} m, residual {residual:.3g} N against a tolerance of "
+            f"{self.residual_tolerance(force_scale):.3g} N)")
+
+
+def force_scale(force: np.ndarray, load: np.ndarray) -> float:
+    """The force scale (N) of an iterate: the largest internal force (size,), reactions at
+    held coordinates included, or applied load (free,)."""
+    return max(float(np.abs(force).max(initial=0.0)), float(np.abs(load).max(initial=0.0)))
+
+
 @dataclass
 class StaticResult:
     """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used."""
@@ -39,24 +128,30 @@ class StaticResult:
 
 
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
-                  multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """Solve F_int(q) + load - A^T mu = 0, A q = 0 for the free coordinates from ``q``."""
+                  multipliers: np.ndarray, convergence: Convergence | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, int]:
+    """Solve F_int(q) + load - A^T mu = 0, A q = 0 for the free coordinates from ``q``
+    (load (size,) N); ``convergence`` the test (default: ``Convergence.of`` the model).
+    Raises ConvergenceError, IllConditionedError."""
     free, joints = model.free, model.joints_free
-    scale = model.length_scale()
+    test = convergence or Convergence.of(model, settings.tolerance)
+    applied = load[free]
     q = q.copy()
     for iteration in range(1, settings.max_iterations + 1):
         force, data = model.internal_forces(q)
-        residual = (force + load)[free] - joints.T @ multipliers
+        residual = force[free] + applied - joints.T @ multipliers
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")
         # J dq - A^T dmu = -R and A dq = -A q, written with the positive definite -J
         step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q))
         q[free] += step
         multipliers = multipliers + dual
-        if np.abs(step).max() <= settings.tolerance * scale:
+        size, scale = float(np.abs(step).max(initial=0.0)), force_scale(force, applied)
+        remaining = float(np.abs(residual).max(initial=0.0))
+        if test.converged(size, remaining, scale):
+            test.check_resolved(scale)
             return q, multipliers, iteration
-    raise ConvergenceError(f"static: Newton did not converge in {settings.max_iterations} "
-                           f"iterations (last step {np.abs(step).max():.3g} m)")
+    raise test.not_converged(settings.max_iterations, size, remaining, scale)
 
 
 def solve_static(model: Model, settings, newton=None) -> StaticResult:
@@ -66,8 +161,11 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
     if newton is not None:     # generated code: no BLAS threads to hold back
         return _solve_static(model, settings, newton)
 
+    convergence = Convergence.of(model, settings.tolerance)
+
     def python_newton(q, fraction, multipliers):
-        return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers)
+        return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers,
+                             convergence)
 
     with single_threaded_blas():
         return _solve_static(model, settings, python_newton)
@@ -78,7 +176,8 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
-    lets the next grow again (doubling, up to the initial increment).
+    lets the next grow again (doubling, up to the initial increment).  An
+    IllConditionedError is not retried.
     """
     check_held(model)
     q = model.reference.copy()
@@ -88,6 +187,8 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
         target = min(1.0, done + increment)
         try:
             q_new, mu_new, used = newton(q, target, multipliers)
+        except IllConditionedError:
+            raise
         except ConvergenceError as error:
             increment /= 2
             if increment < 1.0 / 1024:
