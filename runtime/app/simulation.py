@@ -26,7 +26,7 @@ from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
 from runtime.model.settings import Static
 from runtime.progress import Bar, enabled, warn
-from runtime.solve import engines
+from runtime.solve import arc_length, engines
 from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
 from runtime.solve.python_engine import Divergence
@@ -63,6 +63,7 @@ class Simulation:
         self.model: Model | None = None
         self.static_q: np.ndarray | None = None
         self.modes: Modes | None = None
+        self.path: dict[str, np.ndarray] = {}   # arc length: load_factor and sensors
         self.history: dict[str, list[float]] = {}
         self._states: tuple[list, list] = ([], [])
         self._built: set[str] = set()   # modules built for this run beyond the kernels
@@ -107,8 +108,12 @@ class Simulation:
                 self.phase = "static analysis"
                 found = self._solve_static(scene.static)
                 self.static_q = found.q
-                summary.record_static(self.sensors.values(found.q, t=None), found.iterations,
-                                      found.load_steps)
+                if self.path:
+                    for observer in self.observers:
+                        observer.static_path(self.path)
+                else:
+                    summary.record_static(self.sensors.values(found.q, t=None),
+                                          found.iterations, found.load_steps)
                 for observer in self.observers:
                     observer.static(found.q)
             if scene.modal is not None:
@@ -134,7 +139,11 @@ class Simulation:
         return 0
 
     def _solve_static(self, settings) -> analysis.StaticResult:
-        """The static equilibrium with the chosen engine's Newton solve."""
+        """The static equilibrium with the chosen engine's Newton solve, or the end of the
+        arc-length path (its load factors and sensors into ``path``, the summary's static
+        record filled)."""
+        if settings.method == "arc_length":
+            return self._trace_path(settings)
         dynamic = self.scene.dynamic
         start = time.perf_counter()
         newton = engines.static_newton(self.engine_name, self.model, settings,
@@ -142,6 +151,31 @@ class Simulation:
         if newton is not None:
             self._charge_setup(newton, time.perf_counter() - start)
         return analysis.solve_static(self.model, settings, newton)
+
+    def _trace_path(self, settings) -> analysis.StaticResult:
+        """The arc-length path (``runtime.solve.arc_length``, through the Python solves
+        whatever the engine), stopped by ``settings``' load factor or sensor criterion."""
+        values = lambda q: self.sensors.values(q, t=None)  # noqa: E731
+        start = values(self.model.reference)
+        name, target = settings.stop_sensor, settings.stop_value
+
+        def stop(q: np.ndarray, load_factor: float) -> str | None:
+            if load_factor >= settings.max_load_factor:
+                return f"load factor {load_factor:.6g} >= max_load_factor"
+            if name is not None:
+                value = values(q)[name]
+                if (value - target) * (start[name] - target) <= 0.0:
+                    return f"sensor {name} = {value:.6g} passed stop_value = {target:g}"
+            return None
+
+        found = arc_length.trace_path(self.model, settings, stop)
+        rows = [values(q) for q in found.states]
+        self.path = {"load_factor": found.load_factors,
+                     **{n: np.array([row[n] for row in rows]) for n in self.sensors.names}}
+        self.summary.record_path(rows[-1], found.iterations, found.steps, found.load_factor,
+                                 len(rows), found.stopped)
+        return analysis.StaticResult(found.q, found.multipliers, found.iterations,
+                                     found.steps)
 
     def _charge_setup(self, engine, seconds: float) -> None:
         """An engine built in ``seconds`` (its generated step compiled or loaded): its
@@ -257,7 +291,7 @@ class Simulation:
             q, v = (np.array(x).reshape(-1, size) for x in self._states)
             states = States(np.asarray(self.history["t"], float), q, v)
         return Result(self.summary.to_dict(), sensors, self.static_q, self.modes, states,
-                      self.model, exit_code)
+                      self.model, exit_code, dict(self.path))
 
 
 def _observers(observers: Sequence[Observer]) -> list[Observer]:
