@@ -35,6 +35,10 @@ class IllConditionedError(ConvergenceError):
     double precision (a smaller load increment does not help)."""
 
 
+class SnapThroughError(ConvergenceError):
+    """A load increment jumped past a limit point to another branch of equilibria."""
+
+
 class FreeMechanismError(ValueError):
     """A static analysis of a model that some body can move in freely (no equilibrium to
     find): the message names the bodies and their free motions."""
@@ -177,29 +181,69 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
     lets the next grow again (doubling, up to the initial increment).  An
-    IllConditionedError is not retried.
+    IllConditionedError is not retried.  An increment that jumps past a limit point to
+    another branch (``_snapped``) fails like one that does not converge.
     """
     check_held(model)
     q = model.reference.copy()
     multipliers = np.zeros(model.joints.shape[0])
     done, increment, iterations, steps = 0.0, 1.0 / settings.load_steps, 0, 0
+    energy, snapped = _PathEnergy(model), False
     while done < 1.0 - 1e-12:
         target = min(1.0, done + increment)
         try:
             q_new, mu_new, used = newton(q, target, multipliers)
+            energy.check(q, done, q_new, target)
         except IllConditionedError:
             raise
         except ConvergenceError as error:
             increment /= 2
+            snapped = snapped or isinstance(error, SnapThroughError)
             if increment < 1.0 / 1024:
+                limit = (" (a limit point: larger increments jumped past it; "
+                         'method = "arc_length" traces the path beyond)' if snapped else "")
                 raise ConvergenceError(f"{error}; load stepping reached 1/1024 of the load at "
-                                       f"{done:.4g} of it") from None
+                                       f"{done:.4g} of it{limit}") from None
             continue
         q, multipliers, done = q_new, mu_new, target
         iterations += used
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
     return StaticResult(q, multipliers, iterations, steps)
+
+
+class _PathEnergy:
+    """The check that a load increment stayed on its branch of equilibria.
+
+    With the total potential Pi(q, lambda) = U(q) - lambda P.(q - q0) (P the nominal loads,
+    all conservative), equilibria along a path satisfy dPi/dlambda = -P.(q - q0), and on a
+    stable branch P.(q - q0) grows with lambda (its rate P K^-1 P > 0).  So an increment from
+    a to b along stable equilibria has Pi_b - Pi_a >= -(lambda_b - lambda_a) P.(q_b - q0),
+    exactly; an equilibrium below that bound was reached by jumping past a limit point
+    (the structure would snap through)."""
+
+    #: slack of the bound, relative to the energies compared (rounding, residuals)
+    SLACK = 1e-6
+
+    def __init__(self, model: Model) -> None:
+        self.model, self.pattern = model, model.nominal_load()
+
+    def check(self, q_a: np.ndarray, lam_a: float, q_b: np.ndarray, lam_b: float) -> None:
+        """ConvergenceError when the increment from (q_a, lam_a) to (q_b, lam_b) left its
+        branch."""
+        model = self.model
+        x_a, x_b = (float(self.pattern @ (q - model.reference)) for q in (q_a, q_b))
+        u_a, u_b = (float(model.strain_energy(q)) for q in (q_a, q_b))
+        drop = (u_b - lam_b * x_b) - (u_a - lam_a * x_a)
+        bound = -(lam_b - lam_a) * x_b
+        slack = self.SLACK * (abs(u_a) + abs(u_b) + abs(lam_a * x_a) + abs(lam_b * x_b))
+        if drop < bound - slack:
+            raise SnapThroughError(
+                f"static: the load increment from {lam_a:.4g} to {lam_b:.4g} of the load "
+                f"jumped past a limit point to another branch of equilibria (the total "
+                f"potential fell {bound - drop:.3g} J below what a path of stable equilibria "
+                f"allows: the structure snaps through); trace it with method = "
+                f'"arc_length"')
 
 
 def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
