@@ -29,7 +29,7 @@ from runtime.progress import Bar, enabled, warn
 from runtime.solve import arc_length, engines
 from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
-from runtime.solve.python_engine import Divergence
+from runtime.solve.python_engine import Divergence, StateLimits
 
 __all__ = ["Simulation", "requested", "run_scene"]
 
@@ -200,8 +200,35 @@ class Simulation:
 
     def _observe(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                  dissipated: np.ndarray) -> None:
-        """A block of output times (k,): states (k, size), dissipated energy (k,)."""
+        """A block of output times (k,): states (k, size), dissipated energy (k,).  Raises
+        Divergence at the first output whose state or sensors are non-finite or absurd
+        (``StateLimits``), after observing those before it."""
         values = self.sensors.block(Samples(times, q, v, dissipated))
+        insane = self._first_insane(q, v, values)
+        if insane is not None:
+            row, cause = insane
+            if row:
+                self._record(times[:row], q[:row], v[:row],
+                             {name: x[:row] for name, x in values.items()})
+            raise Divergence(float(times[row]), cause)
+        self._record(times, q, v, values)
+
+    def _first_insane(self, q: np.ndarray, v: np.ndarray, values: dict[str, np.ndarray]
+                      ) -> tuple[int, str] | None:
+        """(row, cause) of the first output of a block whose state (``StateLimits``) or
+        sensor values are not sane, or None."""
+        found = self._limits.first_insane(q, v, self.model.reference)
+        for name, value in values.items():
+            bad = ~np.isfinite(value)
+            if bad.any() and (found is None or int(np.argmax(bad)) < found[0]):
+                row = int(np.argmax(bad))
+                found = (row, f"non-finite sensor {name} ({value[row]})")
+        return found
+
+    def _record(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                values: dict[str, np.ndarray]) -> None:
+        """Sane output times (k,) with their states (k, size) and sensor values (k,) into the
+        history and to the observers."""
         # the history first: it is never behind what an observer wrote (``keep_outputs``
         # cuts it back to what they did write)
         self.history["t"].extend(times.tolist())
@@ -243,6 +270,7 @@ class Simulation:
         names = self.sensors.names
         start = time.perf_counter()
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
+        self._limits = StateLimits.of(engine.dae, settings.t_end)
         self._charge_setup(engine, time.perf_counter() - start)
         self.history = {name: [] for name in ["t", *names]}
         for observer in self.observers:
