@@ -6,7 +6,8 @@
   zero load, the inverted minimum and beyond, where load stepping stops with a named
   divergence at the limit load;
 * Lee's frame (scenes/lee_frame.toml) passes its first limit point at the published
-  P L^2 / EI = 18.5 (Schweizerhof and Wriggers 1986);
+  P L^2 / EI = 18.5 (Schweizerhof and Wriggers 1986), Da Deppo and Schmidt's deep arch
+  (scenes/deep_arch.toml) its limit point at P R^2 / EI = 8.97;
 * the path's CSV and plot, and the keys of [analysis.static].
 """
 
@@ -88,6 +89,18 @@ def test_lee_frame_passes_its_first_limit_point_at_the_published_load():
     factors = result.path["load_factor"]
     assert factors.max() == pytest.approx(18.5, rel=1.5e-2)      # 18.69: 1 % high at 20
     assert factors[-1] < factors.max() - 0.2                      # past it, going down
+
+
+def test_the_deep_arch_passes_its_limit_point_at_the_published_load():
+    # Da Deppo and Schmidt's clamped-hinged arch (scenes/deep_arch.toml), up to just past its
+    # limit point (at crown_v = -114 with 160 elements; the crown goes on down as the load
+    # falls)
+    shipped = load_scene(scenes.path("deep_arch"))
+    settings = dataclasses.replace(shipped.static, stop_value=-118.0)
+    result = run_scene(dataclasses.replace(shipped, static=settings), progress=False)
+    factors = result.path["load_factor"]
+    assert factors.max() == pytest.approx(8.97, rel=1e-2)       # 9.00 with 160 elements
+    assert factors[-1] < factors.max() - 0.1
 
 
 def test_load_stepping_stays_the_default_and_its_summary_unchanged():
