@@ -147,3 +147,11 @@ def _static_table(**keys) -> dict:
 def test_bad_arc_length_keys_name_their_path(keys, message):
     with pytest.raises(SceneError, match=message.replace("(", r"\(")):
         parse_scene(_static_table(**keys))
+
+
+def test_path_points_times_elements_are_bounded_before_anything_is_built():
+    data = _static_table(method="arc_length", max_steps=10**8)
+    data["body"][0]["elements"] = 1000
+    with pytest.raises(SceneError, match="analysis.static.max_steps: 100000000 path points of "
+                                         "1002 elements exceed the limit of 1e"):
+        parse_scene(data)
