@@ -11,7 +11,15 @@ from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
-from runtime.model.items.loads import Gravity, LineForce, PointForce, PointMoment
+from runtime.model.items.loads import (
+    DistributedForce,
+    Gravity,
+    LineForce,
+    LineMoment,
+    PointForce,
+    PointMoment,
+    Pressure,
+)
 from runtime.model.items.sensors import (
     ConstraintViolation,
     Displacement,
@@ -41,8 +49,9 @@ from runtime.model.time_laws import (
 __all__ = [
     "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
     "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
-    "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
-    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
-    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static",
-    "StrainEnergy", "Table", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
+    "DistributedForce", "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef",
+    "Output", "Pin", "PointForce", "PointMoment", "Position", "PotentialEnergy", "Pressure",
+    "Rectangle", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine", "Solver",
+    "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy", "Velocity",
+    "Weld", "load_scene", "run_scene",
 ]

@@ -155,3 +155,16 @@ def test_path_points_times_elements_are_bounded_before_anything_is_built():
     with pytest.raises(SceneError, match="analysis.static.max_steps: 100000000 path points of "
                                          "1002 elements exceed the limit of 1e"):
         parse_scene(data)
+
+
+def test_arc_length_with_a_follower_moment_follows_the_roll_up_circles():
+    # scenes/rollup.toml (M = 2 pi EI / L, following) by arc length: at load factor lambda
+    # the beam is a circular arc of angle 2 pi lambda, the tip at
+    # L (sin(2 pi lambda), 1 - cos(2 pi lambda)) / (2 pi lambda)
+    shipped = load_scene(scenes.path("rollup"))
+    settings = Static(method="arc_length", load_steps=10, max_steps=200)
+    result = run_scene(dataclasses.replace(shipped, static=settings), progress=False)
+    assert result.status == "ok" and result.summary["static"]["load_factor"] >= 1.0
+    turn = 2 * math.pi * result.path["load_factor"][1:]
+    np.testing.assert_allclose(result.path["tip_x"][1:], np.sin(turn) / turn, atol=5e-3)
+    np.testing.assert_allclose(result.path["tip_y"][1:], (1 - np.cos(turn)) / turn, atol=5e-3)

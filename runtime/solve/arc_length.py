@@ -1,7 +1,8 @@
 """Static equilibrium paths through limit points: Crisfield's cylindrical arc length.
 
 The load factor lambda is an unknown beside the free coordinates: equilibrium
-F_int(q) + lambda P - A^T mu = 0, A q = 0 (P the loads at their nominal values), and each
+F_int(q) + lambda P(q) - A^T mu = 0, A q = 0 (P the loads at their nominal values, follower
+loads at their current direction: ``runtime.model.dae.StateLoads``), and each
 step of the path moves a fixed length ``dl`` (m) over the free coordinates from the last
 converged point, |Delta q| = dl.  Every Newton iteration makes the two solves of the load
 stepping's Newton through ``runtime.solve.static._solve`` (the residual's correction dq_R
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from runtime.model.dae import StateLoads
 from runtime.model.model import Model
 from runtime.solve.linear import single_threaded_blas
 from runtime.solve.static import (
@@ -84,24 +86,40 @@ class _PathTracer:
     def __init__(self, model: Model, settings) -> None:
         self.model, self.settings = model, settings
         self.convergence = Convergence.of(model, settings.tolerance)
-        self.pattern = model.nominal_load()[model.free]
-        if not np.any(self.pattern):
+        self.nominal = model.nominal_load()[model.free]
+        self.followers = StateLoads(model)
+        self.unit = np.ones(len(model.scene.loads))
+        if not np.any(self.nominal) and not self.followers:
             raise ConvergenceError("static: arc length needs a load (every load is zero): "
                                    "the path of lambda times no load is the reference")
         self.no_constraint = np.zeros(model.joints.shape[0])
 
-    def _tangent(self, data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _linearise(self, q: np.ndarray, lam: float):
+        """(internal + follower forces (size,), their Jacobian data, the load pattern P(q)
+        (free,): the loads at unit factor, followers included) at (q, lambda)."""
+        force, data = self.model.internal_forces(q)
+        if not self.followers:
+            return force, data, self.nominal
+        follower, follower_data = self.followers.evaluate(q, self.unit, True)
+        return (force + lam * follower, data + lam * follower_data,
+                self.nominal + follower[self.model.free])
+
+    def _tangent(self, data: np.ndarray, pattern: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(dq_P, dmu_P): the free coordinates' and multipliers' rates per unit load factor
-        at an iterate of Jacobian ``data``."""
-        return _solve(self.model, -1.0, data, self.pattern, self.no_constraint)
+        at an iterate of Jacobian ``data`` and load pattern ``pattern``."""
+        return self._solve(data, pattern, self.no_constraint)
+
+    def _solve(self, data: np.ndarray, rhs: np.ndarray, rhs_constraints: np.ndarray):
+        """The load stepping's linear solve (non-symmetric with follower loads)."""
+        return _solve(self.model, -1.0, data, rhs, rhs_constraints, not self.followers)
 
     def trace(self, stop) -> PathResult:
         model, settings = self.model, self.settings
         q = model.reference.copy()
         mu = np.zeros(model.joints.shape[0])
         lam = 0.0
-        _, data = model.internal_forces(q)
-        first = settings.arc_length or (float(np.linalg.norm(self._tangent(data)[0]))
+        _, data, pattern = self._linearise(q, lam)
+        first = settings.arc_length or (float(np.linalg.norm(self._tangent(data, pattern)[0]))
                                         / settings.load_steps)
         length, previous = first, None
         factors, states = [0.0], [q.copy()]
@@ -137,24 +155,23 @@ class _PathTracer:
         """One step of length ``length`` from the converged point (q, mu, lam): (q, mu,
         lam, Delta q over the free coordinates, iterations).  Raises _Failed,
         ConvergenceError."""
-        model, test, pattern = self.model, self.convergence, self.pattern
+        model, test = self.model, self.convergence
         free, joints = model.free, model.joints_free
-        _, data = model.internal_forces(q)
-        rate, rate_mu = self._tangent(data)
+        _, data, pattern = self._linearise(q, lam)
+        rate, rate_mu = self._tangent(data, pattern)
         direction = 1.0 if previous is None or previous @ rate >= 0.0 else -1.0
         d_lam = direction * length / np.linalg.norm(rate)
         increment = d_lam * rate
         q, mu, lam = q.copy(), mu + d_lam * rate_mu, lam + d_lam
         q[free] += increment
         for iteration in range(1, self.settings.max_iterations + 1):
-            force, data = model.internal_forces(q)
-            applied = lam * pattern
+            force, data, pattern = self._linearise(q, lam)
+            applied = lam * self.nominal
             residual = force[free] + applied - joints.T @ mu
             if not np.all(np.isfinite(residual)):
                 raise ConvergenceError("static: non-finite residual")
-            correction, correction_mu = _solve(model, -1.0, data, residual,
-                                               -(model.joints @ q))
-            rate, rate_mu = self._tangent(data)
+            correction, correction_mu = self._solve(data, residual, -(model.joints @ q))
+            rate, rate_mu = self._tangent(data, pattern)
             d_lam = self._root(increment, correction, rate, length)
             step = correction + d_lam * rate
             increment = increment + step

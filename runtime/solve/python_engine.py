@@ -25,7 +25,7 @@ from runtime import catalog
 from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
-from runtime.solve.linear import SchurSolver, single_threaded_blas
+from runtime.solve.linear import SaddleSolver, SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
 #: the previous one (the same rule in both engines).
@@ -155,9 +155,12 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
-    force, _, _ = dae.internal_forces(dae.full_coordinates(q, qp), dae.full_velocities(v, vp),
-                                      jacobian=False)
-    force = force[dae.free] + dae.load_factors([t])[0] @ dae.load_vectors
+    q_full = dae.full_coordinates(q, qp)
+    force, _, _ = dae.internal_forces(q_full, dae.full_velocities(v, vp), jacobian=False)
+    factors = dae.load_factors([t])[0]
+    force = force[dae.free] + factors @ dae.load_vectors
+    if dae.state_loads:
+        force += dae.state_loads.evaluate(q_full, factors, False)[0][dae.free]
     solver = SchurSolver(dae.mass_band, dae.joints_free)
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
@@ -179,7 +182,8 @@ class Integrator:
         #: seconds in steps, in element kernels and in factorisations (as the compiled engine)
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         self.scale = self.dae.scale
-        self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
+        # kept across iterations (modified Newton)
+        self._solver: SchurSolver | SaddleSolver | None = None
         self._refresh = True
 
     # --- pieces of a Newton iteration --------------------------------------------------
@@ -190,10 +194,16 @@ class Integrator:
         velocities v, and the Jacobian data (d/dq, d/dv or None) or None."""
         dae = self.dae
         qp, vp, _ = prescribed
-        force, data, data_dot = dae.internal_forces(
-            dae.full_coordinates(q, qp), dae.full_velocities(v, vp), jacobian)
+        q_full = dae.full_coordinates(q, qp)
+        force, data, data_dot = dae.internal_forces(q_full, dae.full_velocities(v, vp),
+                                                    jacobian)
         self.counters.force_evaluations += 1
         total = force[dae.free] + loads @ dae.load_vectors
+        if dae.state_loads:     # follower loads: their force and load stiffness
+            state_force, state_data = dae.state_loads.evaluate(q_full, loads, jacobian)
+            total += state_force[dae.free]
+            if jacobian:
+                data = data + state_data
         if not np.all(np.isfinite(total)):
             raise Divergence(t, NON_FINITE)
         if jacobian:
@@ -222,14 +232,9 @@ class Integrator:
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
         self.counters.newton_iterations += 1
         if rebuild:
-            mass_coef, jacobian_coef, damping_coef = coefficients
-            model = self.dae.model
-            band = jacobian_coef * model.banded(data) + mass_coef * self.dae.mass_band
-            if data_dot is not None:
-                band += damping_coef * model.banded(data_dot)
             start = time.perf_counter()
             try:
-                self._solver = SchurSolver(band, self.dae.joints_free)
+                self._solver = self._factorise(coefficients, data, data_dot)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
@@ -238,6 +243,24 @@ class Integrator:
             self._refresh = False
         return self._solver.solve(-residual_of(force), None if constraint is None
                                   else -constraint)
+
+    def _factorise(self, coefficients: tuple[float, float, float], data: np.ndarray,
+                   data_dot: np.ndarray | None):
+        """Factorisation of S = c_m M + c_q dF/dq + c_v dF/dv with the joints: banded
+        (Cholesky or LU) when S is symmetric, a general sparse or dense LU of the saddle
+        point otherwise (follower loads)."""
+        mass_coef, jacobian_coef, damping_coef = coefficients
+        dae = self.dae
+        model = dae.model
+        if not dae.symmetric:
+            matrix = jacobian_coef * model.jacobian_matrix(data) + mass_coef * dae.mass_ff
+            if data_dot is not None:
+                matrix = matrix + damping_coef * model.jacobian_matrix(data_dot)
+            return SaddleSolver(matrix, dae.joints_free)
+        band = jacobian_coef * model.banded(data) + mass_coef * dae.mass_band
+        if data_dot is not None:
+            band += damping_coef * model.banded(data_dot)
+        return SchurSolver(band, dae.joints_free)
 
     def dissipation(self, previous: State, q: np.ndarray, v: np.ndarray, prescribed,
                     h: float) -> dict:

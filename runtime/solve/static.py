@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from runtime.model.dae import StateLoads
 from runtime.model.model import Model
 from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
 
@@ -132,10 +133,12 @@ class StaticResult:
 
 
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
-                  multipliers: np.ndarray, convergence: Convergence | None = None
-                  ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Solve F_int(q) + load - A^T mu = 0, A q = 0 for the free coordinates from ``q``
-    (load (size,) N); ``convergence`` the test (default: ``Convergence.of`` the model).
+                  multipliers: np.ndarray, convergence: Convergence | None = None,
+                  state_load=None) -> tuple[np.ndarray, np.ndarray, int]:
+    """Solve F_int(q) + load + f(q) - A^T mu = 0, A q = 0 for the free coordinates from
+    ``q`` (load (size,) N); ``convergence`` the test (default: ``Convergence.of`` the
+    model); ``state_load(q)`` gives the follower loads f (size,) and their Jacobian data
+    (``StateLoads.evaluate``; None: none), which make the matrix non-symmetric.
     Raises ConvergenceError, IllConditionedError."""
     free, joints = model.free, model.joints_free
     test = convergence or Convergence.of(model, settings.tolerance)
@@ -143,11 +146,15 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
     q = q.copy()
     for iteration in range(1, settings.max_iterations + 1):
         force, data = model.internal_forces(q)
+        if state_load is not None:
+            follower, follower_data = state_load(q)
+            force, data = force + follower, data + follower_data
         residual = force[free] + applied - joints.T @ multipliers
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")
         # J dq - A^T dmu = -R and A dq = -A q, written with the positive definite -J
-        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q))
+        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q),
+                            state_load is None)
         q[free] += step
         multipliers = multipliers + dual
         size, scale = float(np.abs(step).max(initial=0.0)), force_scale(force, applied)
@@ -166,10 +173,14 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
         return _solve_static(model, settings, newton)
 
     convergence = Convergence.of(model, settings.tolerance)
+    state_loads = StateLoads(model)
+    factors = np.ones(len(model.scene.loads))
 
     def python_newton(q, fraction, multipliers):
+        follower = (lambda q: state_loads.evaluate(q, fraction * factors, True)) \
+            if state_loads else None
         return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers,
-                             convergence)
+                             convergence, follower)
 
     with single_threaded_blas():
         return _solve_static(model, settings, python_newton)
@@ -220,17 +231,21 @@ class _PathEnergy:
     stable branch P.(q - q0) grows with lambda (its rate P K^-1 P > 0).  So an increment from
     a to b along stable equilibria has Pi_b - Pi_a >= -(lambda_b - lambda_a) P.(q_b - q0),
     exactly; an equilibrium below that bound was reached by jumping past a limit point
-    (the structure would snap through)."""
+    (the structure would snap through).  Follower loads are not conservative (no potential):
+    with them the check is not made."""
 
     #: slack of the bound, relative to the energies compared (rounding, residuals)
     SLACK = 1e-6
 
     def __init__(self, model: Model) -> None:
         self.model, self.pattern = model, model.nominal_load()
+        self.conservative = not StateLoads(model)
 
     def check(self, q_a: np.ndarray, lam_a: float, q_b: np.ndarray, lam_b: float) -> None:
         """ConvergenceError when the increment from (q_a, lam_a) to (q_b, lam_b) left its
         branch."""
+        if not self.conservative:
+            return
         model = self.model
         x_a, x_b = (float(self.pattern @ (q - model.reference)) for q in (q_a, q_b))
         u_a, u_b = (float(model.strain_energy(q)) for q in (q_a, q_b))
@@ -247,11 +262,12 @@ class _PathEnergy:
 
 
 def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
-           rhs_constraints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+           rhs_constraints: np.ndarray, symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Solve [[c J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free coordinates
     (J from ``Model.internal_forces`` data).  Without joints the matrix is banded and
-    symmetric: banded Cholesky, O(n b^2), linear in the number of elements."""
-    if model.joints.shape[0]:
+    symmetric: banded Cholesky, O(n b^2), linear in the number of elements; a non-symmetric
+    J (follower loads) goes through the general LU of ``SaddleSolver``."""
+    if model.joints.shape[0] or not symmetric:
         matrix = jacobian_coef * model.jacobian_matrix(data)
         return SaddleSolver(matrix, model.joints_free).solve(rhs, rhs_constraints)
     return solve_symmetric_banded(jacobian_coef * model.banded(data), rhs), np.zeros(0)
