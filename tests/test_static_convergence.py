@@ -31,6 +31,7 @@ def _solve(scene, engine: str):
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("E, force", [(STEEL.E, 10.0),        # stiff: 2.1e11 Pa
                                       (STEEL.E, 1e-4),        # stiff, a tiny load
+                                      (STEEL.E, 1e-7),        # strains of 200 eps
                                       (2.1e2, 1e-8)])         # soft: 2.1e2 Pa
 def test_stiff_and_soft_models_converge_to_beam_theory_in_the_usual_iterations(engine, E,
                                                                                 force):

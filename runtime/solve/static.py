@@ -6,8 +6,10 @@ within ``tolerance`` times the force scale of the iterate (the largest of the ap
 the internal forces and the reactions) plus the rounding floor of the residual,
 eps |K| L: near equilibrium the residual of a model of stiffness |K| (N/m) and size L (m)
 cannot fall below rounding, so a stiff model still converges in the usual number of
-iterations.  A model whose rounding noise eps |K| L is above its forces (a shear correction
-of 1e30, say: the residual is noise, not a digit of it resolved) has no equilibrium to find
+iterations.  A model whose rounding noise eps |K| L is over ``NOISE_LIMIT`` times its forces
+(a shear correction of 1e30, say: the residual is noise, not a digit of it resolved; a tiny
+load on a stiff model, whose noise is in its stiff axial modes, is not) has no equilibrium
+to find
 in double precision: that is an ``IllConditionedError``, a divergence that load stepping
 does not retry.
 """
@@ -22,6 +24,8 @@ from runtime.model.dae import StateLoads
 from runtime.model.model import Model
 from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
 
+#: rounding noise over this many times the forces: nothing of the equilibrium is resolved
+NOISE_LIMIT = 1e3
 #: safety factor on the rounding floor eps |K| L of the residual (measured floors are
 #: 0.3 - 1 of eps |K| L on the shipped scenes)
 FLOOR_FACTOR = 10.0
@@ -32,7 +36,7 @@ class ConvergenceError(RuntimeError):
 
 
 class IllConditionedError(ConvergenceError):
-    """The residual's rounding noise is above the forces: no equilibrium can be resolved in
+    """The residual's rounding noise is far above the forces: no equilibrium can be resolved in
     double precision (a smaller load increment does not help)."""
 
 
@@ -96,13 +100,14 @@ class Convergence:
                 and residual <= self.residual_tolerance(force_scale))
 
     def check_resolved(self, force_scale: float) -> None:
-        """IllConditionedError when the rounding noise is above the forces (N) at a
-        converged iterate."""
-        if self.noise > force_scale:
+        """IllConditionedError when the rounding noise is over ``NOISE_LIMIT`` times the
+        forces (N) at a converged iterate."""
+        if self.noise > NOISE_LIMIT * force_scale:
             raise IllConditionedError(
                 f"static: no equilibrium can be resolved in double precision: the rounding "
                 f"noise of the residual, eps x stiffness {self.stiffness:.3g} N/m x size "
-                f"{self.length:.3g} m = {self.noise:.3g} N, is above the forces "
+                f"{self.length:.3g} m = {self.noise:.3g} N, is over {NOISE_LIMIT:g} times the "
+                f"forces "
                 f"({force_scale:.3g} N); check the materials' E and shear_correction and "
                 f"the sections")
 
