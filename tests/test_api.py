@@ -25,12 +25,14 @@ from runtime import (
     CosineRamp,
     Displacement,
     DissipatedEnergy,
+    DistributedForce,
     Dynamic,
     Gravity,
     Hub,
     KineticEnergy,
     LinearRamp,
     LineForce,
+    LineMoment,
     Material,
     Modal,
     NodeRef,
@@ -40,6 +42,7 @@ from runtime import (
     PointMoment,
     Position,
     PotentialEnergy,
+    Pressure,
     Rectangle,
     Revolute,
     Scene,
@@ -229,7 +232,8 @@ def test_unknown_types_are_errors_listing_the_registry():
     data["load"][0]["type"] = "moment"
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
-                       'point_force, point_moment, gravity, line_force')
+                       'point_force, point_moment, gravity, line_force, line_moment, pressure, '
+                       'distributed_force')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -239,7 +243,8 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld"]
-    assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force"]
+    assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
+                           "line_moment", "pressure", "distributed_force"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
@@ -406,7 +411,12 @@ def random_scene(rng: random.Random) -> Scene:
                      else [line * columns + i for i in range(columns)]):
             held[("sheet", node)] = type(constraints[-1])
         other = {"x=0": "x=-1", "x=-1": "x=0", "y=0": "y=-1", "y=-1": "y=0"}[edge]
-        loads_on_plate = [LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3))]
+        loads_on_plate = [rng.choice([
+            LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3),
+                      follower=rng.random() < 0.5),
+            LineMoment(edge=f"sheet:{other}", moment_per_length=_vector(rng, 3),
+                       follower=rng.random() < 0.5),
+            Pressure(body="sheet", pressure=_number(rng, -1e3, 1e3))])]
     for body in chain:            # pins on interior nodes
         for index in range(1, body.n_nodes - 1):
             if rng.random() < 0.2:
@@ -420,10 +430,17 @@ def random_scene(rng: random.Random) -> Scene:
         holder = held.get((body.name, index))
         law = _law(rng) if rng.random() < 0.5 else Constant()
         options = [Gravity(_vector(rng, dim, 10), time_law=law)]
+        vectors = element_kind(body.element).vectors
+        # a follower load needs a frame: gradients enough to span one (not a 3D cable's)
+        framed = len(vectors) - 1 >= dim - 1
         if holder is None:
             options.append(PointForce(f"{body.name}:{index - body.n_nodes}",
-                                      _vector(rng, dim, 100), time_law=law))
-        vectors = element_kind(body.element).vectors
+                                      _vector(rng, dim, 100), time_law=law,
+                                      follower=framed and rng.random() < 0.3))
+        if body is not plate:
+            options.append(DistributedForce(body=body.name, force_per_length=_vector(rng, dim),
+                                            follower=framed and rng.random() < 0.5,
+                                            time_law=law))
         if holder in (None, Pin) and ("r_y" in vectors or (dim == 2 and "r_x" in vectors)):
             options.append(PointMoment(NodeRef(body.name, index), _rotation(rng, dim),
                                        time_law=law))
