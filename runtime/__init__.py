@@ -11,16 +11,29 @@ from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
-from runtime.model.items.loads import Gravity, LineForce, PointForce, PointMoment
+from runtime.model.items.loads import (
+    DistributedForce,
+    Gravity,
+    LineForce,
+    LineMoment,
+    PointForce,
+    PointMoment,
+    Pressure,
+)
 from runtime.model.items.sensors import (
+    Acceleration,
     ConstraintViolation,
     Displacement,
     DissipatedEnergy,
     KineticEnergy,
     Position,
     PotentialEnergy,
+    Reaction,
+    SectionForce,
     Sensor,
+    Strain,
     StrainEnergy,
+    Stress,
     TotalEnergy,
     Velocity,
 )
@@ -39,10 +52,12 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
-    "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
-    "LineForce", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce",
-    "PointMoment", "Position", "PotentialEnergy", "Rectangle", "Result", "Revolute", "Scene",
-    "SceneError", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "Static",
-    "StrainEnergy", "Table", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
+    "Acceleration", "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
+    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
+    "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment", "LinearRamp", "Material",
+    "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment", "Position",
+    "PotentialEnergy", "Pressure", "Reaction", "Rectangle", "Result", "Revolute", "Scene",
+    "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
+    "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy", "Velocity", "Weld",
+    "load_scene", "run_scene",
 ]

@@ -7,9 +7,12 @@
 ``q_p`` the prescribed coordinates (hub rotations: known values, rates and accelerations
 at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values).
 ``F`` is the elastic force of the element groups plus the external loads, each a constant
-vector times a time law.  A ``DAESystem`` is built once from a ``Model`` and holds only
-arrays and the element groups; the Python engine (``runtime.solve.python_engine``) and the
-compiled engine (``runtime.solve.compiled_engine``) both consume it, nothing else of the model.
+vector times a time law, or a state-dependent generalised force f(q) (follower loads,
+``StateLoads``) times its time law, whose exact Jacobian joins the elastic one in the CSR
+pattern of ``Model.pattern`` (non-symmetric: ``DAESystem.symmetric`` is then False).
+A ``DAESystem`` is built once from a ``Model`` and holds only arrays and the element groups;
+the Python engine (``runtime.solve.python_engine``) and the compiled engine
+(``runtime.solve.compiled_engine``) both consume it, nothing else of the model.
 """
 
 from __future__ import annotations
@@ -76,6 +79,9 @@ class DAESystem:
         self.load_laws = [law for law, _ in loads]
         self.load_vectors = (np.array([vector[self.free] for _, vector in loads])
                              if loads else np.zeros((0, self.free.size)))
+        self.state_loads = StateLoads(model)
+        #: whether the iteration matrices are symmetric (no follower load)
+        self.symmetric = not self.state_loads
         self.hubs = [self._hub(node, law, axis) for node, law, axis in model.hubs]
         # initial velocities of the free coordinates (m/s; the model's initial conditions)
         self.initial_velocity = model.initial_velocities()[self.free]
@@ -169,6 +175,56 @@ class DAESystem:
         v_full[..., self.free] = v_free
         v_full[..., self.prescribed] = v_prescribed
         return v_full
+
+
+class StateLoads:
+    """The loads of a model that depend on its coordinates (``Load.follows``): their
+    generalised forces f(q) and Jacobians df/dq, each scaled by its load factor, assembled
+    over the whole model (force (size,)) and into the free-free CSR pattern of the model's
+    elastic Jacobian (``Model.pattern``: a load acts within an element's coordinates or a
+    node's, which the pattern holds).  ``len`` is the number of such loads."""
+
+    def __init__(self, model: Model) -> None:
+        self.size, self.nnz = model.size, model.pattern.nnz
+        #: (index among the scene's loads, state force, slots (m, k, k) of the Jacobian
+        #: entries in the pattern, -1 where a coordinate is not free)
+        self.loads = []
+        position = np.full(model.size, -1, np.int64)
+        position[model.free] = np.arange(model.free.size)
+        pattern = model.pattern
+        nf = model.free.size
+        keys = (np.repeat(np.arange(nf), np.diff(pattern.indptr)).astype(np.int64) * nf
+                + pattern.indices)
+        for index, load in enumerate(model.scene.loads):
+            if not load.follows:
+                continue
+            evaluate = load.state_force(model)
+            dofs = evaluate.maps.dofs
+            rows, cols = position[dofs][:, :, None], position[dofs][:, None, :]
+            flat = rows * nf + cols
+            slots = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
+            inside = (rows >= 0) & (cols >= 0)
+            if keys.size and not np.all(keys[slots[inside]] == flat[inside]):
+                raise AssertionError("a follower load acts outside the Jacobian pattern")
+            self.loads.append((index, evaluate, np.where(inside, slots, -1)))
+
+    def __len__(self) -> int:
+        return len(self.loads)
+
+    def evaluate(self, q_full: np.ndarray, factors: np.ndarray, jacobian: bool):
+        """Force (size,) in N and, if asked, the Jacobian data (pattern nnz,) at coordinates
+        q_full (size,) with the load factors of every scene load ``factors`` (loads,)."""
+        force = np.zeros(self.size)
+        data = np.zeros(self.nnz) if jacobian else None
+        for index, evaluate, slots in self.loads:
+            factor = factors[index]
+            patches = evaluate(q_full, jacobian)
+            force += np.bincount(patches.dofs.ravel(), factor * patches.force.ravel(),
+                                 self.size)
+            if jacobian:
+                keep = slots >= 0
+                data += np.bincount(slots[keep], factor * patches.jacobian[keep], self.nnz)
+        return force, data
 
 
 def rotations(dim: int, axis: np.ndarray, theta: np.ndarray):

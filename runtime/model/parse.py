@@ -24,6 +24,7 @@ from runtime.catalog import (
     INTEGRATORS,
     METHODS,
     NEWTON_MODES,
+    STATIC_METHODS,
     generated_kinds,
     material_laws,
 )
@@ -33,7 +34,7 @@ from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.sensors import SENSORS, Sensor
+from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
 from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
     HINTS,
@@ -285,10 +286,32 @@ def _tolerance(value: Any, path: str) -> float:
     return tolerance
 
 
-def _static(data: Any) -> Static:
-    return Static(**_table_fields(data, "analysis.static", {
+def _static(data: Any, sensors: list[Sensor]) -> Static:
+    path = "analysis.static"
+    fields = _table_fields(data, path, {
         "max_iterations": _iterations, "tolerance": _tolerance,
-        "load_steps": lambda v, p: count(v, p, LIMITS["steps"], " load increments")}))
+        "load_steps": lambda v, p: count(v, p, LIMITS["steps"], " load increments"),
+        "method": lambda v, p: choice(v, p, STATIC_METHODS, "static method"),
+        "arc_length": lambda v, p: number(v, p, positive=True),
+        "max_steps": lambda v, p: count(v, p, LIMITS["steps"], " path points"),
+        "max_load_factor": lambda v, p: number(v, p, positive=True),
+        "stop_sensor": string, "stop_value": number})
+    arc_keys = sorted(set(fields) & {"arc_length", "max_steps", "max_load_factor",
+                                     "stop_sensor", "stop_value"})
+    if arc_keys and fields.get("method") != "arc_length":
+        raise SceneError(f'{path}.{arc_keys[0]}: only meaningful with method = "arc_length"; '
+                         f'add it or remove {arc_keys[0]}')
+    if ("stop_sensor" in fields) != ("stop_value" in fields):
+        given, missing = (("stop_sensor", "stop_value") if "stop_sensor" in fields
+                          else ("stop_value", "stop_sensor"))
+        raise SceneError(f"{path}.{missing}: expected with {given} (the path stops when "
+                         f"sensor stop_sensor passes stop_value)")
+    names = [s.name for s in sensors]
+    if "stop_sensor" in fields and fields["stop_sensor"] not in names:
+        expected = f"one of {', '.join(names)}" if names else "a [[sensor]] name (none defined)"
+        raise SceneError(f"{path}.stop_sensor: no sensor called {show(fields['stop_sensor'])}; "
+                         f"expected {expected}")
+    return Static(**fields)
 
 
 def _modal(data: Any) -> Modal:
@@ -427,9 +450,10 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
             raise SceneError(f"sensor[{i}].name: duplicate sensor name {show(sensor.name)}"
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
+    check_reactions(tuple(sensors), constraints)
 
     analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
-    static = _static(analysis["static"]) if "static" in analysis else None
+    static = _static(analysis["static"], sensors) if "static" in analysis else None
     modal = _modal(analysis["modal"]) if "modal" in analysis else None
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
     if dynamic is not None and dynamic.frequency_of is not None:

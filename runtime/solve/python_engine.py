@@ -25,7 +25,7 @@ from runtime import catalog
 from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
-from runtime.solve.linear import SchurSolver, single_threaded_blas
+from runtime.solve.linear import SaddleSolver, SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
 #: the previous one (the same rule in both engines).
@@ -72,6 +72,63 @@ def newton_not_converged(iterations: int, correction: float) -> str:
 NON_FINITE = "non-finite forces (the state blew up)"
 SINGULAR = "singular iteration matrix"
 
+#: a state this many times beyond what the scene can reach (``StateLimits``) is a blow-up
+ABSURD = 1e6
+#: time samples of the laws when their peaks are estimated
+LAW_SAMPLES = 10_001
+
+
+@dataclass(frozen=True)
+class StateLimits:
+    """The largest sane displacement (m) and velocity (m/s, 1/s for gradients) of any
+    coordinate in a dynamic run: ``ABSURD`` times what the scene can reach by ``t_end``.
+
+    The reach is the model's length scale L plus what its fastest initial or prescribed
+    motion v0 (rigid rates times L) and the largest acceleration its loads can give a node,
+    a = sum of the loads' peak forces / the smallest nodal mass, cover:
+    L + v0 t + a t^2 / 2 (velocities: L / t + v0 + a t).  A state beyond it (or non-finite)
+    is a divergence, whatever the engine."""
+
+    displacement: float
+    velocity: float
+
+    @classmethod
+    def of(cls, dae: DAESystem, t_end: float) -> StateLimits:
+        """The limits of a run of ``dae`` to ``t_end`` (s)."""
+        model = dae.model
+        length = model.length_scale()
+        times = np.linspace(0.0, t_end, LAW_SAMPLES)
+        rates = np.abs(dae.prescribed_motion(times)[1]).max(initial=0.0)
+        speed = float(np.abs(model.initial_velocities()).max(initial=0.0)) + rates * length
+        peaks = np.abs(dae.load_factors(times)).max(axis=0, initial=0.0)
+        force = float(sum(peak * np.abs(vector).max(initial=0.0) for peak, vector in
+                          zip(peaks, dae.load_vectors, strict=True)))
+        masses = model.mass.diagonal()[model.position_dofs().ravel()]
+        acceleration = force / float(masses[masses > 0].min(initial=np.inf))
+        return cls(ABSURD * (length + speed * t_end + acceleration * t_end**2 / 2),
+                   ABSURD * (length / t_end + speed + acceleration * t_end))
+
+    def first_insane(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray
+                     ) -> tuple[int, str] | None:
+        """(row, cause) of the first state of a block (k, size) that is non-finite or
+        beyond the limits, or None (vectorised over the block)."""
+        finite = np.isfinite(q).all(axis=1) & np.isfinite(v).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            displacement = np.abs(q - reference).max(axis=1, initial=0.0)
+            velocity = np.abs(v).max(axis=1, initial=0.0)
+        bad = ~finite | (displacement > self.displacement) | (velocity > self.velocity)
+        if not bad.any():
+            return None
+        row = int(np.argmax(bad))
+        if not finite[row]:
+            return row, "non-finite state (the state blew up)"
+        if displacement[row] > self.displacement:
+            return row, (f"absurd displacement {displacement[row]:.3g} m (over "
+                         f"{self.displacement:.3g} m, {ABSURD:g} times what the scene can "
+                         f"reach; the state blew up)")
+        return row, (f"absurd velocity {velocity[row]:.3g} m/s (over {self.velocity:.3g} "
+                     f"m/s, {ABSURD:g} times what the scene can reach; the state blew up)")
+
 
 def one_by_one(observe, model: Model):
     """An ``observe_block`` that hands each output time of a block to ``observe(t, q, v)``
@@ -98,13 +155,52 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
-    force, _, _ = dae.internal_forces(dae.full_coordinates(q, qp), dae.full_velocities(v, vp),
-                                      jacobian=False)
-    force = force[dae.free] + dae.load_factors([t])[0] @ dae.load_vectors
+    q_full = dae.full_coordinates(q, qp)
+    force, _, _ = dae.internal_forces(q_full, dae.full_velocities(v, vp), jacobian=False)
+    factors = dae.load_factors([t])[0]
+    force = force[dae.free] + factors @ dae.load_vectors
+    if dae.state_loads:
+        force += dae.state_loads.evaluate(q_full, factors, False)[0][dae.free]
     solver = SchurSolver(dae.mass_band, dae.joints_free)
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
+
+
+class OutputDynamics:
+    """The equations of motion at output states, for the sensors that need them
+    (accelerations, reactions): ``M_ff a + A_f^T lambda = F_free - M_fp a_p`` with
+    ``A_f a = -A_p a_p``, solved at each state of a block (the consistent accelerations of
+    its positions and velocities, as ``initial_state`` solves them at t = 0; F with the
+    follower loads at the state).  Both engines' output states go through it, so their
+    sensors differ only as their states do."""
+
+    def __init__(self, dae: DAESystem) -> None:
+        self.dae = dae
+        self.solver = SchurSolver(dae.mass_band, dae.joints_free)
+        loads = dae.model.nominal_loads()
+        self.load_vectors = (np.array([vector for _, vector in loads]) if loads
+                             else np.zeros((0, dae.size)))
+
+    def __call__(self, times: np.ndarray, q_full: np.ndarray,
+                 v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
+        the states (k, size) of the output times (k,) (s)."""
+        dae = self.dae
+        _, _, ap = dae.prescribed_motion(times)
+        factors = dae.load_factors(times)
+        force = factors @ self.load_vectors
+        for row in range(len(times)):
+            force[row] += dae.internal_forces(q_full[row], v_full[row], jacobian=False)[0]
+            if dae.state_loads:     # follower loads
+                force[row] += dae.state_loads.evaluate(q_full[row], factors[row], False)[0]
+        rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
+        a, lam = self.solver.solve(rhs.T, -(dae.joints_prescribed @ ap.T) if dae.joints
+                                   else None)
+        accelerations = np.zeros_like(force)
+        accelerations[:, dae.free] = a.T
+        accelerations[:, dae.prescribed] = ap
+        return accelerations, np.asarray(lam).T.reshape(len(times), dae.joints), force
 
 
 class Integrator:
@@ -122,7 +218,8 @@ class Integrator:
         #: seconds in steps, in element kernels and in factorisations (as the compiled engine)
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
         self.scale = self.dae.scale
-        self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
+        # kept across iterations (modified Newton)
+        self._solver: SchurSolver | SaddleSolver | None = None
         self._refresh = True
 
     # --- pieces of a Newton iteration --------------------------------------------------
@@ -133,10 +230,16 @@ class Integrator:
         velocities v, and the Jacobian data (d/dq, d/dv or None) or None."""
         dae = self.dae
         qp, vp, _ = prescribed
-        force, data, data_dot = dae.internal_forces(
-            dae.full_coordinates(q, qp), dae.full_velocities(v, vp), jacobian)
+        q_full = dae.full_coordinates(q, qp)
+        force, data, data_dot = dae.internal_forces(q_full, dae.full_velocities(v, vp),
+                                                    jacobian)
         self.counters.force_evaluations += 1
         total = force[dae.free] + loads @ dae.load_vectors
+        if dae.state_loads:     # follower loads: their force and load stiffness
+            state_force, state_data = dae.state_loads.evaluate(q_full, loads, jacobian)
+            total += state_force[dae.free]
+            if jacobian:
+                data = data + state_data
         if not np.all(np.isfinite(total)):
             raise Divergence(t, NON_FINITE)
         if jacobian:
@@ -165,14 +268,9 @@ class Integrator:
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
         self.counters.newton_iterations += 1
         if rebuild:
-            mass_coef, jacobian_coef, damping_coef = coefficients
-            model = self.dae.model
-            band = jacobian_coef * model.banded(data) + mass_coef * self.dae.mass_band
-            if data_dot is not None:
-                band += damping_coef * model.banded(data_dot)
             start = time.perf_counter()
             try:
-                self._solver = SchurSolver(band, self.dae.joints_free)
+                self._solver = self._factorise(coefficients, data, data_dot)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
@@ -181,6 +279,24 @@ class Integrator:
             self._refresh = False
         return self._solver.solve(-residual_of(force), None if constraint is None
                                   else -constraint)
+
+    def _factorise(self, coefficients: tuple[float, float, float], data: np.ndarray,
+                   data_dot: np.ndarray | None):
+        """Factorisation of S = c_m M + c_q dF/dq + c_v dF/dv with the joints: banded
+        (Cholesky or LU) when S is symmetric, a general sparse or dense LU of the saddle
+        point otherwise (follower loads)."""
+        mass_coef, jacobian_coef, damping_coef = coefficients
+        dae = self.dae
+        model = dae.model
+        if not dae.symmetric:
+            matrix = jacobian_coef * model.jacobian_matrix(data) + mass_coef * dae.mass_ff
+            if data_dot is not None:
+                matrix = matrix + damping_coef * model.jacobian_matrix(data_dot)
+            return SaddleSolver(matrix, dae.joints_free)
+        band = jacobian_coef * model.banded(data) + mass_coef * dae.mass_band
+        if data_dot is not None:
+            band += damping_coef * model.banded(data_dot)
+        return SchurSolver(band, dae.joints_free)
 
     def dissipation(self, previous: State, q: np.ndarray, v: np.ndarray, prescribed,
                     h: float) -> dict:

@@ -1,43 +1,48 @@
 """External loads of scenes (``[[load]]`` tables): a typed registry, ``LOADS``.
 
 A load is a constant generalised force vector (``nominal``, N per coordinate, at a time-law
-value of 1) scaled by its ``time_law`` (default: constant 1).  Each class declares its TOML
-keys as fields (``runtime.model.schema.Record``); adding one is one class here and one entry in
-``LOADS``.
+value of 1) scaled by its ``time_law`` (default: constant 1), or, when it ``follows`` the
+deformation (``follower = true``, ``pressure``), a generalised force f(q) with its exact
+Jacobian (``state_force``, ``runtime.model.items.follower``) scaled by its time law; its
+``nominal`` is then zero.  Each class declares its TOML keys as fields
+(``runtime.model.schema.Record``); adding one is one class here and one entry in ``LOADS``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from runtime.element import invariants
 from runtime.kernels.kind import element_kind
-from runtime.kernels.loader import kernel_family
 from runtime.model.errors import SceneError, show
+from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
+from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
 from runtime.model.schema import (
     Context,
     EdgeRef,
     NodeRef,
     Record,
+    boolean,
+    choice,
     edge_key,
     key,
     law_key,
     node_key,
+    number,
     registry,
     rotation_vector,
     vector,
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "Gravity", "LineForce", "Load", "NodeLoad", "PointForce", "PointMoment"]
+__all__ = ["LOADS", "DistributedForce", "Gravity", "LineForce", "LineMoment", "Load",
+           "NodeLoad", "PointForce", "PointMoment", "Pressure"]
 
-#: Gauss points along an element side for line loads (exact for the side's shape functions
-#: times its length element up to degree 15)
-EDGE_GAUSS_ORDER = 8
+StateForce = Callable[[np.ndarray, bool], Patches]
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,29 @@ class Load(Record):
     def targets(self) -> list[NodeRef]:
         """The nodes it acts on (none for a field such as gravity)."""
         return []
+
+    @property
+    def follows(self) -> bool:
+        """Whether it depends on the coordinates (then ``state_force``, and ``nominal`` is 0)."""
+        return False
+
+    def state_force(self, model: ModelView) -> StateForce:
+        """The function (q (size,), jacobian) -> ``Patches`` of its generalised force at a
+        time-law value of 1 (loads that ``follow``)."""
+        raise NotImplementedError
+
+
+def _boolean_key(value: Any, path: str, context: Context) -> bool:
+    return boolean(value, path)
+
+
+def _no_frame(path: str, body: str, context: Context) -> None:
+    """SceneError when the nodes of ``body`` carry no frame for a follower load."""
+    kind = element_kind(context.node.bodies[body].element)
+    if load_points.frame_gradients(kind) is None:
+        raise SceneError(f"{path}: body {show(body)} ({kind.name}) carries only "
+                         f"{', '.join(kind.vectors)}: a follower load needs the frame of its "
+                         "gradients (r_x and r_y, or r_y and r_z, in 3D); use follower = false")
 
 
 @dataclass(frozen=True)
@@ -80,15 +108,38 @@ def _vector_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
 
 @dataclass(frozen=True)
 class PointForce(NodeLoad):
-    """A force ``force`` (dim,) in N on the position of ``node`` (fixed direction)."""
+    """A force ``force`` (dim,) in N on the position of ``node``: fixed in direction, or with
+    ``follower = true`` turning with the node's frame (its gradients, as ``frame =``
+    sensors): ``force`` is given at the reference, its components in the node's reference
+    frame are kept in the deformed frame."""
 
     type: ClassVar[str] = "point_force"
     force: tuple[float, ...] = key(_vector_key)
+    follower: bool = key(_boolean_key, False)
+
+    def resolved(self, context: Context) -> Load:
+        if self.follower:
+            _no_frame("follower", self.node.body, context)
+        return self
+
+    @property
+    def follows(self) -> bool:
+        return self.follower
 
     def nominal(self, model: ModelView) -> np.ndarray:
         out = np.zeros(model.size)
-        out[model.node_dofs(model.node_index(self.node), "r")] = self.force
+        if not self.follower:
+            out[model.node_dofs(model.node_index(self.node), "r")] = self.force
         return out
+
+    def state_force(self, model: ModelView) -> StateForce:
+        maps = _node_maps(model, self.node)
+        return FrameLoad(maps, force=maps.local(model.reference, self.force))
+
+
+def _node_maps(model: ModelView, ref: NodeRef, section: bool = False):
+    return load_points.node_maps(model, model.node_index(ref), model.bodies[ref.body].kind,
+                                 section)
 
 
 def _moment_key(value: Any, path: str, context: Context) -> float | tuple[float, ...]:
@@ -132,6 +183,11 @@ class PointMoment(NodeLoad):
     in bending, not M.  A 2D node without r_y (a cable's) takes the moment on its tangent:
     d r_x = d theta (-r_x,y, r_x,x), so Q_x = M (-r_x,y, r_x,x) / |r_x|^2 at the reference
     (a 3D cable node has no section orientation: refused).
+
+    ``follower = true``: the moment turns with the node's frame (its components in the
+    reference frame are kept) and does the virtual work M . d theta on the exact rotation of
+    the frame built from the node's gradients (``runtime.model.items.follower``; in 2D the
+    frame of r_x, so M d theta with theta the angle of r_x): exact for finite rotations.
     """
 
     type: ClassVar[str] = "point_moment"
@@ -139,10 +195,21 @@ class PointMoment(NodeLoad):
     noun: ClassVar[str] = "moment"
     node: NodeRef | str = key(_section_node_key)
     moment: float | tuple[float, ...] = key(_moment_key)
+    follower: bool = key(_boolean_key, False)
+
+    @property
+    def follows(self) -> bool:
+        return self.follower
+
+    def state_force(self, model: ModelView) -> StateForce:
+        maps = _node_maps(model, self.node, section=True)
+        return FrameLoad(maps, moment=_moment_components(maps, model, self.moment))
 
     def nominal(self, model: ModelView) -> np.ndarray:
         node = model.node_index(self.node)
         out = np.zeros(model.size)
+        if self.follower:
+            return out
         if "r_y" not in model.node_vectors(node):  # a 2D cable node: on its tangent
             tangent = model.reference[model.node_dofs(node, "r_x")]
             out[model.node_dofs(node, "r_x")] = (self.moment * np.array([-tangent[1], tangent[0]])
@@ -159,6 +226,14 @@ class PointMoment(NodeLoad):
         return out
 
 
+def _moment_components(maps, model: ModelView, moment) -> np.ndarray:
+    """A moment given in global components at the reference as components in the frames of
+    the points of ``maps`` (m, p, 3); in 2D the moment about z (m, p, 1)."""
+    if model.dim == 2:
+        return np.full((*maps.weights.shape, 1), float(moment))
+    return maps.local(model.reference, moment)
+
+
 @dataclass(frozen=True)
 class Gravity(Load):
     """A uniform acceleration field ``acceleration`` (dim,) in m/s^2 on every body: the
@@ -173,53 +248,172 @@ class Gravity(Load):
 
 
 @dataclass(frozen=True)
-class LineForce(Load):
-    """A uniform force per unit length ``force_per_length`` (dim,) in N/m along the ``edge``
-    of a rectangle body (``"BODY:x=-1"``: its last grid column), fixed in direction: the
-    consistent generalised force int S^T f ds over the element sides on that grid line
-    (Gauss rule along each side, ds from the reference).  Its resultant is f times the edge
-    length (a tip line load on a plate strip: P = f b)."""
+class EdgeLoad(Load):
+    """A load per unit (reference) length along the ``edge`` of a rectangle body
+    (``"BODY:x=-1"``: its last grid column), integrated over the element sides on that grid
+    line, each once (Gauss rule along each side, ds from the reference)."""
 
-    type: ClassVar[str] = "line_force"
     on_gradients: ClassVar[bool] = False
-    noun: ClassVar[str] = "line force"
     target_key: ClassVar[str] = "edge"
     edge: EdgeRef | str = key(edge_key)
-    force_per_length: tuple[float, ...] = key(_vector_key)
 
     def targets(self) -> list[NodeRef]:
         return self.edge.refs()
 
+    def _maps(self, model: ModelView):
+        return load_points.edge_maps(model.bodies[self.edge.body], self.edge,
+                                     self.on_gradients)
+
+
+@dataclass(frozen=True)
+class LineForce(EdgeLoad):
+    """A uniform force per unit length ``force_per_length`` (dim,) in N/m along an edge
+    (``EdgeLoad``): fixed in direction, the consistent generalised force int S^T f ds; or
+    with ``follower = true`` turning with the frame of the mid-surface at each point (its
+    gradients r_x, r_y; components in the reference frame kept), per unit reference length.
+    Its resultant is f times the edge length (a tip line load on a plate strip: P = f b)."""
+
+    type: ClassVar[str] = "line_force"
+    noun: ClassVar[str] = "line force"
+    force_per_length: tuple[float, ...] = key(_vector_key)
+    follower: bool = key(_boolean_key, False)
+
+    @property
+    def follows(self) -> bool:
+        return self.follower
+
     def nominal(self, model: ModelView) -> np.ndarray:
-        body = model.bodies[self.edge.body]
-        kind, element = body.kind, body.element
-        axis = "xy".index(self.edge.axis)     # the side lies at fixed local x (or y) ...
-        along = 1 - axis                        # ... and runs along local y (or x)
-        size = element.geometry[along]
-        family = kernel_family(kind.name, "invariants", element.backend)
-        t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
-        fractions = kind.node_fractions
-        on_edge = np.isin(body.mesh.connectivity, self.edge.nodes)
         out = np.zeros(model.size)
-        sides: set[frozenset] = set()   # an interior line's sides belong to two elements:
-        for e in np.flatnonzero(on_edge.sum(axis=1) > 1):   # integrate each side once
-            side = frozenset(body.mesh.connectivity[e][on_edge[e]].tolist())
-            if side in sides:
-                continue
-            sides.add(side)
-            points = np.zeros((t.size, kind.dim))   # mid-surface (z = 0) of the side
-            points[:, axis] = fractions[np.flatnonzero(on_edge[e])[0], axis] * \
-                element.geometry[axis]
-            points[:, along] = (t + 1) / 2 * size
-            data = {"point": points, "geometry": np.asarray(element.geometry, float)}
-            values = family("shape_values", data)["values"]                  # (p, n)
-            grads = invariants.full_gradients(kind, invariants.shape_gradient_table(
-                kind, family, element.geometry, points))                     # (p, n, dim)
-            q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
-            ds = np.linalg.norm(grads[:, :, along] @ q0, axis=1) * w * size / 2
+        if self.follower:
+            return out
+        body = model.bodies[self.edge.body]
+        for e, _, ds, values, _ in load_points.edge_sides(body, self.edge):
             out[body.element_dofs[e]] += np.outer(values.T @ ds,
                                                   self.force_per_length).ravel()
         return out
 
+    def state_force(self, model: ModelView) -> StateForce:
+        maps = self._maps(model)
+        return FrameLoad(maps, force=maps.local(model.reference, self.force_per_length))
 
-LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce)
+
+@dataclass(frozen=True)
+class LineMoment(EdgeLoad):
+    """A uniform moment per unit length ``moment_per_length`` (3,) in N m/m along an edge
+    (``EdgeLoad``), e.g. ``[0, -m, 0]`` bends a strip along x about y: the virtual work of m
+    on the rotation of the mid-surface frame (r_x, r_y) at each point
+    (``runtime.model.items.follower``).  Fixed (the default): the constant generalised force
+    of that work at the reference (small rotations, as ``point_moment``); with
+    ``follower = true`` the moment turns with the frame and the force is exact for finite
+    rotations.  Its resultant moment is m times the edge length."""
+
+    type: ClassVar[str] = "line_moment"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "line_moment acts on plate edges (3D scenes)"
+    on_gradients: ClassVar[bool] = True
+    noun: ClassVar[str] = "line moment"
+    moment_per_length: tuple[float, ...] = key(_vector_key)
+    follower: bool = key(_boolean_key, False)
+
+    @property
+    def follows(self) -> bool:
+        return self.follower
+
+    def state_force(self, model: ModelView) -> StateForce:
+        maps = self._maps(model)
+        return FrameLoad(maps, moment=_moment_components(maps, model, self.moment_per_length))
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        out = np.zeros(model.size)
+        if not self.follower:     # the follower's force at the reference, held constant
+            patches = self.state_force(model)(model.reference, False)
+            np.add.at(out, patches.dofs, patches.force)
+        return out
+
+
+def _body_of_kind(value: Any, path: str, context: Context, plates: bool) -> str:
+    """A body name whose kind is a plate kind (``plates``) or a beam kind."""
+    name = choice(value, path, context.body_names, "body")
+    kind = element_kind(context.node.bodies[name].element)
+    if (len(kind.mesh_axes) == 2) != plates:
+        raise SceneError(f"{path}: body {show(name)} is made of {kind.name} elements; "
+                         f"expected a {'plate (rectangle)' if plates else 'beam (line)'} body")
+    return name
+
+
+def _plate_key(value: Any, path: str, context: Context) -> str:
+    return _body_of_kind(value, path, context, True)
+
+
+def _beam_key(value: Any, path: str, context: Context) -> str:
+    return _body_of_kind(value, path, context, False)
+
+
+@dataclass(frozen=True)
+class Pressure(Load):
+    """A uniform pressure ``pressure`` in Pa on the mid-surface of the plate ``body``, along
+    its deformed unit normal r_x x r_y (+z of a plate in the x-y plane at the reference), per
+    unit reference area (a follower load: its resultant on a flat plate is p times the plate's
+    area; the deformed area does not scale it)."""
+
+    type: ClassVar[str] = "pressure"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "pressure acts on plates (3D scenes)"
+    body: str = key(_plate_key)
+    pressure: float = key(lambda value, path, context: number(value, path))
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def state_force(self, model: ModelView) -> StateForce:
+        return PressureLoad(load_points.surface_maps(model.bodies[self.body]), self.pressure)
+
+
+@dataclass(frozen=True)
+class DistributedForce(Load):
+    """A uniform force per unit reference length ``force_per_length`` (dim,) in N/m along the
+    axis of every element of the beam ``body``: fixed in direction (the consistent force
+    int S^T f ds), or with ``follower = true`` turning with the frame of the axis at each
+    point (gradients dr/dx, dr/dy in 3D, dr/dx in 2D; components in the reference frame
+    kept).  Its resultant is f times the body's length."""
+
+    type: ClassVar[str] = "distributed_force"
+    body: str = key(_beam_key)
+    force_per_length: tuple[float, ...] = key(_vector_key)
+    follower: bool = key(_boolean_key, False)
+
+    def resolved(self, context: Context) -> Load:
+        kind = element_kind(context.node.bodies[self.body].element)
+        if self.follower and context.dim == 3 and "r_y" not in kind.vectors:
+            raise SceneError(f"follower: body {show(self.body)} ({kind.name}) carries only "
+                             f"{', '.join(kind.vectors)}: no section frame along its axis "
+                             "for a follower load; use follower = false")
+        return self
+
+    @property
+    def follows(self) -> bool:
+        return self.follower
+
+    def _maps(self, model: ModelView):
+        return load_points.axis_maps(model.bodies[self.body])
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        out = np.zeros(model.size)
+        if not self.follower:
+            maps = self._maps(model)
+            force = np.einsum("mp,pdn,d->mn", maps.weights, maps.position[0],
+                              np.asarray(self.force_per_length, float))
+            np.add.at(out, maps.dofs, force)
+        return out
+
+    def state_force(self, model: ModelView) -> StateForce:
+        maps = self._maps(model)
+        return FrameLoad(maps, force=maps.local(model.reference, self.force_per_length))
+
+
+LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
+                                        Pressure, DistributedForce)
