@@ -22,14 +22,19 @@ from runtime.model.items.loads import (
     PythonLoad,
 )
 from runtime.model.items.sensors import (
+    Acceleration,
     ConstraintViolation,
     Displacement,
     DissipatedEnergy,
     KineticEnergy,
     Position,
     PotentialEnergy,
+    Reaction,
+    SectionForce,
     Sensor,
+    Strain,
     StrainEnergy,
+    Stress,
     TotalEnergy,
     Velocity,
 )
@@ -49,12 +54,12 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
-    "Displacement", "DissipatedEnergy", "Dynamic", "Element", "Gravity", "Hub", "KineticEnergy",
-    "DistributedForce", "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef",
-    "Output", "Pin", "PointForce", "PointMoment", "Position", "PotentialEnergy", "Pressure",
-    "PythonLaw", "PythonLoad",
-    "Rectangle", "Result", "Revolute", "Scene", "SceneError", "Sensor", "Sine", "Solver",
-    "Spherical", "Spin", "SpinUp", "Static", "StrainEnergy", "Table", "TotalEnergy", "Velocity",
-    "Weld", "load_scene", "run_scene",
+    "Acceleration", "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
+    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
+    "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment", "LinearRamp", "Material",
+    "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment", "Position",
+    "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result",
+    "Revolute", "Scene", "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical",
+    "Spin", "SpinUp", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
+    "Velocity", "Weld", "load_scene", "run_scene",
 ]

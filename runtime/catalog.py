@@ -25,6 +25,8 @@ VARIANTS = ("straight", "general")
 INTEGRATORS = ("trapezoidal", "generalized_alpha")
 #: Dynamic engines (registry: ``runtime.solve.engines.ENGINES``).
 ENGINES = ("compiled", "python")
+#: Methods of static analyses (``[analysis.static] method``): the default first.
+STATIC_METHODS = ("load_stepping", "arc_length")
 #: Newton modes of the dynamic integrators (both engines).
 NEWTON_MODES = ("full", "modified")
 #: The material law of a material that names none.

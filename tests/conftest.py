@@ -107,12 +107,13 @@ def arc_reference(kind: str, radius: float = ARC_RADIUS, angle: float = ARC_ANGL
 
     Beams: the arc lies in the x-y plane, starts at the origin tangent to x and turns towards
     +y; at each node r_x is the unit tangent, r_y the unit normal (pointing to the centre)
-    and, in 3D, r_z = (0, 0, 1).  Plates: a cylindrical panel, x bent in the x-z plane
-    towards +z about an axis parallel to y: r_x the tangent, r_y = (0, 1, 0), r_z the normal.
+    and, in 3D, r_z = (0, 0, 1).  Kinds meshing two axes (plates, shells): a cylindrical
+    panel, x bent in the x-z plane towards +z about an axis parallel to y: r_x the tangent,
+    r_y = (0, 1, 0), r_z the normal.
     """
     assert abs(radius * angle - LENGTH) < 1e-12 or angle != ARC_ANGLE
     d = dim_of(kind)
-    if element_kind(kind).meta["domain"]["name"] == "plate":
+    if len(element_kind(kind).mesh_axes) == 2:    # a surface: bent into a cylindrical panel
         def position(p):
             t = p[0] / radius
             return np.array([radius * np.sin(t), p[1], radius * (1.0 - np.cos(t))])

@@ -25,12 +25,14 @@ from runtime import (
     CosineRamp,
     Displacement,
     DissipatedEnergy,
+    DistributedForce,
     Dynamic,
     Gravity,
     Hub,
     KineticEnergy,
     LinearRamp,
     LineForce,
+    LineMoment,
     Material,
     Modal,
     NodeRef,
@@ -40,6 +42,7 @@ from runtime import (
     PointMoment,
     Position,
     PotentialEnergy,
+    Pressure,
     Rectangle,
     Revolute,
     Scene,
@@ -61,7 +64,14 @@ from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.sensors import SENSORS
+from runtime.model.items.sensors import (
+    SENSORS,
+    Acceleration,
+    Reaction,
+    SectionForce,
+    Strain,
+    Stress,
+)
 from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.3, rho=7800.0)
@@ -222,7 +232,8 @@ def test_unknown_types_are_errors_listing_the_registry():
     data["load"][0]["type"] = "moment"
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
-                       'point_force, point_moment, gravity, line_force')
+                       'point_force, point_moment, gravity, line_force, line_moment, pressure, '
+                       'distributed_force')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -232,10 +243,12 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld"]
-    assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force"]
+    assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
+                           "line_moment", "pressure", "distributed_force"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
-                             "constraint_violation", "velocity"]
+                             "constraint_violation", "velocity", "acceleration", "reaction",
+                             "strain", "stress", "section"]
 
 
 def test_output_table():
@@ -391,14 +404,20 @@ def random_scene(rng: random.Random) -> Scene:
     if plate is not None:
         edge = rng.choice(["x=0", "x=-1", "y=0", "y=-1"])
         constraints.append(rng.choice([Clamp, Pin])(edge=f"sheet:{edge}"))
-        columns, rows = plate.grid_shape
         axis, line = edge.split("=")
-        line = int(line) % (columns if axis == "x" else rows)
-        for node in ([j * columns + line for j in range(rows)] if axis == "x"
-                     else [line * columns + i for i in range(columns)]):
-            held[("sheet", node)] = type(constraints[-1])
+        a = "xy".index(axis)
+        line = int(line) % plate.grid_shape[a]
+        # the nodes on that lattice line (a layout with mid-side nodes has fewer than a
+        # full grid: runtime/model/mesh.py)
+        for node in plate.mesh.on_line(a, line):
+            held[("sheet", int(node))] = type(constraints[-1])
         other = {"x=0": "x=-1", "x=-1": "x=0", "y=0": "y=-1", "y=-1": "y=0"}[edge]
-        loads_on_plate = [LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3))]
+        loads_on_plate = [rng.choice([
+            LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3),
+                      follower=rng.random() < 0.5),
+            LineMoment(edge=f"sheet:{other}", moment_per_length=_vector(rng, 3),
+                       follower=rng.random() < 0.5),
+            Pressure(body="sheet", pressure=_number(rng, -1e3, 1e3))])]
     for body in chain:            # pins on interior nodes
         for index in range(1, body.n_nodes - 1):
             if rng.random() < 0.2:
@@ -412,10 +431,17 @@ def random_scene(rng: random.Random) -> Scene:
         holder = held.get((body.name, index))
         law = _law(rng) if rng.random() < 0.5 else Constant()
         options = [Gravity(_vector(rng, dim, 10), time_law=law)]
+        vectors = element_kind(body.element).vectors
+        # a follower load needs a frame: gradients enough to span one (not a 3D cable's)
+        framed = len(vectors) - 1 >= dim - 1
         if holder is None:
             options.append(PointForce(f"{body.name}:{index - body.n_nodes}",
-                                      _vector(rng, dim, 100), time_law=law))
-        vectors = element_kind(body.element).vectors
+                                      _vector(rng, dim, 100), time_law=law,
+                                      follower=framed and rng.random() < 0.3))
+        if body is not plate:
+            options.append(DistributedForce(body=body.name, force_per_length=_vector(rng, dim),
+                                            follower=framed and rng.random() < 0.5,
+                                            time_law=law))
         if holder in (None, Pin) and ("r_y" in vectors or (dim == 2 and "r_x" in vectors)):
             options.append(PointMoment(NodeRef(body.name, index), _rotation(rng, dim),
                                        time_law=law))
@@ -426,8 +452,9 @@ def random_scene(rng: random.Random) -> Scene:
         body = rng.choice(bodies)
         node = NodeRef(body.name, rng.randrange(body.n_nodes))
         if body is plate and rng.random() < 0.5:       # by grid index, as written
-            columns, rows = body.grid_shape
-            node = f"sheet:{rng.randrange(-columns, columns)},{rng.randrange(rows)}"
+            columns, _ = body.grid_shape
+            column, row = body.mesh.lattice[node.index]  # where the node is on the lattice
+            node = f"sheet:{column - columns * rng.randrange(2)},{row}"
         name = rng.choice(["s", "tip.x", "U-", "_v"]) + str(i)
         components = ("x", "y", "norm") if dim == 2 else ("x", "y", "z", "norm")
         # a frame needs gradients enough to span one (not a 3D cable's r_x alone)
@@ -439,7 +466,16 @@ def random_scene(rng: random.Random) -> Scene:
             StrainEnergy(name, rng.choice([None, body.name])),
             KineticEnergy(name, rng.choice([None, body.name])),
             PotentialEnergy(name), TotalEnergy(name), DissipatedEnergy(name),
-            ConstraintViolation(name), Velocity(name, node, rng.choice(components))]
+            ConstraintViolation(name), Velocity(name, node, rng.choice(components)),
+            Acceleration(name, node, rng.choice(components)),
+            *_point_sensors(rng, name, body, dim, plate)]
+        supports = [f"{b}:{i}" for b, i in sorted(held)] + [
+            n for c in constraints if hasattr(c, "nodes") for n in c.nodes]
+        if supports:
+            quantity = rng.choice(["force", "moment"])
+            options.append(Reaction(name, rng.choice(supports), quantity,
+                                    rng.choice(components if dim == 3 or quantity == "force"
+                                               else ("z", "norm"))))
         sensors.append(rng.choice(options))
 
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
@@ -464,6 +500,26 @@ def random_scene(rng: random.Random) -> Scene:
     return Scene(title=rng.choice(TITLES), materials=materials, bodies=bodies,
                  constraints=constraints, loads=loads, sensors=sensors, static=static,
                  modal=modal, dynamic=dynamic, solver=solver, output=output)
+
+
+def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -> list:
+    """A strain or stress sensor at a random point of a random element of ``body`` (on the
+    axis of a cable) and, on a beam, a section sensor."""
+    kind = element_kind(body.element)
+    bounds = kind.domain.bounds(body.geometry)
+    point = [rng.uniform(low, high) for low, high in bounds]
+    if kind.energy.structural:
+        point[1:] = [0.0] * (dim - 1)
+    element = rng.randrange(int(np.prod(body.counts)))
+    tensors = ("xx", "yy", "xy") if dim == 2 else ("xx", "yy", "zz", "yz", "xz", "xy")
+    out = [Strain(name, body.name, element, tuple(point), rng.choice(tensors)),
+           Stress(name, body.name, element, tuple(point),
+                  rng.choice([*tensors, "von_mises"]), rng.choice(["cauchy", "pk2"]))]
+    if body is not plate:
+        sections = (("N", "M3", "M") if dim == 2 else ("N", "M")) if kind.energy.structural \
+            else (("N", "Q2", "M3", "M") if dim == 2 else ("N", "Q2", "Q3", "T", "M2", "M3"))
+        out.append(SectionForce(name, body.name, element, point[0], rng.choice(sections)))
+    return out
 
 
 def test_random_scenes_round_trip_through_toml(tmp_path):

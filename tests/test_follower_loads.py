@@ -74,7 +74,7 @@ def test_jacobian_against_finite_differences(body, load):
     loads = StateLoads(model)
     q = model.reference + 0.05 * np.random.default_rng(1).normal(size=model.size)
     factors = np.array([0.7])
-    force, data = loads.evaluate(q, factors, True)
+    force, data, _ = loads.evaluate(q, factors, True)
     jacobian = model.jacobian_matrix(data).toarray()
     numeric = np.zeros_like(jacobian)
     h = 1e-6

@@ -561,6 +561,7 @@ def test_law_that_does_not_apply_is_refused_with_the_reason(kind):
     energy has no shear or Poisson strains for it to correct: Element says so (and so did
     the generator, which left the law out of element.json)."""
     assert "ecm" in element_kind(kind).meta["laws_not_applicable"]
-    where = "the cable energy" if element_kind(kind).energy.structural else "the plate domain"
+    info = element_kind(kind)
+    where = "the cable energy" if info.energy.structural else f"the {info.domain.name} domain"
     with pytest.raises(ValueError, match=f"law: law 'ecm' does not apply to {where}"):
         Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law="ecm", backend="numpy")

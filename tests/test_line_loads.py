@@ -25,7 +25,8 @@ def _model(kind: str, line: str, force=(0.0, 0.0, -100.0)) -> Model:
                        loads=[LineForce(edge=line, force_per_length=force)], static=Static()))
 
 
-# grid lines x = I (length b, at x = I a / nx) and y = J (length a, at y = J b / ny)
+# lattice lines x = I (length b, at x = I a / (nx sx)) and y = J (length a, at y = J b / (ny sy)),
+# sx, sy lattice steps per element (2 with mid-side nodes: odd lines cross elements' middles)
 LINES = [("x", i) for i in (1, 4, -1)] + [("y", j) for j in (0, 1, 2, -1)]
 
 
@@ -39,7 +40,8 @@ def test_line_force_resultant_and_moment_on_boundary_and_interior_lines(kind, ax
     a, b = SIZE
     along = "xy".index(axis)
     length = b if axis == "x" else a
-    place = (index % (GRID[along] + 1)) * SIZE[along] / GRID[along]
+    lines = GRID[along] * element_kind(kind).lattice_steps[along]   # lattice steps across
+    place = (index % (lines + 1)) * SIZE[along] / lines
     # resultant: f times the line's length
     np.testing.assert_allclose(forces.sum(axis=0), [0.0, 0.0, -100.0 * length], rtol=1e-12,
                                atol=1e-9)

@@ -526,7 +526,7 @@ BAD = [
      'sensor[0].component: unknown component "w"; expected one of x, y, z, norm'),
     ("2d", _set("sensor", 0, "component", "z"),
      'sensor[0].component: unknown component "z"; expected one of x, y, norm'),
-    ("3d", _set("sensor", 0, "type", "strain"), 'sensor[0].type: unknown sensor type "strain"'),
+    ("3d", _set("sensor", 0, "type", "strains"), 'sensor[0].type: unknown sensor type "strains"'),
     ("3d", _append("sensor", {"name": "tip_y", "type": "constraint_violation"}),
      'sensor[1].name: duplicate sensor name "tip_y"'),
     ("3d", _append("sensor", {"name": "U", "type": "strain_energy", "body": "bem"}),

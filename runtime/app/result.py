@@ -5,7 +5,7 @@ they are computed (``ancf run``'s writers, the VTU series, the animation frames)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,7 +45,9 @@ class Result:
     values are in ``summary["static"]["sensors"]``); static: equilibrium coordinates (size,)
     or None; modes: :class:`Modes` or None; states: :class:`States` when asked, else None;
     model: the ``Model`` (indexing, reference, sampling of shapes); exit_code: 0 ok, 1
-    diverged (results kept up to then).
+    diverged (results kept up to then); path: the arc-length path of the static analysis,
+    {"load_factor": (k,), sensor name: values (k,)} over its converged points, the start
+    first ({} with load stepping).
     """
 
     summary: dict
@@ -55,6 +57,7 @@ class Result:
     states: States | None
     model: Model
     exit_code: int
+    path: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def status(self) -> str:
@@ -65,7 +68,8 @@ class Result:
 class Observer:
     """Receives a run's results as they are computed; every hook does nothing by default.
 
-    Order: ``begin`` once the model is built; ``static``, ``modal`` after those analyses;
+    Order: ``begin`` once the model is built; ``static_path`` (arc length only), ``static``,
+    ``modal`` after those analyses;
     ``dynamic_start``, ``samples`` for every block of output times (t = 0 included; by
     default ``sample`` at each), then
     ``dynamic_end`` however the dynamic analysis ends (when it ends by an exception, errors
@@ -77,6 +81,9 @@ class Observer:
 
     def static(self, q: np.ndarray) -> None:
         """Static equilibrium coordinates (size,)."""
+
+    def static_path(self, path: dict[str, np.ndarray]) -> None:
+        """The arc-length path: {"load_factor": (k,), sensor name: values (k,)}."""
 
     def modal(self, modes: Modes) -> None:
         """Frequencies and mode shapes."""

@@ -127,6 +127,17 @@ class _CsvWriter(Observer):
             self.writer.close()
 
 
+class _PathWriter(Observer):
+    """static_path.csv of an arc-length static analysis, a row per converged point."""
+
+    def __init__(self, job: _Job) -> None:
+        self.job = job
+
+    def static_path(self, path: dict[str, np.ndarray]) -> None:
+        self.job.files.add(output.PATH_CSV)
+        output.write_path(self.job.out / output.PATH_CSV, path)
+
+
 class _Job:
     """One run: its summary, output folder and the files it wrote there."""
 
@@ -173,7 +184,7 @@ class _Job:
                                           f"{', '.join(shapes.PLANES)}, got {plane!r}")
         vtk = requested(scene, "vtk") if vtk is None else vtk
         animation = requested(scene, "animation") if animation is None else animation
-        observers: list[Observer] = [self.csv]
+        observers: list[Observer] = [self.csv, _PathWriter(self)]
         series = shapes.VtkSeries(self.out / output.VTK_FOLDER) if vtk else None
         frames = shapes.Frames() if animation else None
         observers += [o for o in (series, frames) if o is not None]
@@ -227,12 +238,22 @@ class _Job:
                 self.save(ExitCode.INTERRUPTED)
 
     def _plots(self, scene: Scene, simulation: Simulation) -> bool:
-        """The sensor plots of the dynamic analysis; whether any was attempted."""
+        """The sensor plots of the dynamic analysis and the plot of the arc-length path;
+        whether any was attempted."""
         history = simulation.history
-        if not history.get("t"):
-            return False
-        sensors = simulation.sensors
         units = {s.name: s.unit for s in scene.sensors}
+        if simulation.path:
+            energies = simulation.sensors.energy_names
+            series = {name: values for name, values in simulation.path.items()
+                      if name != "load_factor" and name not in energies}
+            written, warnings = output.plot_path(simulation.path["load_factor"], series,
+                                                 self.out, units)
+            self.files.update(path.name for path in written)
+            for text in warnings:
+                self.summary.warn(text)
+        if not history.get("t"):
+            return bool(simulation.path)
+        sensors = simulation.sensors
         series = {name: history[name] for name in sensors.names}
         unwritten: list[str] = []
         written, warnings = output.plot_series(history["t"], series, self.out, units,
@@ -313,7 +334,7 @@ def _owned_files(scene: Scene | None) -> list[str]:
     those too)."""
     if scene is None:
         return []
-    return [CSV, *output.RESERVED_FILES, output.ANIMATION_FILE,
+    return [CSV, output.PATH_CSV, *output.RESERVED_FILES, output.ANIMATION_FILE,
             *(output.plot_file_name(s.name) for s in scene.sensors)]
 
 

@@ -5,22 +5,24 @@ An element's position field is ``r(p) = S(p) e`` at local points ``p`` of its re
 domain, with the shape functions ``S`` of the element kind (the generated ``shape_values``
 kernel of its invariants family).  :class:`Shape` samples it on a small grid per element over
 the axes the kind's mesh tiles (``ElementKind.mesh_axes``), at the middle of the other axes: the
-centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate.  The grid
+centre line ``r(x, 0[, 0])`` of a beam, the mid-surface ``r(x, y, 0)`` of a plate or shell, the
+volume of a solid.  The grid
 holds the element's nodes, so every model node is a sample point.  Displacements, velocities
 and mode shapes (all linear in the coordinates) are sampled the same way.
 
 Writers (all atomic, a write error is :class:`runtime.app.writers.OutputError`):
 
-* :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates,
-  point data ``displacement`` (m) and ``velocity`` (m/s), or any vectors given (points at
-  the reference configuration: Warp By Vector applies the displacement once);
+* :func:`write_vtu` - one VTU file (meshio): line cells for beams, quad cells for plates and
+  shells, hexahedra for solids, point data ``displacement`` (m), ``velocity`` (m/s), strain
+  and stress (:meth:`Shape.fields`), or any arrays given (points at the reference
+  configuration: Warp By Vector applies the displacement once);
 * :func:`write_pvd` - a ParaView collection of VTU files with their times;
 * :class:`VtkSeries` - a run observer writing ``vtk/dynamic_NNNNNN.vtu`` at every output time
   and ``vtk/dynamic.pvd``, plus ``vtk/static.vtu`` and ``vtk/mode_K.vtu`` / ``vtk/modes.pvd``;
 * :class:`Frames` (a run observer) and :func:`write_animation` - a GIF of the deformed shape
   projected on a plane; :func:`write_snapshot` - a PNG of one state against the reference.
   Both draw the element edges (:attr:`Shape.outline`): a beam's centre line, the wireframe
-  of a plate's elements.
+  of a plate's or a solid's elements.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from runtime.app import writers as output
 from runtime.app.result import Modes, Observer
 from runtime.kernels.kind import ElementKind
 from runtime.kernels.loader import kernel_family
+from runtime.model.items import material_points as material
 from runtime.model.model import BodyMesh, Model
 from runtime.progress import Bar
 
@@ -50,8 +53,8 @@ PER_ELEMENT = 4
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 #: frames of an animation at most (output times are subsampled evenly beyond)
 MAX_FRAMES = 100
-#: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2)
-CELL_TYPES = {1: "line", 2: "quad"}
+#: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2, bricks 3)
+CELL_TYPES = {1: "line", 2: "quad", 3: "hexahedron"}
 #: sample points are matched on a grid of 2**-20 element units (as meshing.structured_mesh)
 _KEY = 2**20
 
@@ -74,6 +77,8 @@ class Shape:
         # per body: element dofs (m, ndof), shape values (samples, n_shape), sample points
         # (m, samples)
         self._bodies = []
+        # per body: the body, the local sample coordinates (samples, dim) in m, sample points
+        self._fields: list[tuple[BodyMesh, np.ndarray, np.ndarray]] = []
         cells: dict[str, list[np.ndarray]] = {}
         outline, node_points, first = [], [], 0
         for body in model.bodies.values():
@@ -81,12 +86,14 @@ class Shape:
             axes = kind.mesh_axes
             if len(axes) not in CELL_TYPES:
                 raise ValueError(f"shape: cannot draw {kind.name}, meshed over {len(axes)} "
-                                 f"axes (meshes over 1 or 2 axes are drawn)")
+                                 f"axes (meshes over 1 to 3 axes are drawn)")
             fractions = _sample_fractions(kind, axes, per_element)
             local = _grid(fractions)                                # (samples, axes)
-            values = _shape_values(body, axes, local)
+            coordinates = _local_points(body, axes, local)
+            values = _shape_values(body, coordinates)
             count, points, nodes = _sample_points(body, axes, local)
             self._bodies.append((body.element_dofs, values, first + points))
+            self._fields.append((body, coordinates, first + points))
             corners = _grid_cells(fractions)                        # (cells, corners)
             cells.setdefault(CELL_TYPES[len(axes)], []).append(
                 (first + points[:, corners]).reshape(-1, corners.shape[1]))
@@ -107,6 +114,29 @@ class Shape:
             samples = np.einsum("pk,mkd->mpd", values, e)       # (elements, samples, dim)
             result[points.ravel(), :self.dim] = samples.reshape(-1, self.dim)
         return result
+
+    def fields(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Strain and stress at the sample points for coordinates ``q`` (size,)
+        (``runtime.model.items.material_points``; a point shared by elements takes their
+        mean): ``green_lagrange_strain`` in the reference local frame and ``cauchy_stress``
+        (Pa) in the current local frame, (points, 6) symmetric tensors in ParaView's order
+        xx, yy, zz, xy, yz, xz (zz, yz, xz zero in 2D), and ``von_mises_stress`` (points,)
+        (Pa; 2D plane stress)."""
+        rows, cols = (0, 1, 2, 0, 1, 0), (0, 1, 2, 1, 2, 2)
+        strain, stress = np.zeros((self.points, 6)), np.zeros((self.points, 6))
+        mises, count = np.zeros(self.points), np.zeros(self.points)
+        for body, coordinates, points in self._fields:
+            found = material.strain_stress(body, np.arange(body.elements), coordinates,
+                                           q[None, :])
+            where = points.ravel()
+            for target, tensor in ((strain, found.strain[0]), (stress, found.cauchy[0])):
+                full = np.zeros((*tensor.shape[:2], 3, 3))
+                full[..., :self.dim, :self.dim] = tensor
+                np.add.at(target, where, full[..., rows, cols].reshape(-1, 6))
+            np.add.at(mises, where, material.von_mises(found.cauchy[0]).ravel())
+            np.add.at(count, where, 1.0)
+        return {"green_lagrange_strain": strain / count[:, None],
+                "cauchy_stress": stress / count[:, None], "von_mises_stress": mises / count}
 
     @property
     def surface(self) -> bool:
@@ -155,20 +185,45 @@ def _indices(fractions: list[np.ndarray]) -> np.ndarray:
 
 def _grid_cells(fractions: list[np.ndarray]) -> np.ndarray:
     """Local cells (cells, corners) of the sample grid: segments along a line, quads
-    (counter-clockwise in the local x-y plane) over a surface."""
+    (counter-clockwise in the local x-y plane) over a surface, hexahedra in a volume (the
+    bottom quad, then the top one: VTK's corner order)."""
     index = _indices(fractions)
     if index.ndim == 1:
         return np.column_stack([index[:-1], index[1:]])
-    return np.stack([index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]],
-                    axis=-1).reshape(-1, 4)
+    if index.ndim == 2:
+        return np.stack([index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]],
+                        axis=-1).reshape(-1, 4)
+    low, high = index[:-1], index[1:]              # z layers (index is (nz, ny, nx))
+    return np.stack([layer[:, a, b] for layer in (low, high) for a, b in (
+        (np.s_[:-1], np.s_[:-1]), (np.s_[:-1], np.s_[1:]), (np.s_[1:], np.s_[1:]),
+        (np.s_[1:], np.s_[:-1]))], axis=-1).reshape(-1, 8)
 
 
 def _grid_loop(fractions: list[np.ndarray]) -> np.ndarray:
     """Local sample indices along the element's edges: the line itself; a surface's
-    boundary as a closed loop (y = 0, x = 1, y = 1, x = 0)."""
+    boundary as a closed loop (y = 0, x = 1, y = 1, x = 0); a volume's twelve edges as one
+    path (the bottom loop, then up each vertical edge and along the top, three verticals
+    drawn twice)."""
     index = _indices(fractions)
     if index.ndim == 1:
         return index
+    if index.ndim == 2:
+        return _loop(index)
+    bottom, top = _loop(index[0]), _loop(index[-1])
+    corners = [0, len(fractions[0]) - 1, len(fractions[0]) + len(fractions[1]) - 2,
+               2 * len(fractions[0]) + len(fractions[1]) - 3]   # loop positions of the corners
+    vertical = [index[:, 0, 0], index[:, 0, -1], index[:, -1, -1], index[:, -1, 0]]
+    path = [bottom, vertical[0][1:]]
+    for k in range(4):     # along the top to corner k + 1, down its vertical and back up
+        stop = corners[k + 1] if k < 3 else len(top) - 1
+        path.append(top[corners[k] + 1:stop + 1])
+        if k < 3:
+            path += [vertical[k + 1][-2::-1], vertical[k + 1][1:]]
+    return np.concatenate(path)
+
+
+def _loop(index: np.ndarray) -> np.ndarray:
+    """The boundary of a (ny, nx) sample grid as a closed loop (y = 0, x = 1, y = 1, x = 0)."""
     return np.concatenate([index[0, :-1], index[:-1, -1], index[-1, :0:-1], index[::-1, 0]])
 
 
@@ -184,8 +239,8 @@ def _polylines(lines: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _shape_values(body: BodyMesh, axes: list[int], local: np.ndarray) -> np.ndarray:
-    """Shape function values (samples, n_shape) at the sample fractions ``local`` (samples,
+def _local_points(body: BodyMesh, axes: list[int], local: np.ndarray) -> np.ndarray:
+    """Local coordinates (samples, dim) in m of the sample fractions ``local`` (samples,
     axes) of the meshed axes, at the middle of the other axes (a beam's centre line, a
     plate's mid-surface)."""
     element = body.element
@@ -193,6 +248,13 @@ def _shape_values(body: BodyMesh, axes: list[int], local: np.ndarray) -> np.ndar
     for a, (low, high) in enumerate(element.kind.domain.bounds(element.geometry)):
         points[:, a] = (low + local[:, axes.index(a)] * (high - low) if a in axes
                         else (low + high) / 2)
+    return points
+
+
+def _shape_values(body: BodyMesh, points: np.ndarray) -> np.ndarray:
+    """Shape function values (samples, n_shape) at local coordinates ``points`` (samples,
+    dim)."""
+    element = body.element
     family = kernel_family(element.kind.name, "invariants", element.backend)
     return family("shape_values", {"point": points,
                                    "geometry": np.asarray(element.geometry)})["values"]
@@ -218,8 +280,8 @@ def write_vtu(path: str | Path, shape: Shape, q: np.ndarray,
               vectors: dict[str, np.ndarray]) -> Path:
     """The shape at coordinates ``q`` (size,; the reference configuration for a state, as
     :class:`VtkSeries` writes them) into the VTU file ``path`` (points in m, the cells of
-    ``shape``), with point data ``{name: (points, 3)}`` (e.g. displacement in m, velocity in
-    m/s)."""
+    ``shape``), with point data ``{name: (points,) or (points, components)}`` (e.g.
+    displacement in m, velocity in m/s, the strain and stress of :meth:`Shape.fields`)."""
     import meshio
 
     mesh = meshio.Mesh(shape.sample(q), shape.cells, point_data=vectors)
@@ -251,12 +313,13 @@ class VtkSeries(Observer):
     computed, the finite-element way: points at the reference configuration, the motion as
     point data (ParaView's Warp By Vector on ``displacement`` shows the deformed shape).
     ``static.vtu`` and ``dynamic_NNNNNN.vtu`` at every output time carry ``displacement``
-    (m) and ``velocity`` (m/s), with ``dynamic.pvd`` (written when the dynamic analysis
-    ends, however it ends); ``mode_K.vtu`` (points at the linearisation point, point data
-    ``mode``, the mode shape normalised to a largest nodal displacement of 1) with
-    ``modes.pvd`` (time = mode number).  ``files``: the static file and the collections
-    written, as ``<folder name>/<file>``.  Each run it observes starts a fresh series: the
-    files of the previous one are removed."""
+    (m), ``velocity`` (m/s) and the strain and stress fields of :meth:`Shape.fields`, with
+    ``dynamic.pvd`` (written when the dynamic analysis ends, however it ends);
+    ``mode_K.vtu`` (points at the linearisation point, point data ``mode``, the mode shape
+    normalised to a largest nodal displacement of 1) with ``modes.pvd`` (time = mode
+    number).  ``files``: the static file and the collections written, as
+    ``<folder name>/<file>``.  Each run it observes starts a fresh series: the files of the
+    previous one are removed."""
 
     def __init__(self, folder: str | Path) -> None:
         if not isinstance(folder, str | os.PathLike):
@@ -293,7 +356,8 @@ class VtkSeries(Observer):
         """The state ``q``, ``v`` as ``name``: reference points, displacement, velocity."""
         self._write(name, self.reference, {
             "displacement": self.shape.sample(q - self.reference),
-            "velocity": self.zero if v is None else self.shape.sample(v)})
+            "velocity": self.zero if v is None else self.shape.sample(v),
+            **self.shape.fields(q)})
 
     def static(self, q: np.ndarray) -> None:
         self._state("static.vtu", q, None)

@@ -21,15 +21,16 @@ from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
 from runtime.catalog import INTEGRATORS
 from runtime.kernels.kind import element_kind
+from runtime.model.dae import StateLoads
 from runtime.model.items.sensors import Samples, Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
 from runtime.model.settings import Static
 from runtime.progress import Bar, enabled, warn
-from runtime.solve import engines
+from runtime.solve import arc_length, engines
 from runtime.solve import static as analysis
 from runtime.solve.modal import modal_shapes
-from runtime.solve.python_engine import Divergence
+from runtime.solve.python_engine import Divergence, OutputDynamics, StateLimits
 
 __all__ = ["Simulation", "requested", "run_scene"]
 
@@ -63,10 +64,12 @@ class Simulation:
         self.model: Model | None = None
         self.static_q: np.ndarray | None = None
         self.modes: Modes | None = None
+        self.path: dict[str, np.ndarray] = {}   # arc length: load_factor and sensors
         self.history: dict[str, list[float]] = {}
         self._states: tuple[list, list] = ([], [])
         self._built: set[str] = set()   # modules built for this run beyond the kernels
         self._setup_s = 0.0   # seconds building engines during the analyses (not simulating)
+        self._dynamics: OutputDynamics | None = None   # equations of motion at the outputs
 
     def build(self) -> Model:
         """Build the model (kernels compiled or loaded) and its sensors; choose the engine.
@@ -107,8 +110,12 @@ class Simulation:
                 self.phase = "static analysis"
                 found = self._solve_static(scene.static)
                 self.static_q = found.q
-                summary.record_static(self.sensors.values(found.q, t=None), found.iterations,
-                                      found.load_steps)
+                if self.path:
+                    for observer in self.observers:
+                        observer.static_path(self.path)
+                else:
+                    summary.record_static(self._static_sensors(found), found.iterations,
+                                          found.load_steps)
                 for observer in self.observers:
                     observer.static(found.q)
             if scene.modal is not None:
@@ -133,8 +140,25 @@ class Simulation:
                     for f in b.element.loaded_families}))
         return 0
 
+    def _static_sensors(self, found: analysis.StaticResult) -> dict[str, float]:
+        """The sensors at the static equilibrium: at rest, loads at their nominal value, the
+        joint multipliers of the solution (reactions)."""
+        if not self.sensors.dynamics:
+            return self.sensors.values(found.q, t=None)
+        model = self.model
+        force = model.internal_forces(found.q, jacobian=False)[0] + model.nominal_load()
+        followers = StateLoads(model)
+        if followers:
+            force += followers.evaluate(found.q, np.ones(len(self.scene.loads)), False)[0]
+        return self.sensors.values(found.q, t=None, a=np.zeros(model.size),
+                                   multipliers=found.multipliers, force=force)
+
     def _solve_static(self, settings) -> analysis.StaticResult:
-        """The static equilibrium with the chosen engine's Newton solve."""
+        """The static equilibrium with the chosen engine's Newton solve, or the end of the
+        arc-length path (its load factors and sensors into ``path``, the summary's static
+        record filled)."""
+        if settings.method == "arc_length":
+            return self._trace_path(settings)
         dynamic = self.scene.dynamic
         start = time.perf_counter()
         newton = engines.static_newton(self.engine_name, self.model, settings,
@@ -142,6 +166,31 @@ class Simulation:
         if newton is not None:
             self._charge_setup(newton, time.perf_counter() - start)
         return analysis.solve_static(self.model, settings, newton)
+
+    def _trace_path(self, settings) -> analysis.StaticResult:
+        """The arc-length path (``runtime.solve.arc_length``, through the Python solves
+        whatever the engine), stopped by ``settings``' load factor or sensor criterion."""
+        values = lambda q: self.sensors.values(q, t=None)  # noqa: E731
+        start = values(self.model.reference)
+        name, target = settings.stop_sensor, settings.stop_value
+
+        def stop(q: np.ndarray, load_factor: float) -> str | None:
+            if load_factor >= settings.max_load_factor:
+                return f"load factor {load_factor:.6g} >= max_load_factor"
+            if name is not None:
+                value = values(q)[name]
+                if (value - target) * (start[name] - target) <= 0.0:
+                    return f"sensor {name} = {value:.6g} passed stop_value = {target:g}"
+            return None
+
+        found = arc_length.trace_path(self.model, settings, stop)
+        rows = [values(q) for q in found.states]
+        self.path = {"load_factor": found.load_factors,
+                     **{n: np.array([row[n] for row in rows]) for n in self.sensors.names}}
+        self.summary.record_path(rows[-1], found.iterations, found.steps, found.load_factor,
+                                 len(rows), found.stopped)
+        return analysis.StaticResult(found.q, found.multipliers, found.iterations,
+                                     found.steps)
 
     def _charge_setup(self, engine, seconds: float) -> None:
         """An engine built in ``seconds`` (its generated step compiled or loaded): its
@@ -166,8 +215,36 @@ class Simulation:
 
     def _observe(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                  dissipated: np.ndarray) -> None:
-        """A block of output times (k,): states (k, size), dissipated energy (k,)."""
-        values = self.sensors.block(Samples(times, q, v, dissipated))
+        """A block of output times (k,): states (k, size), dissipated energy (k,).  Raises
+        Divergence at the first output whose state or sensors are non-finite or absurd
+        (``StateLimits``), after observing those before it."""
+        dynamics = self._dynamics(times, q, v) if self._dynamics is not None else ()
+        values = self.sensors.block(Samples(times, q, v, dissipated, *dynamics))
+        insane = self._first_insane(q, v, values)
+        if insane is not None:
+            row, cause = insane
+            if row:
+                self._record(times[:row], q[:row], v[:row],
+                             {name: x[:row] for name, x in values.items()})
+            raise Divergence(float(times[row]), cause)
+        self._record(times, q, v, values)
+
+    def _first_insane(self, q: np.ndarray, v: np.ndarray, values: dict[str, np.ndarray]
+                      ) -> tuple[int, str] | None:
+        """(row, cause) of the first output of a block whose state (``StateLimits``) or
+        sensor values are not sane, or None."""
+        found = self._limits.first_insane(q, v, self.model.reference)
+        for name, value in values.items():
+            bad = ~np.isfinite(value)
+            if bad.any() and (found is None or int(np.argmax(bad)) < found[0]):
+                row = int(np.argmax(bad))
+                found = (row, f"non-finite sensor {name} ({value[row]})")
+        return found
+
+    def _record(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                values: dict[str, np.ndarray]) -> None:
+        """Sane output times (k,) with their states (k, size) and sensor values (k,) into the
+        history and to the observers."""
         # the history first: it is never behind what an observer wrote (``keep_outputs``
         # cuts it back to what they did write)
         self.history["t"].extend(times.tolist())
@@ -209,6 +286,8 @@ class Simulation:
         names = self.sensors.names
         start = time.perf_counter()
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
+        self._dynamics = OutputDynamics(engine.dae) if self.sensors.dynamics else None
+        self._limits = StateLimits.of(engine.dae, settings.t_end)
         self._charge_setup(engine, time.perf_counter() - start)
         self.history = {name: [] for name in ["t", *names]}
         for observer in self.observers:
@@ -257,7 +336,7 @@ class Simulation:
             q, v = (np.array(x).reshape(-1, size) for x in self._states)
             states = States(np.asarray(self.history["t"], float), q, v)
         return Result(self.summary.to_dict(), sensors, self.static_q, self.modes, states,
-                      self.model, exit_code)
+                      self.model, exit_code, dict(self.path))
 
 
 def _observers(observers: Sequence[Observer]) -> list[Observer]:

@@ -54,11 +54,17 @@ class Timing:
 
 @dataclass
 class StaticSummary:
-    """The static analysis: sensor values at equilibrium, Newton iterations, load steps."""
+    """The static analysis: sensor values at equilibrium, Newton iterations, load steps (arc
+    length: the steps of the path), and with arc length the method, the load factor of the
+    last point, the points of the path (the start included) and why it stopped."""
 
     sensors: dict[str, float]
     iterations: int
     load_steps: int
+    method: str | None = None
+    load_factor: float | None = None
+    path_points: int | None = None
+    stopped: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """``summary["static"]``."""
@@ -176,6 +182,13 @@ class Summary:
                       load_steps: int) -> None:
         """The static equilibrium was found."""
         self.static = StaticSummary(sensors, iterations, load_steps)
+
+    def record_path(self, sensors: dict[str, float], iterations: int, steps: int,
+                    load_factor: float, points: int, stopped: str) -> None:
+        """The static equilibrium path was traced by arc length to the point of
+        ``load_factor`` (``sensors`` there), ``points`` of them, the start included."""
+        self.static = StaticSummary(sensors, iterations, steps, "arc_length", load_factor,
+                                    points, stopped)
 
     def record_modal(self, about: str, frequencies_rad_s: np.ndarray, damped: bool) -> None:
         """The natural frequencies (rad/s, ascending) about ``about``; ``damped``: whether

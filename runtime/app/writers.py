@@ -26,15 +26,17 @@ from typing import IO, Any
 
 import numpy as np
 
-__all__ = ["ENERGIES_FILE", "OutputError", "RESERVED_FILES", "TimeSeriesWriter", "VTK_FOLDER",
-           "atomic_file", "atomic_path", "plot_file_name", "plot_series", "prepare_folder",
-           "write_json_atomic"]
+__all__ = ["ENERGIES_FILE", "OutputError", "PATH_CSV", "PATH_PLOT", "RESERVED_FILES",
+           "TimeSeriesWriter", "VTK_FOLDER", "atomic_file", "atomic_path", "plot_file_name",
+           "plot_path", "plot_series", "prepare_folder", "write_json_atomic", "write_path"]
 
 ENERGIES_FILE = "energies.png"
 #: the snapshot of the static state and the animation (runtime.app.shapes)
 SHAPE_FILE, ANIMATION_FILE = "shape_static.png", "shape_animation.gif"
+#: the arc-length path of a static analysis: its CSV and its load-displacement plot
+PATH_CSV, PATH_PLOT = "static_path.csv", "static_path.png"
 #: PNG names of a run that no sensor plot may take
-RESERVED_FILES = (ENERGIES_FILE, SHAPE_FILE)
+RESERVED_FILES = (ENERGIES_FILE, SHAPE_FILE, PATH_PLOT)
 #: subfolder of the VTU/PVD files of a run (runtime.app.shapes), owned by the run
 VTK_FOLDER = "vtk"
 # longest plot file stem: room for the temporary-file decoration within 255 bytes
@@ -241,6 +243,22 @@ class TimeSeriesWriter:
         self.close()
 
 
+def write_path(path: str | Path, columns: Mapping[str, Sequence[float]]) -> None:
+    """The arc-length path as CSV, atomically: header ``load_factor,<sensors...>`` (the
+    ``columns`` in order), one row per converged point, numbers with ``repr`` precision.
+    Raises OutputError."""
+    names = list(columns)
+    lines = io.StringIO()
+    csv.writer(lines, lineterminator="\n").writerow(names)
+    for row in zip(*(columns[name] for name in names), strict=True):
+        lines.write(",".join(repr(float(v)) for v in row) + "\n")
+    try:
+        with atomic_file(path, "w") as f:
+            f.write(lines.getvalue())
+    except OSError as error:
+        raise OutputError(f"{path}: cannot write ({_reason(error)})") from None
+
+
 def _json_ready(data: Any) -> Any:
     """``data`` with NaN/inf floats replaced by None, tuples by lists, NumPy values by Python
     ones (anything with ``tolist``) and paths by strings."""
@@ -278,6 +296,39 @@ def plot_file_name(name: str) -> str:
         return f"{name}.png"
     digest = hashlib.sha1(name.encode("utf-8", "surrogatepass")).hexdigest()[:8]
     return f"{safe[:MAX_STEM - 9] or 'series'}-{digest}.png"
+
+
+def plot_path(load_factors: Sequence[float], series: Mapping[str, Sequence[float]],
+              out_dir: str | Path, units: Mapping[str, str] | None = None
+              ) -> tuple[list[Path], list[str]]:
+    """``static_path.png``: the load factor against each of ``series`` (the
+    load-displacement curves of the arc-length path, a panel each), written atomically.
+    Returns (written paths, warnings) as :func:`plot_series`; nothing without series."""
+    if not series:
+        return [], []
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except Exception as error:
+        return [], [f"plots: cannot import matplotlib ({type(error).__name__}: {error})"]
+    units = units or {}
+    target = Path(out_dir) / PATH_PLOT
+    try:
+        names = list(series)
+        fig = Figure(figsize=(6.4, 1.2 + 3.0 * len(names)), layout="constrained")
+        axes = fig.subplots(len(names), 1, squeeze=False)[:, 0]
+        for ax, name in zip(axes, names, strict=True):
+            ax.plot(series[name], load_factors, lw=1.2, marker=".", ms=3)
+            ax.set_xlabel(_label(name, units.get(name)))
+            ax.set_ylabel("load factor")
+            ax.grid(True, alpha=0.3)
+        fig.suptitle("static equilibrium path (arc length)")
+        FigureCanvasAgg(fig)
+        with atomic_file(target) as f:
+            fig.savefig(f, format="png", dpi=100)
+    except Exception as error:
+        return [], [f"{PATH_PLOT}: not written ({type(error).__name__}: {error})"]
+    return [target], []
 
 
 def _label(name: str, unit: str | None, width: int = 40) -> str:

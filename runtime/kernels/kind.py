@@ -7,7 +7,9 @@ their calling conventions, storage patterns).  The runtime reads element metadat
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 from functools import cache
 from typing import Any
 
@@ -225,6 +227,34 @@ class ElementKind:
                 scale = self.domain.parameters.index(self.domain.axes[a].scale)
                 out[i, a] = coeffs[scale]
         return out
+
+    @property
+    def lattice_steps(self) -> tuple[int, ...]:
+        """Steps of the node lattice per element along each meshed axis: the common
+        denominator of the node fractions (1 for 2-node beams and 4-node plates; 2 for 3-node
+        beams and for a layout with mid-side nodes).  A mesh's grid indices count these
+        steps, so a grid point is a node only where the layout places one."""
+        fractions = self.node_fractions[:, self.mesh_axes]
+        return tuple(math.lcm(*(Fraction(float(f)).limit_denominator(1000).denominator
+                                for f in fractions[:, a]))
+                     for a in range(fractions.shape[1]))
+
+    def frame_gap(self) -> str | None:
+        """Why a node of this kind cannot carry an orthonormal frame (None when it can): the
+        gradients it carries must fix every axis, r_x, r_y and r_z completed from two in 3D,
+        from one in 2D.  One gradient in 3D fixes one direction only: the normal of a
+        surface (r_z of a shell) or the tangent of a line (r_x of a cable), not the turn
+        about it."""
+        gradients = [v for v in self.vectors if v != "r"]
+        if len(gradients) >= self.dim - 1:
+            return None
+        carried = f"its nodes carry only {', '.join(self.vectors)}"
+        if not gradients:
+            return f"{carried}: no gradient, no frame"
+        axis = "xyz".index(gradients[0][-1])
+        what = "tangent" if axis in self.mesh_axes else "normal"
+        return (f"{carried}: {gradients[0]} fixes only the node's {what}, not the turn about "
+                f"it (a frame in {self.dim}D needs {self.dim - 1} gradients)")
 
     def node_points(self, length: float, height: float | None = None,
                     width: float | None = None) -> np.ndarray:

@@ -10,7 +10,7 @@ from typing import Any
 
 from runtime.kernels.kind import element_kind
 from runtime.model import mesh as meshing
-from runtime.model.placements import Arc, Line, Placement, Rectangle
+from runtime.model.placements import Arc, Box, Line, Placement, Rectangle
 from runtime.model.schema import plain, table
 
 
@@ -52,13 +52,14 @@ class Spin:
 
 @dataclass(frozen=True)
 class Body:
-    """A mesh of elements of kind ``element`` sharing nodes (numbered by the kind's node layout:
-    ``n_nodes`` of them, see ``runtime.model.mesh.structured_mesh``).
+    """A mesh of elements of kind ``element`` sharing nodes (placed and numbered by the kind's
+    node layout: ``n_nodes`` of them, see ``runtime.model.mesh``).
 
     Beam kinds (a line of ``elements`` elements): section ``height`` and ``width`` (m; TOML
     ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or
     ``arc``.  Plate kinds: ``rectangle`` (its grid sets ``elements``) and ``thickness`` (m;
-    TOML ``section = {thickness}``).  material: the name of a material of the scene;
+    TOML ``section = {thickness}``).  Solid kinds (meshing three axes): ``box`` (its grid sets
+    ``elements``; no section).  material: the name of a material of the scene;
     quadrature: Gauss orders (dim,) or None for the kind's default.  Initial conditions
     (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s, a uniform
     translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
@@ -78,6 +79,7 @@ class Body:
     initial_angular_velocity: Spin | None = None
     rectangle: Rectangle | None = None
     thickness: float | None = None
+    box: Box | None = None
 
     @property
     def dim(self) -> int:
@@ -86,10 +88,12 @@ class Body:
 
     @property
     def placement(self) -> Placement:
-        """Where the body lies: its rectangle, its arc, or the line from start to end (the one
-        place that tells them apart)."""
+        """Where the body lies: its rectangle, its box, its arc, or the line from start to end
+        (the one place that tells them apart)."""
         if self.rectangle is not None:
             return self.rectangle
+        if self.box is not None:
+            return self.box
         return self.arc if self.arc is not None else Line(self.start, self.end)
 
     @property
@@ -99,20 +103,29 @@ class Body:
 
     @property
     def grid_shape(self) -> tuple[int, ...]:
-        """Node points along each meshed axis: (nodes,) for a line, (columns along x, rows
-        along y) for a rectangle."""
-        return meshing.grid_shape(element_kind(self.element), self.counts)
+        """Points of the node lattice along each meshed axis (``runtime.model.mesh``): (nodes,)
+        for a line, (columns along x, rows along y) for a rectangle; with mid-side nodes the
+        lattice has two steps per element."""
+        return meshing.lattice_shape(element_kind(self.element), self.counts)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
-        (nx + 1)(ny + 1) for 4-node plates."""
+        (nx + 1)(ny + 1) for 4-node plates, what the layout places for others (computed
+        without meshing)."""
         return meshing.node_count(element_kind(self.element), self.counts)
+
+    @property
+    def mesh(self) -> meshing.Mesh:
+        """The body's structured mesh (built once per kind and counts)."""
+        return meshing.structured_mesh(element_kind(self.element), self.counts)
 
     @property
     def section(self) -> tuple[float, ...]:
         """The section sizes (m) across the meshed axes: (height, width) of a beam, the
-        thickness of a plate."""
+        thickness of a plate, none for a box (its elements' sides are the geometry)."""
+        if self.box is not None:
+            return ()
         return (self.thickness,) if self.thickness is not None else (self.height, self.width)
 
     @property
@@ -123,17 +136,18 @@ class Body:
 
     def node_position(self, index: int) -> tuple[float, ...]:
         """Reference position (m) of node ``index``, as the model meshes the body."""
-        return self.placement.node_position(index, self.grid_shape)
+        return self.placement.node_position(tuple(self.mesh.points[index]), self.counts)
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[[body]]``: what the body was given, so that the parser rejects
         what does not fit its kind (a plate's height, a beam's thickness, a plate's
         elements beside its grid)."""
         section = {"height": self.height, "width": self.width, "thickness": self.thickness}
+        given = {k: v for k, v in section.items() if v is not None}
         head = {"name": self.name, "element": self.element, "material": self.material,
-                "section": {k: v for k, v in section.items() if v is not None}}
-        # a rectangle's grid sets its elements (written only when they disagree: an error)
-        grid = getattr(self.rectangle, "grid", None)
+                **({"section": given} if given or self.box is None else {})}
+        # a grid sets its elements (written only when they disagree: an error)
+        grid = getattr(self.rectangle or self.box, "grid", None)
         if self.elements is not None and (grid is None or self.elements != math.prod(grid)):
             head["elements"] = self.elements
         return {**plain(head),

@@ -8,7 +8,7 @@
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
 * loads: a point force acts on a node whose position is free, a point moment on a node whose
-  section can turn;
+  section can turn, a line force on a grid line of a rectangle (not on a box's face);
 * the frequency estimate of a dynamic analysis has a sensor and enough output samples.
 """
 
@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import Constraint, Hub, Joint, NodeConstraint, Weld
 from runtime.model.items.loads import Load
 from runtime.model.items.sensors import Sensor
-from runtime.model.placements import Line
 from runtime.model.schema import NodeRef
 from runtime.model.settings import MULTIPLE_TOLERANCE, Dynamic
 
@@ -111,20 +112,26 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
 
 
 def check_hub_axis(path: str, hub: Hub, body: Body) -> None:
-    """A prescribed rotation of a 3D cable node (it carries r, r_x only) about the cable's own
-    axis would turn nothing: the node stays clamped.  Refused (cables are straight lines)."""
+    """A prescribed rotation of a 3D node that carries one gradient (``ElementKind.frame_gap``:
+    a cable's r_x, a shell's r_z) about the direction of that gradient would turn nothing:
+    the node stays clamped.  Refused, naming the line's axis or the surface's normal."""
     kind = element_kind(body.element)
-    if kind.dim != 3 or len(kind.vectors) != 2 or not isinstance(body.placement, Line):
+    gradients = [v for v in kind.vectors if v != "r"]
+    if kind.dim != 3 or len(gradients) != 1:
         return
-    axis = hub.axis or (0.0, 0.0, 1.0)
-    along = [e - s for s, e in zip(body.placement.start, body.placement.end, strict=True)]
-    cross = [axis[1] * along[2] - axis[2] * along[1], axis[2] * along[0] - axis[0] * along[2],
-             axis[0] * along[1] - axis[1] * along[0]]
-    if math.hypot(*cross) <= 1e-9 * math.hypot(*axis) * math.hypot(*along):
-        raise SceneError(f"{path}: a rotation about the axis of body {body.name!r} "
-                         f"({kind.name}, its nodes carry only r, r_x: no section, no torsion) "
+    element, local = np.argwhere(body.mesh.connectivity == hub.node.index)[0]
+    e0 = body.placement.element_references(kind, body.counts)[element]
+    along = e0.reshape(kind.n_shape, 3)[local * len(kind.vectors)
+                                        + kind.vectors.index(gradients[0])]
+    axis = np.asarray(hub.axis or (0.0, 0.0, 1.0))
+    if np.linalg.norm(np.cross(axis, along)) <= 1e-9 * np.linalg.norm(axis) * np.linalg.norm(
+            along):
+        what, turn = (("axis", "no section, no torsion") if kind.frame_gap().count("tangent")
+                      else ("normal", "no turn about the normal"))
+        raise SceneError(f"{path}: a rotation about the {what} of body {body.name!r} "
+                         f"({kind.name}, its nodes carry only {', '.join(kind.vectors)}: {turn}) "
                          f"turns none of its coordinates; expected an axis not parallel to the "
-                         f"cable, or a clamp")
+                         f"{'cable' if what == 'axis' else 'normal'}, or a clamp")
 
 
 def check_weld(path: str, a: Body, b: Body) -> None:
@@ -140,9 +147,18 @@ def check_weld(path: str, a: Body, b: Body) -> None:
                              f"every gradient, or a spherical joint")
 
 
-def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...]) -> None:
+def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
+                bodies: tuple[Body, ...]) -> None:
     """A load must act on coordinates that its nodes' constraints leave free (on one node of
-    an edge at least)."""
+    an edge at least); a line force acts along a grid line of a rectangle body, not on the
+    face of a box body (no face load is built)."""
+    boxes = {b.name for b in bodies if b.box is not None}
+    for i, load in enumerate(loads):
+        edge = getattr(load, "edge", None)
+        if edge is not None and edge.body in boxes:
+            raise SceneError(f"load[{i}].edge: {edge} is a face of the box body "
+                             f"{show(edge.body)}; a {load.noun} acts along a grid line of a "
+                             f"rectangle body (loads on faces are not built yet)")
     held = {node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)
             for node in c.targets()}
     for i, load in enumerate(loads):

@@ -1,8 +1,9 @@
 """A scene turned into a model: meshed bodies, global coordinates, assembly, constraints.
 
-Each body is meshed by connectivity (``runtime.element.reference.structured_mesh``: a line of beam
-elements, interior nodes included for 3-node beams; a grid of plate elements); its nodes
-are numbered along x, then y, and the bodies one after the other.  Coordinates are
+Each body is meshed by connectivity from its kind's node layout (``runtime.model.mesh``: a
+line of beam elements, interior nodes included for 3-node beams; a grid of plate or shell
+elements with exactly the nodes of the layout, corners and mid-sides); its nodes are numbered
+along x, then y, and the bodies one after the other.  Coordinates are
 node-major over the whole model: a node owns ``per_node`` consecutive coordinates (its
 nodal vectors, e.g. r, r_x, r_y, r_z or r, r_y, r_z, each a dim-vector), the number of
 its body's kind.  Coordinates are split into *free* ones (unknowns), *fixed* ones (clamp,
@@ -112,7 +113,7 @@ class Model:
                               backend=self.backend, quadrature=body.quadrature,
                               law=material.law, shear_correction=material.shear_correction,
                               damping=material.damping)
-            mesh = meshing.structured_mesh(kind, body.counts)
+            mesh = body.mesh
             self.bodies[body.name] = BodyMesh(
                 body.name, element, mesh, nodes, coordinates,
                 node_references(kind, mesh, e0s), coordinates + mesh.dofs(kind),

@@ -24,6 +24,7 @@ from runtime.catalog import (
     INTEGRATORS,
     METHODS,
     NEWTON_MODES,
+    STATIC_METHODS,
     generated_kinds,
     material_laws,
 )
@@ -33,9 +34,10 @@ from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.sensors import SENSORS, Sensor
-from runtime.model.placements import PLACEMENTS, Arc, Line, Rectangle
+from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
+from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
+    HINTS,
     Context,
     Nodes,
     boolean,
@@ -114,8 +116,8 @@ def _material(name: str, data: Any) -> Material:
 
 def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
     path = f"body[{i}]"
-    keys(data, path, ("name", "element", "material", "section"),
-         ("elements", *(key for placement in PLACEMENTS for key in placement.keys),
+    keys(data, path, ("name", "element", "material"),
+         ("section", "elements", *(key for placement in PLACEMENTS for key in placement.keys),
           "quadrature", "initial_velocity", "initial_angular_velocity"))
     name = checked_name(data["name"], f"{path}.name", "a body name")
     if ":" in name:
@@ -135,9 +137,16 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                          f"{show(law)}, which does not apply to {kind} elements ({why}); "
                          f"expected a material with one of the laws "
                          f"{', '.join(meta.laws)}")
-    plate = len(meta.mesh_axes) == 2
-    shape = _plate_shape if plate else _line_shape
-    height, width, thickness, elements, start, end, arc, rectangle = shape(data, path, kind, dim)
+    shape = (_line_shape, _plate_shape, _box_shape)[len(meta.mesh_axes) - 1]
+    if shape is not _box_shape:
+        if "box" in data:
+            raise SceneError(f"{path}.box: {kind} is not a solid element; boxes are for "
+                             f"elements meshing three axes (bricks)")
+        if "section" not in data:
+            raise SceneError(f"{path}.section: missing required key; expected "
+                             f"{HINTS['section']}")
+    height, width, thickness, elements, start, end, arc, rectangle, box = shape(
+        data, path, kind, dim)
 
     quadrature = None
     if "quadrature" in data:
@@ -161,7 +170,7 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                                     "in rad/s"),
                     vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
     return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
-                velocity, spin, rectangle, thickness)
+                velocity, spin, rectangle, thickness, box)
 
 
 def _check_initial_motion(body: Body, path: str, rho: float) -> None:
@@ -207,14 +216,14 @@ def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
         raise SceneError(f"{path}: expected either start and end or arc, got both")
     if straight:
         line = Line.parse(data, path, dim, why)
-        return height, width, None, elements, line.start, line.end, None, None
+        return height, width, None, elements, line.start, line.end, None, None, None
     if "arc" in data:
         energy = element_kind(kind).energy
         if "general" not in energy.variants:
             raise SceneError(f"{path}.arc: {kind} takes straight references only: "
                              f"{energy.curved}; expected start and end (a straight body)")
         arc = Arc.parse(data["arc"], f"{path}.arc", dim, why)
-        return height, width, None, elements, None, None, arc, None
+        return height, width, None, elements, None, None, arc, None, None
     raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")
 
 
@@ -236,7 +245,24 @@ def _plate_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
                    "a table {thickness = T}")
     thickness = size(section["thickness"], f"{path}.section.thickness", "a thickness in m")
     rectangle = Rectangle.parse(data["rectangle"], f"{path}.rectangle", dim, f"{kind} is {dim}D")
-    return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle)
+    return (None, None, thickness, math.prod(rectangle.grid), None, None, None, rectangle, None)
+
+
+def _box_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
+    """Element count and placement (a ``Box``) of a solid body (kinds meshing three axes)."""
+    for key in ("section", *Line.keys, *Arc.keys, *Rectangle.keys):
+        if key in data:
+            raise SceneError(f"{path}.{key}: {kind} is a solid element; a solid body is a "
+                             f"box = {{corner = [x, y, z], size = [a, b, c], grid = "
+                             f"[nx, ny, nz]}} (its elements' sides are its geometry)")
+    if "elements" in data:
+        raise SceneError(f"{path}.elements: the box's grid sets the elements of a solid "
+                         f"body; remove elements")
+    if "box" not in data:
+        raise SceneError(f"{path}.box: missing required key; expected {{corner = [x, y, z], "
+                         f"size = [a, b, c], grid = [nx, ny, nz]}} ({kind} is a solid element)")
+    box = Box.parse(data["box"], f"{path}.box", dim, f"{kind} is {dim}D")
+    return (None, None, None, math.prod(box.grid), None, None, None, None, box)
 
 
 def _table_fields(data: Any, path: str, spec: dict[str, Callable[[Any, str], Any]],
@@ -260,10 +286,32 @@ def _tolerance(value: Any, path: str) -> float:
     return tolerance
 
 
-def _static(data: Any) -> Static:
-    return Static(**_table_fields(data, "analysis.static", {
+def _static(data: Any, sensors: list[Sensor]) -> Static:
+    path = "analysis.static"
+    fields = _table_fields(data, path, {
         "max_iterations": _iterations, "tolerance": _tolerance,
-        "load_steps": lambda v, p: count(v, p, LIMITS["steps"], " load increments")}))
+        "load_steps": lambda v, p: count(v, p, LIMITS["steps"], " load increments"),
+        "method": lambda v, p: choice(v, p, STATIC_METHODS, "static method"),
+        "arc_length": lambda v, p: number(v, p, positive=True),
+        "max_steps": lambda v, p: count(v, p, LIMITS["steps"], " path points"),
+        "max_load_factor": lambda v, p: number(v, p, positive=True),
+        "stop_sensor": string, "stop_value": number})
+    arc_keys = sorted(set(fields) & {"arc_length", "max_steps", "max_load_factor",
+                                     "stop_sensor", "stop_value"})
+    if arc_keys and fields.get("method") != "arc_length":
+        raise SceneError(f'{path}.{arc_keys[0]}: only meaningful with method = "arc_length"; '
+                         f'add it or remove {arc_keys[0]}')
+    if ("stop_sensor" in fields) != ("stop_value" in fields):
+        given, missing = (("stop_sensor", "stop_value") if "stop_sensor" in fields
+                          else ("stop_value", "stop_sensor"))
+        raise SceneError(f"{path}.{missing}: expected with {given} (the path stops when "
+                         f"sensor stop_sensor passes stop_value)")
+    names = [s.name for s in sensors]
+    if "stop_sensor" in fields and fields["stop_sensor"] not in names:
+        expected = f"one of {', '.join(names)}" if names else "a [[sensor]] name (none defined)"
+        raise SceneError(f"{path}.stop_sensor: no sensor called {show(fields['stop_sensor'])}; "
+                         f"expected {expected}")
+    return Static(**fields)
 
 
 def _modal(data: Any) -> Modal:
@@ -388,7 +436,7 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     check_constraints(constraints, tuple(bodies))
     loads = tuple(parse_record(LOADS, "load", x, f"load[{i}]", context)
                   for i, x in enumerate(_array_of_tables(data, "load")))
-    check_loads(loads, constraints)
+    check_loads(loads, constraints, tuple(bodies))
     raw_sensors = _array_of_tables(data, "sensor")
     if len(raw_sensors) > LIMITS["sensors"]:
         raise SceneError(f"sensor: expected at most {LIMITS['sensors']} sensors (one CSV "
@@ -403,9 +451,10 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
             raise SceneError(f"sensor[{i}].name: duplicate sensor name {show(sensor.name)}"
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
+    check_reactions(tuple(sensors), constraints)
 
     analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
-    static = _static(analysis["static"]) if "static" in analysis else None
+    static = _static(analysis["static"], sensors) if "static" in analysis else None
     modal = _modal(analysis["modal"]) if "modal" in analysis else None
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
     if dynamic is not None and dynamic.frequency_of is not None:

@@ -3,8 +3,9 @@
 A placement reads its own keys of a ``[[body]]`` table, says how many elements tile each
 meshed axis and how large they are, where each node of the structured mesh is, how far the
 body reaches from the origin, and gives the reference coordinates of every element.  Line
-kinds (beams) are placed on a straight ``Line`` (``start``/``end``) or an ``Arc``; plate
-kinds on a ``Rectangle``.  ``Body.placement`` is the one place that tells which one a body has.
+kinds (beams) are placed on a straight ``Line`` (``start``/``end``) or an ``Arc``; plate and
+shell kinds on a ``Rectangle``; solid kinds (meshing three axes, bricks) in a ``Box``.
+``Body.placement`` is the one place that tells which one a body has.
 """
 
 from __future__ import annotations
@@ -52,9 +53,11 @@ class Placement:
                                  f"expected elements of at least {1 / MAGNITUDE:g} m (at most "
                                  f"{most} elements), got {n}")
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        """Reference position (m) of node ``index`` of the structured mesh whose node grid has
-        ``shape`` (nodes evenly spaced along a line or arc, on the grid of a rectangle)."""
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        """Reference position (m) of the mesh point ``point`` (element units along each
+        meshed axis, ``runtime.model.mesh.Mesh.points``) of a structured mesh of ``counts``
+        elements: along a line or arc, on a rectangle."""
         raise NotImplementedError
 
     def extent(self) -> float:
@@ -98,8 +101,9 @@ class Line(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return (math.dist(self.start, self.end) / counts[0],)
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        f = index / (shape[0] - 1)
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        f = point[0] / counts[0]
         return tuple(a + (b - a) * f for a, b in zip(self.start, self.end, strict=True))
 
     def extent(self) -> float:
@@ -153,8 +157,9 @@ class Arc(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return (self.radius * math.radians(abs(self.angle_deg)) / counts[0],)
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        f = index / (shape[0] - 1)
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        f = point[0] / counts[0]
         theta = math.radians(self.start_angle_deg) + f * math.radians(self.angle_deg)
         x, y = self.center[0], self.center[1]
         return (x + self.radius * math.cos(theta), y + self.radius * math.sin(theta),
@@ -216,9 +221,9 @@ class Rectangle(Placement):
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
         return tuple(side / n for side, n in zip(self.size, counts, strict=True))
 
-    def node_position(self, index: int, shape: tuple[int, ...]) -> tuple[float, ...]:
-        i, j = index % shape[0], index // shape[0]
-        x, y = (i / (shape[0] - 1)) * self.size[0], (j / (shape[1] - 1)) * self.size[1]
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        x, y = (p / n * side for p, n, side in zip(point, counts, self.size, strict=True))
         return (self.corner[0] + x, self.corner[1] + y, self.corner[2])
 
     def extent(self) -> float:
@@ -233,5 +238,70 @@ class Rectangle(Placement):
                          for j in range(ny) for i in range(nx)])
 
 
+@dataclass(frozen=True)
+class Box(Placement):
+    """An axis-aligned box: ``corner`` (3,) in m, ``size`` (a, b, c) in m along +x, +y and +z,
+    meshed by ``grid`` (nx, ny, nz) elements of size a / nx by b / ny by c / nz (solid kinds,
+    whose meshes tile all three axes)."""
+
+    keys: ClassVar[tuple[str, ...]] = ("box",)
+    mesh_dims: ClassVar[int] = 3
+    count_key: ClassVar[str] = "box.grid"
+
+    corner: tuple[float, ...]
+    size: tuple[float, float, float]
+    grid: tuple[int, int, int]
+
+    @classmethod
+    def parse(cls, data: Any, path: str, dim: int, why: str) -> Box:
+        """The box of the table ``box = {...}`` ``data`` at ``path``."""
+        r = keys(data, path, ("corner", "size", "grid"), (),
+                 "a table {corner = [x, y, z], size = [a, b, c], grid = [nx, ny, nz]}")
+        corner = vector(r["corner"], f"{path}.corner", dim, why)
+        if max(map(abs, corner)) > MAGNITUDE:
+            raise SceneError(f"{path}.corner: expected a point with coordinates of at most "
+                             f"{MAGNITUDE:g} m in magnitude, got {show(r['corner'])}")
+        sides = vector(r["size"], f"{path}.size", 3, "the sides a, b, c along x, y, z, in m")
+        if min(sides) <= 0 or not math.isfinite(sum(sides) ** 2):
+            raise SceneError(f"{path}.size: expected three positive finite sides in m, got "
+                             f"{show(r['size'])}")
+        for side in sides:
+            in_range(side, f"{path}.size", "sides in m")
+        grid = r["grid"]
+        if not isinstance(grid, list) or len(grid) != 3:
+            raise SceneError(f"{path}.grid: expected [nx, ny, nz], three positive integers "
+                             f"(elements along x, y and z), got {show(grid)}")
+        return cls(corner, sides,
+                   tuple(count(n, f"{path}.grid[{k}]") for k, n in enumerate(grid)))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table ``box = {...}``."""
+        return table(self)
+
+    def counts(self, elements: int | None) -> tuple[int, ...]:
+        return tuple(self.grid)
+
+    def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
+        return tuple(side / n for side, n in zip(self.size, counts, strict=True))
+
+    def node_position(self, point: tuple[float, ...], counts: tuple[int, ...]
+                      ) -> tuple[float, ...]:
+        return tuple(c + p / n * side for c, p, n, side in zip(self.corner, point, counts,
+                                                                self.size, strict=True))
+
+    def extent(self) -> float:
+        return max(abs(x) for x in self.corner) + sum(self.size)
+
+    def element_references(self, kind: ElementKind, counts: tuple[int, ...]) -> np.ndarray:
+        sides = np.array(self.element_sides(counts))
+        fractions = kind.node_fractions
+        frames = np.broadcast_to(np.eye(3), (kind.n_nodes, 3, 3))
+        cells = [(i, j, k) for k in range(counts[2]) for j in range(counts[1])
+                 for i in range(counts[0])]
+        return np.array([reference.frame_reference(
+            kind, np.asarray(self.corner) + (np.array(cell) + fractions) * sides, frames)
+            for cell in cells])
+
+
 #: Every placement, by the kinds of meshes it places (``Placement.mesh_dims``).
-PLACEMENTS: tuple[type[Placement], ...] = (Line, Arc, Rectangle)
+PLACEMENTS: tuple[type[Placement], ...] = (Line, Arc, Rectangle, Box)

@@ -23,6 +23,7 @@ import numpy as np
 
 from runtime.element.element import MAGNITUDE
 from runtime.model.errors import SceneError, is_finite, show
+from runtime.model.mesh import Mesh
 from runtime.model.time_laws import Law, parse_law
 
 # what a missing required key should hold, for error messages
@@ -81,7 +82,8 @@ class NodeRef:
 @dataclass(frozen=True)
 class EdgeRef:
     """The grid line ``axis = line`` of a rectangle body (``"BODY:x=0"``: the nodes of grid
-    column 0, the edge at the rectangle's corner; ``"BODY:y=-1"``: the last grid row), with
+    column 0, the edge at the rectangle's corner; ``"BODY:y=-1"``: the last grid row), or the
+    lattice plane of a box body (a face: ``"BODY:z=0"`` its bottom), with
     ``line`` non-negative in a validated scene; ``nodes`` are the body's node indices on it
     (from x = 0 to the end along the other axis; not compared); ``written`` as for NodeRef."""
 
@@ -188,8 +190,8 @@ def rotation_vector(value: Any, path: str, dim: int, what: str) -> float | tuple
 
 
 class MeshedBody(Protocol):
-    """What node references are resolved against: a body's name, element kind and node grid
-    (``runtime.model.bodies.Body``)."""
+    """What node references are resolved against: a body's name, element kind, node lattice
+    and mesh (``runtime.model.bodies.Body``)."""
 
     name: str
     element: str
@@ -200,10 +202,14 @@ class MeshedBody(Protocol):
     @property
     def n_nodes(self) -> int: ...
 
+    @property
+    def mesh(self) -> Mesh: ...
+
 
 class Nodes:
-    """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies) and
-    edges ``"BODY:x=I"`` / ``"BODY:y=J"`` against the bodies of a scene."""
+    """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies: the node
+    at point (I, J) of the node lattice, ``runtime.model.mesh``) and edges ``"BODY:x=I"`` /
+    ``"BODY:y=J"`` (the nodes on that lattice line) against the bodies of a scene."""
 
     def __init__(self, bodies: tuple[MeshedBody, ...]) -> None:
         self.bodies = {b.name: b for b in bodies}
@@ -220,41 +226,55 @@ class Nodes:
     def __call__(self, value: Any, path: str) -> NodeRef:
         body, text = self._body(value, path, 'a node reference "BODY:INDEX"')
         shape = body.grid_shape
-        if "," in text and len(shape) == 2:
+        if "," in text and len(shape) >= 2:
             parts = text.split(",")
-            if len(parts) != 2:
-                raise SceneError(f'{path}: expected a grid index "BODY:I,J" (two integers), '
-                                 f"got {show(value)}")
-            i, j = (_index(part, n, path, value, f"grid index {axis}",
-                           f"body {show(body.name)} with {n} node {what}")
-                    for part, n, axis, what in zip(parts, shape, "IJ", ("columns", "rows"),
-                                                   strict=True))
-            index = j * shape[0] + i
+            if len(parts) != len(shape):
+                form, count_ = (("I,J", "two") if len(shape) == 2 else ("I,J,K", "three"))
+                raise SceneError(f'{path}: expected a grid index "BODY:{form}" ({count_} '
+                                 f"integers), got {show(value)}")
+            grid = tuple(_index(part, n, path, value, f"grid index {axis}",
+                                f"body {show(body.name)} with {n} node {what}")
+                         for part, n, axis, what in zip(parts, shape, "IJK",
+                                                        ("columns", "rows", "layers"),
+                                                        strict=False))
+            index = body.mesh.node_at(grid)
+            if index is None:
+                point = ",".join(map(str, grid))
+                near = ", ".join(f'"{body.name}:{",".join(map(str, body.mesh.lattice[k]))}" '
+                                 f"(node {k})" for k in body.mesh.nearest(grid))
+                raise SceneError(f"{path}: no node at grid point {point} of body "
+                                 f"{show(body.name)} ({body.element} elements place nodes on "
+                                 f"part of its {' x '.join(map(str, shape))} node lattice); "
+                                 f"nearest nodes: {near}")
             return NodeRef(body.name, index, None if text == str(index) else text)
         n = body.n_nodes
         index = _index(text, n, path, value, "node index",
-                       f"body {show(body.name)} with {n} nodes", grid=len(shape) == 2)
+                       f"body {show(body.name)} with {n} nodes", grid=len(shape) >= 2)
         return NodeRef(body.name, index, None if text == str(index) else text)
 
     def edge(self, value: Any, path: str) -> EdgeRef:
-        """An edge (a grid line) ``"BODY:x=I"`` or ``"BODY:y=J"`` of a rectangle body."""
+        """An edge (a node lattice line) ``"BODY:x=I"`` or ``"BODY:y=J"`` of a rectangle
+        body, or a face (a lattice plane, also ``"BODY:z=K"``) of a box body: the nodes on it,
+        in node order (along the line; x fastest, then y, on a face)."""
         form = 'an edge "BODY:x=I" or "BODY:y=J" (a grid line of a rectangle body)'
         body, text = self._body(value, path, form)
         shape = body.grid_shape
-        if len(shape) != 2:
+        if len(shape) == 1:
             raise SceneError(f"{path}: body {show(body.name)} is a line of {body.element} "
                              f"elements; edges are grid lines of rectangle bodies (use node "
                              f'"{body.name}:INDEX"), got {show(value)}')
-        if text[:2] not in ("x=", "y="):
+        if len(shape) == 3:
+            form = ('a face "BODY:x=I", "BODY:y=J" or "BODY:z=K" (a lattice plane of a box '
+                    'body)')
+        if text[:2] not in tuple(f"{axis}=" for axis in "xyz"[:len(shape)]):
             raise SceneError(f"{path}: expected {form}, got {show(value)}")
         axis = text[0]
-        a = "xy".index(axis)
+        a = "xyz".index(axis)
         n = shape[a]
         line = _index(text[2:], n, path, value, f"grid line {axis}",
-                      f"body {show(body.name)} with {n} node {('columns', 'rows')[a]}")
-        nx, ny = shape
-        nodes = (tuple(j * nx + line for j in range(ny)) if axis == "x"
-                 else tuple(line * nx + i for i in range(nx)))
+                      f"body {show(body.name)} with {n} node "
+                      f"{('columns', 'rows', 'layers')[a]}")
+        nodes = tuple(int(i) for i in body.mesh.on_line(a, line))
         return EdgeRef(body.name, axis, line, nodes, None if text[2:] == str(line) else text[2:])
 
 

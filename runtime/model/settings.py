@@ -16,11 +16,26 @@ MULTIPLE_TOLERANCE = 1e-9
 @dataclass(frozen=True)
 class Static:
     """Static analysis: Newton-Raphson, at most ``max_iterations`` per load increment,
-    convergence ``tolerance`` (relative), loads applied in ``load_steps`` equal increments."""
+    convergence ``tolerance`` (relative: corrections to the model's size, residuals to its
+    forces).
+
+    ``method``: ``load_stepping`` (the loads applied in ``load_steps`` equal increments) or
+    ``arc_length`` (Crisfield's cylindrical arc length: the path of equilibria through limit
+    points, the load factor an unknown).  Arc length: ``arc_length`` the first step's length
+    (m, over the free coordinates; None: that of the linear predictor at 1/load_steps of the
+    load), at most ``max_steps`` converged points; the path stops at the first point with a
+    load factor of at least ``max_load_factor``, or whose sensor ``stop_sensor`` has passed
+    ``stop_value`` (its unit) from its value at the start."""
 
     max_iterations: int = 50
     tolerance: float = 1e-10
     load_steps: int = 1
+    method: str = "load_stepping"
+    arc_length: float | None = None
+    max_steps: int = 100
+    max_load_factor: float = 1.0
+    stop_sensor: str | None = None
+    stop_value: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[analysis.static]``."""

@@ -103,10 +103,14 @@ def check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
                              f"elements, no joints or no modal analysis")
 
     work = LIMITS["element_steps"]
-    if static is not None and static.load_steps * elements > work:
-        raise SceneError(f"analysis.static.load_steps: {static.load_steps} load increments of "
-                         f"{elements} elements exceed the limit of {work:.0e} element-steps "
-                         f"(about a day); expected at most {work // elements} increments")
+    if static is not None:
+        key, steps, what = (("max_steps", static.max_steps, "path points")
+                            if static.method == "arc_length" else
+                            ("load_steps", static.load_steps, "load increments"))
+        if steps * elements > work:
+            raise SceneError(f"analysis.static.{key}: {steps} {what} of {elements} elements "
+                             f"exceed the limit of {work:.0e} element-steps (about a day); "
+                             f"expected at most {work // elements} {what}")
     if dynamic is not None:
         steps = round(dynamic.t_end / dynamic.step)
         if steps * elements > work:

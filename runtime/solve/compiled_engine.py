@@ -36,10 +36,10 @@ from runtime.solve.python_engine import (
     newton_not_converged,
     one_by_one,
 )
-from runtime.solve.static import ConvergenceError
+from runtime.solve.static import Convergence, ConvergenceError
 from templates import environment
 
-STEPPER_VERSION = "2"
+STEPPER_VERSION = "3"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
 #: a call of the compiled step covers more output times while it lasts less than this (s),
@@ -422,8 +422,9 @@ class CompiledEngine:
 class CompiledStatic:
     """Newton solves of the static equilibrium through the generated step (``ancf_static``:
     the same kernels, banded assembly, factorisation and joint solve as the dynamic step),
-    one call per load increment of ``runtime.solve.static``.  The module is the one a
-    dynamic analysis with ``integrator`` uses (compiled once for both)."""
+    one call per load increment of ``runtime.solve.static``, with its convergence test
+    (``runtime.solve.static.Convergence``).  The module is the one a dynamic analysis with
+    ``integrator`` uses (compiled once for both)."""
 
     def __init__(self, model: Model, settings, integrator: str) -> None:
         binding = Dynamic(t_end=1.0, step=1.0, integrator=integrator,
@@ -431,8 +432,11 @@ class CompiledStatic:
         self.engine = CompiledEngine(model, binding, model.reference)
         self.compile_s, self.modules = self.engine.compile_s, self.engine.modules
         dae = self.engine.dae
+        self.convergence = Convergence.of(model, settings.tolerance)
         self._m = self.engine._model(1.0)
         self._m.modified = 0
+        self._m.residual_tolerance = settings.tolerance
+        self._m.residual_floor = self.convergence.floor
         rest = np.zeros(dae.free.size)
         self._s = self.engine._state(State(0.0, dae.fixed_values[dae.free], rest, rest,
                                            np.zeros(dae.joints),
@@ -444,7 +448,8 @@ class CompiledStatic:
     def __call__(self, q: np.ndarray, load_fraction: float,
                  multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
         """Equilibrium (q_full (size,), multipliers, iterations) under ``load_fraction`` of
-        every load, from q_full and multipliers.  Raises ConvergenceError."""
+        every load, from q_full and multipliers.  Raises ConvergenceError,
+        IllConditionedError."""
         dae, s = self.engine.dae, self._s
         state_q, state_lam = self.engine._state_arrays[0], self.engine._state_arrays[3]
         state_q[:] = q[dae.free]
@@ -457,9 +462,10 @@ class CompiledStatic:
         if status == 1:
             raise ConvergenceError("static: non-finite residual")
         if status == 2:
-            raise ConvergenceError(f"static: Newton did not converge in {self.max_iterations} "
-                                   f"iterations (last step {s.last_correction:.3g} m)")
+            raise self.convergence.not_converged(self.max_iterations, s.last_correction,
+                                                 s.last_residual, s.force_scale)
         if status == 3:
             raise ConvergenceError("static: singular iteration matrix")
+        self.convergence.check_resolved(s.force_scale)
         return (dae.full_coordinates(state_q.copy(), self._qp), state_lam.copy(),
                 s.newton_iterations - before)

@@ -73,6 +73,63 @@ def newton_not_converged(iterations: int, correction: float) -> str:
 NON_FINITE = "non-finite forces (the state blew up)"
 SINGULAR = "singular iteration matrix"
 
+#: a state this many times beyond what the scene can reach (``StateLimits``) is a blow-up
+ABSURD = 1e6
+#: time samples of the laws when their peaks are estimated
+LAW_SAMPLES = 10_001
+
+
+@dataclass(frozen=True)
+class StateLimits:
+    """The largest sane displacement (m) and velocity (m/s, 1/s for gradients) of any
+    coordinate in a dynamic run: ``ABSURD`` times what the scene can reach by ``t_end``.
+
+    The reach is the model's length scale L plus what its fastest initial or prescribed
+    motion v0 (rigid rates times L) and the largest acceleration its loads can give a node,
+    a = sum of the loads' peak forces / the smallest nodal mass, cover:
+    L + v0 t + a t^2 / 2 (velocities: L / t + v0 + a t).  A state beyond it (or non-finite)
+    is a divergence, whatever the engine."""
+
+    displacement: float
+    velocity: float
+
+    @classmethod
+    def of(cls, dae: DAESystem, t_end: float) -> StateLimits:
+        """The limits of a run of ``dae`` to ``t_end`` (s)."""
+        model = dae.model
+        length = model.length_scale()
+        times = np.linspace(0.0, t_end, LAW_SAMPLES)
+        rates = np.abs(dae.prescribed_motion(times)[1]).max(initial=0.0)
+        speed = float(np.abs(model.initial_velocities()).max(initial=0.0)) + rates * length
+        peaks = np.abs(dae.load_factors(times)).max(axis=0, initial=0.0)
+        force = float(sum(peak * np.abs(vector).max(initial=0.0) for peak, vector in
+                          zip(peaks, dae.load_vectors, strict=True)))
+        masses = model.mass.diagonal()[model.position_dofs().ravel()]
+        acceleration = force / float(masses[masses > 0].min(initial=np.inf))
+        return cls(ABSURD * (length + speed * t_end + acceleration * t_end**2 / 2),
+                   ABSURD * (length / t_end + speed + acceleration * t_end))
+
+    def first_insane(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray
+                     ) -> tuple[int, str] | None:
+        """(row, cause) of the first state of a block (k, size) that is non-finite or
+        beyond the limits, or None (vectorised over the block)."""
+        finite = np.isfinite(q).all(axis=1) & np.isfinite(v).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            displacement = np.abs(q - reference).max(axis=1, initial=0.0)
+            velocity = np.abs(v).max(axis=1, initial=0.0)
+        bad = ~finite | (displacement > self.displacement) | (velocity > self.velocity)
+        if not bad.any():
+            return None
+        row = int(np.argmax(bad))
+        if not finite[row]:
+            return row, "non-finite state (the state blew up)"
+        if displacement[row] > self.displacement:
+            return row, (f"absurd displacement {displacement[row]:.3g} m (over "
+                         f"{self.displacement:.3g} m, {ABSURD:g} times what the scene can "
+                         f"reach; the state blew up)")
+        return row, (f"absurd velocity {velocity[row]:.3g} m/s (over {self.velocity:.3g} "
+                     f"m/s, {ABSURD:g} times what the scene can reach; the state blew up)")
+
 
 def one_by_one(observe, model: Model):
     """An ``observe_block`` that hands each output time of a block to ``observe(t, q, v)``
@@ -113,6 +170,43 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
     a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
+
+
+class OutputDynamics:
+    """The equations of motion at output states, for the sensors that need them
+    (accelerations, reactions): ``M_ff a + A_f^T lambda = F_free - M_fp a_p`` with
+    ``A_f a = -A_p a_p``, solved at each state of a block (the consistent accelerations of
+    its positions and velocities, as ``initial_state`` solves them at t = 0; F with the
+    follower loads at the state).  Both engines' output states go through it, so their
+    sensors differ only as their states do."""
+
+    def __init__(self, dae: DAESystem) -> None:
+        self.dae = dae
+        self.solver = SchurSolver(dae.mass_band, dae.joints_free)
+        loads = dae.model.nominal_loads()
+        self.load_vectors = (np.array([vector for _, vector in loads]) if loads
+                             else np.zeros((0, dae.size)))
+
+    def __call__(self, times: np.ndarray, q_full: np.ndarray,
+                 v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
+        the states (k, size) of the output times (k,) (s)."""
+        dae = self.dae
+        _, _, ap = dae.prescribed_motion(times)
+        factors = dae.load_factors(times)
+        force = factors @ self.load_vectors
+        for row in range(len(times)):
+            force[row] += dae.internal_forces(q_full[row], v_full[row], jacobian=False)[0]
+            if dae.state_loads:     # follower and Python loads
+                force[row] += dae.state_loads.evaluate(q_full[row], factors[row], False,
+                                                       v_full[row], float(times[row]))[0]
+        rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
+        a, lam = self.solver.solve(rhs.T, -(dae.joints_prescribed @ ap.T) if dae.joints
+                                   else None)
+        accelerations = np.zeros_like(force)
+        accelerations[:, dae.free] = a.T
+        accelerations[:, dae.prescribed] = ap
+        return accelerations, np.asarray(lam).T.reshape(len(times), dae.joints), force
 
 
 class Integrator:

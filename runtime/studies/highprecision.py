@@ -2,13 +2,13 @@
 (and of the cable energy of Berzeri and Shabana for cable kinds).
 
 Shares no code with the generator or the kernels: the shape functions of every shipped kind
-are typed here from the literature (``LITERATURE``: docs/design.md section 4 for the 2-node beams,
-Project Chrono's ANCF-3333 beam and ANCF-3443 plate in their normalised coordinates for the
-others), differentiated once by SymPy into mpmath functions, and the energy is integrated by
-Gauss quadrature in 50-digit arithmetic.  What an element states as data is read from its
-metadata (``generated/<kind>/element.json``): the dimension, the domain (the span of each
-local axis in the geometry parameters, the thickness of a planar element) and the Gauss orders
-that integrate the straight element exactly.
+are typed here from the literature (``LITERATURE``: docs/design.md section 4 for the 2-node
+beams, Project Chrono's ANCF-3333 beam, ANCF-3443 plate and ANCF-3833 shell in their
+normalised coordinates for the others), differentiated once by SymPy into mpmath functions,
+and the energy is integrated by Gauss quadrature in 50-digit arithmetic.  What an element
+states as data is read from its metadata (``generated/<kind>/element.json``): the dimension,
+the domain (the span of each local axis in the geometry parameters, the thickness of a planar
+element) and the Gauss orders that integrate the straight element exactly.
 
 A kind without literature shape functions (a new element file) is integrated with the element
 file's own (``symgen/elements``): the arithmetic stays independent of the invariants and the
@@ -76,6 +76,19 @@ def _plate() -> list[sp.Expr]:
     ]
 
 
+def _shell_8node() -> list[sp.Expr]:
+    """Chrono 3833 without r_zz (lenX = L, lenY = H, thickness W): Calc_Sxi_compact's node
+    functions of corners A, B, C, D and mid-sides E, F, G, H, each carrying r and
+    z r_z = (W zeta / 2) r_z."""
+    u, v = 2 * X / L - 1, 2 * Y / H - 1
+    z = W * (2 * Z / W) / 2
+    n = [-(u - 1) * (v - 1) * (u + v + 1) / 4, (u + 1) * (v - 1) * (v - u + 1) / 4,
+         (u + 1) * (v + 1) * (u + v - 1) / 4, -(u - 1) * (v + 1) * (v - u - 1) / 4,
+         (u**2 - 1) * (v - 1) / 2, -(u + 1) * (v**2 - 1) / 2,
+         -(u**2 - 1) * (v + 1) / 2, (u - 1) * (v**2 - 1) / 2]
+    return [f for node in n for f in (node, z * node)]
+
+
 def _cable() -> list[sp.Expr]:
     """Cubic Hermite functions of the ANCF cable (Berzeri and Shabana; Gerstmayr and
     Irschik): s = [1 - 3xi^2 + 2xi^3, L (xi - 2xi^2 + xi^3), 3xi^2 - 2xi^3, L (xi^3 - xi^2)]."""
@@ -93,6 +106,7 @@ LITERATURE = {
     "beam2d_3node": lambda: _beam_3node(2),
     "beam3d_3node": lambda: _beam_3node(3),
     "plate3d": _plate,
+    "shell3d_8node": _shell_8node,
 }
 
 

@@ -33,13 +33,15 @@ class BodyView(Protocol):
 
 class ModelView(Protocol):
     """What an item may ask of the model: sizes (``dim``, ``size`` coordinates), the reference
-    coordinates (size,), the mass matrix (size, size) in kg, the joint rows ``A`` of
-    ``A q = 0`` (rows, size), the bodies by name, the scene it was built from, and the
-    queries below.  Units SI."""
+    coordinates (size,), the indices of the ``free`` coordinates (neither fixed nor
+    prescribed), the mass matrix (size, size) in kg, the joint rows ``A`` of ``A q = 0``
+    (rows, size), the bodies by name, the scene it was built from, and the queries below.
+    Units SI."""
 
     dim: int
     size: int
     reference: np.ndarray
+    free: np.ndarray
     mass: scipy.sparse.csr_matrix
     joints: scipy.sparse.csr_matrix
     bodies: dict[str, BodyView]

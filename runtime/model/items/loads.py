@@ -148,14 +148,16 @@ def _moment_key(value: Any, path: str, context: Context) -> float | tuple[float,
 
 
 def _section_node_key(value: Any, path: str, context: Context) -> NodeRef:
-    """A node a moment can act on: one with r_y, or in 2D one with r_x (a cable node); a 3D
-    cable node (r_x only) has no section orientation for the twist."""
+    """A node a moment can act on: one whose gradients define a frame
+    (``ElementKind.frame_gap``: r_y, or in 2D r_x of a cable node); a 3D cable node's r_x or a
+    shell node's r_z fixes one direction only."""
     ref = node_key(value, path, context)
     kind = element_kind(context.node.bodies[ref.body].element)
-    if "r_y" not in kind.vectors and (context.dim == 3 or "r_x" not in kind.vectors):
+    gap = kind.frame_gap()
+    if gap is not None or "r_y" not in kind.vectors and context.dim == 3:
         raise SceneError(f"{path}: node {show(value)} of body {show(ref.body)} ({kind.name}) "
-                         f"carries only {', '.join(kind.vectors)}: a moment needs the node's "
-                         "section (r_y; in 2D r_x); a 3D cable node has no section orientation")
+                         f"cannot take a moment: {gap or 'a moment in 3D acts on r_y and r_z'}; "
+                         "a moment needs the node's frame")
     return ref
 
 

@@ -10,6 +10,7 @@ a model's scene, at one state or over a block.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -18,22 +19,29 @@ import numpy as np
 
 from runtime.kernels.kind import element_kind
 from runtime.model.errors import SceneError, show
+from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
+from runtime.model.items.constraints import Joint
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
+    EdgeRef,
     NodeRef,
     Record,
     choice,
+    edge_key,
     key,
     node_key,
+    number,
     registry,
     string,
+    vector,
 )
 
-__all__ = ["ENERGY_TYPES", "SENSORS", "ConstraintViolation", "DissipatedEnergy", "Displacement",
-           "KineticEnergy", "Position", "PotentialEnergy", "Samples", "Sensor", "Sensors",
-           "StrainEnergy", "TotalEnergy", "Velocity"]
+__all__ = ["ENERGY_TYPES", "SENSORS", "Acceleration", "ConstraintViolation", "DissipatedEnergy",
+           "Displacement", "KineticEnergy", "Position", "PotentialEnergy", "Reaction", "Samples",
+           "SectionForce", "Sensor", "Sensors", "StrainEnergy", "Strain", "Stress",
+           "TotalEnergy", "Velocity", "check_reactions"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -61,12 +69,22 @@ def _name_key(value: Any, path: str, context: Context) -> str:
 class Samples:
     """States at k output times: ``t`` (k,) in s (None: a static state, loads at their
     nominal value), coordinates ``q`` and velocities ``v`` (k, size), and the energy
-    ``dissipated`` (k,) in J by damping since the start of the dynamic run."""
+    ``dissipated`` (k,) in J by damping since the start of the dynamic run.
+
+    For the sensors that need them (``Sensor.dynamics``), the equations of motion at these
+    states: accelerations ``a`` (k, size) in m/s^2 (fixed coordinates zero, prescribed ones
+    their prescribed accelerations; zero in a static state), joint ``multipliers``
+    (k, joints) and the applied force ``force`` (k, size): elastic, damping and external
+    generalised forces F(q, v, t), so that ``M a + A^T multipliers = F`` on the free
+    coordinates; None when no sensor needs them."""
 
     t: np.ndarray | None
     q: np.ndarray
     v: np.ndarray
     dissipated: np.ndarray
+    a: np.ndarray | None = None
+    multipliers: np.ndarray | None = None
+    force: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -76,6 +94,8 @@ class Sensor(Record):
 
     unit: ClassVar[str] = "J"
     energy: ClassVar[bool] = True
+    #: needs the accelerations, multipliers and forces of ``Samples``
+    dynamics: ClassVar[bool] = False
     name: str = key(_name_key)
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
@@ -92,15 +112,14 @@ def _component_key(value: Any, path: str, context: Context) -> str:
 
 
 def _frame_key(value: Any, path: str, context: Context) -> NodeRef:
-    """A node whose gradients define a frame (at least dim - 1 of them: a 3D cable node,
-    carrying r_x only, has no section orientation)."""
+    """A node whose gradients define a frame (``ElementKind.frame_gap``: at least dim - 1 of
+    them; a 3D cable node's r_x or a shell node's r_z fixes one direction only)."""
     ref = node_key(value, path, context)
     kind = element_kind(context.node.bodies[ref.body].element)
-    if len(kind.vectors) - 1 < kind.dim - 1:
+    gap = kind.frame_gap()
+    if gap is not None:
         raise SceneError(f"{path}: node {show(value)} of body {show(ref.body)} ({kind.name}) "
-                         f"carries only {', '.join(kind.vectors)}: too few gradients for a "
-                         f"frame in {kind.dim}D (a cable node has no section orientation); "
-                         "expected a node of a kind with a frame")
+                         f"has no frame: {gap}; expected a node of a kind with a frame")
     return ref
 
 
@@ -183,6 +202,324 @@ def _body_key(value: Any, path: str, context: Context) -> str:
 
 
 @dataclass(frozen=True)
+class Acceleration(Sensor):
+    """Acceleration of ``node`` (m/s^2): one ``component`` (x | y | z | norm) in global axes,
+    from the equations of motion at the output state (the consistent accelerations of its
+    positions and velocities; zero in a static state)."""
+
+    type: ClassVar[str] = "acceleration"
+    unit: ClassVar[str] = "m/s^2"
+    energy: ClassVar[bool] = False
+    dynamics: ClassVar[bool] = True
+    node: NodeRef | str = key(node_key)
+    component: str = key(_component_key)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        acceleration = samples.a[:, model.node_dofs(model.node_index(self.node), "r")]
+        return _component(acceleration, self.component)
+
+
+def _quantity_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, ("force", "moment"), "quantity")
+
+
+def _any_component_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, ("x", "y", "z", "norm"), "component")
+
+
+@dataclass(frozen=True)
+class Reaction(Sensor):
+    """The ``quantity`` (force in N | moment in N m) that the constraints of ``node`` exert on
+    it: its supports (clamp, pin, prescribed_rotation: the residual ``M a - F`` of the
+    coordinates they hold or prescribe) and its joints (``-A^T lambda`` on its free
+    coordinates).  The force acts on the position r; the moment about the node's position
+    is ``sum_k r_k x f_k`` over its gradients r_k with their generalised forces f_k (the
+    virtual work of a small rotation w: delta r_k = w x r_k).  With ``edge`` instead of
+    ``node`` (a grid line of a rectangle body, ``"BODY:x=0"``): the resultant over its nodes,
+    the moment about the edge's first node (``(r_n - r_0) x f_n`` added per node).  One
+    ``component`` (x | y | z | norm, the default; a 2D moment is about z: z | norm) in global
+    axes or, with ``frame``, in that node's frame; ``quantity`` defaults to force."""
+
+    type: ClassVar[str] = "reaction"
+    energy: ClassVar[bool] = False
+    dynamics: ClassVar[bool] = True
+    node: NodeRef | str | None = key(node_key, None)
+    quantity: str = key(_quantity_key, "force")
+    component: str = key(_any_component_key, "norm")
+    frame: NodeRef | str | None = key(_frame_key, None)
+    edge: EdgeRef | str | None = key(edge_key, None)
+
+    @property
+    def unit(self) -> str:   # type: ignore[override]
+        return "N" if self.quantity == "force" else "N m"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        given = [name for name in ("node", "edge") if name in data]
+        if len(given) != 1:
+            raise SceneError(f'{path}: expected either node = "BODY:INDEX" or edge = '
+                             f'"BODY:x=I" (a grid line of a rectangle body), got '
+                             f"{' and '.join(given) if given else 'neither'}")
+        sensor = super().parse(data, path, context)
+        allowed = ("x", "y", "z", "norm") if context.dim == 3 else \
+            ("x", "y", "norm") if sensor.quantity == "force" else ("z", "norm")
+        if sensor.component not in allowed:
+            why = "a 2D moment is about z" if sensor.quantity == "moment" else \
+                "a 2D force has x and y"
+            raise SceneError(f"{path}.component: unknown component {show(sensor.component)} "
+                             f"of a {context.dim}D {sensor.quantity} ({why}); expected one of "
+                             f"{', '.join(allowed)}")
+        return sensor
+
+    def targets(self) -> list[NodeRef]:
+        """The nodes whose reactions it sums."""
+        return [self.node] if self.edge is None else self.edge.refs()
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        dim, k = model.dim, len(samples.q)
+        nodes = [model.node_index(ref) for ref in self.targets()]
+        vector = np.zeros((k, dim if self.quantity == "force" else 3))
+        origin = samples.q[:, model.node_dofs(nodes[0], "r")]
+        for node in nodes:
+            names = model.node_vectors(node)
+            per_vector = _constraint_force(model, samples, model.node_dofs(node)).reshape(
+                k, len(names), dim)
+            force = per_vector[:, names.index("r")]
+            if self.quantity == "force":
+                vector += force
+                continue
+            vector += _cross3(samples.q[:, model.node_dofs(node, "r")] - origin, force)
+            for index, name in enumerate(names):
+                if name != "r":
+                    vector += _cross3(samples.q[:, model.node_dofs(node, name)],
+                                      per_vector[:, index])
+        if self.frame is not None and (self.quantity == "force" or dim == 3):
+            frame = model.node_frame(samples.q, model.node_index(self.frame))
+            vector = np.einsum("kji,kj->ki", frame, vector)
+        return _component(vector, self.component)
+
+
+def _constraint_force(model: ModelView, samples: Samples, dofs: np.ndarray) -> np.ndarray:
+    """(k, dofs) generalised force of the constraints on coordinates ``dofs``: M a - F where
+    they are held or prescribed, -A^T lambda where they are free."""
+    held = samples.a @ model.mass[:, dofs] - samples.force[:, dofs]
+    if not model.joints.shape[0]:
+        return np.where(np.isin(dofs, model.free), 0.0, held)
+    joints = np.asarray(samples.multipliers @ model.joints[:, dofs])
+    return np.where(np.isin(dofs, model.free), -joints, held)
+
+
+def _cross3(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """arm x force of (k, dim) vectors as (k, 3) (2D: the z part)."""
+    if arm.shape[1] == 3:
+        return np.cross(arm, force)
+    out = np.zeros((arm.shape[0], 3))
+    out[:, 2] = arm[:, 0] * force[:, 1] - arm[:, 1] * force[:, 0]
+    return out
+
+
+def check_reactions(sensors: tuple[Sensor, ...], constraints: tuple) -> None:
+    """SceneError naming a reaction sensor whose node no constraint holds or joins."""
+    held = {ref for c in constraints for ref in
+            (c.nodes if isinstance(c, Joint) else c.targets())}
+    for i, sensor in enumerate(sensors):
+        if not isinstance(sensor, Reaction):
+            continue
+        free = [ref for ref in sensor.targets() if ref not in held]
+        if free and sensor.edge is not None:
+            raise SceneError(f"sensor[{i}].edge: node {free[0]} of edge {sensor.edge} is held "
+                             f"by no clamp, pin or prescribed_rotation and in no joint; "
+                             f"expected an edge held by a [[constraint]]")
+        if free:
+            raise SceneError(f"sensor[{i}].node: node {sensor.node} is held by no clamp, pin "
+                             f"or prescribed_rotation and in no joint (no reaction to "
+                             f"measure); expected a node of a [[constraint]]")
+
+
+def _integer_key(value: Any, path: str, context: Context) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise SceneError(f"{path}: expected an integer element index (0 the first, -1 the "
+                         f"last), got {show(value)}")
+    return value
+
+
+def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    axes = "x, y, z" if context.dim == 3 else "x, y"
+    return vector(value, path, context.dim, f"local coordinates {axes} in m")
+
+
+def _element_of(sensor: Any, path: str, context: Context) -> tuple[Any, int]:
+    """The scene body of ``sensor.body`` and its element index made non-negative (SceneError
+    at ``path.element`` out of range)."""
+    body = context.node.bodies[sensor.body]
+    count = int(np.prod(body.counts))
+    if not -count <= sensor.element < count:
+        raise SceneError(f"{path}.element: element index {sensor.element} out of range for "
+                         f"body {show(sensor.body)} with {count} elements (0..{count - 1} or "
+                         f"-{count}..-1)")
+    return body, sensor.element % count
+
+
+def _check_point(point: tuple[float, ...], body: Any, path: str) -> None:
+    """SceneError at ``path`` unless ``point`` lies in the element's local box (a cable's on
+    its axis)."""
+    kind = element_kind(body.element)
+    bounds = kind.domain.bounds(body.geometry)
+    names = "xyz"
+    for a, ((low, high), value) in enumerate(zip(bounds, point, strict=True)):
+        slack = 1e-12 * max(abs(low), abs(high), 1e-30)
+        if not low - slack <= value <= high + slack:
+            raise SceneError(f"{path}[{a}]: local {names[a]} = {value:g} m outside the element "
+                             f"of body {show(body.name)} ({names[a]} in [{low:g}, {high:g}] "
+                             f"m); expected a point of the element's local box")
+    if kind.energy.structural and any(point[1:]):
+        raise SceneError(f"{path}: a cable ({kind.name}) has no cross section (r, r_x only): "
+                         f"its strain is the axial strain on the axis; expected y"
+                         f"{' and z' if kind.dim == 3 else ''} = 0")
+
+
+TENSOR_COMPONENTS = {2: ("xx", "yy", "xy"), 3: ("xx", "yy", "zz", "yz", "xz", "xy")}
+
+
+def _tensor_component_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, (*TENSOR_COMPONENTS[context.dim], "von_mises"), "component")
+
+
+@dataclass(frozen=True)
+class MaterialPointSensor(Sensor):
+    """A tensor field at the material point ``point`` (local coordinates x, y(, z) in m in
+    the element's box: x along the axis from its first node) of element ``element`` (0-based
+    along the body; negative from the end) of ``body``: one ``component`` xx | yy | zz | yz
+    | xz | xy (2D: xx, yy, xy) in the element's local frame
+    (``runtime.model.items.material_points``)."""
+
+    energy: ClassVar[bool] = False
+    body: str = key(_body_key)
+    element: int = key(_integer_key)
+    point: tuple[float, ...] = key(_point_key)
+    component: str = key(_tensor_component_key)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        body, element = _element_of(sensor, path, context)
+        _check_point(sensor.point, body, f"{path}.point")
+        return dataclasses.replace(sensor, element=element)
+
+    def _tensor(self, model: ModelView, samples: Samples) -> np.ndarray:
+        """The (k, dim, dim) tensor this sensor reads."""
+        raise NotImplementedError
+
+    def _fields(self, model: ModelView, samples: Samples) -> material.Fields:
+        return material.strain_stress(model.bodies[self.body], np.array([self.element]),
+                                      np.array([self.point], float), samples.q)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        tensor = self._tensor(model, samples)
+        if self.component == "von_mises":
+            return material.von_mises(tensor)
+        a, b = ("xyz".index(c) for c in self.component)
+        return tensor[:, a, b].copy()
+
+
+@dataclass(frozen=True)
+class Strain(MaterialPointSensor):
+    """Green-Lagrange strain (dimensionless) in the reference local frame."""
+
+    type: ClassVar[str] = "strain"
+    unit: ClassVar[str] = "1"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        if data.get("component") == "von_mises":
+            raise SceneError(f"{path}.component: von_mises is a stress; expected one of "
+                             f"{', '.join(TENSOR_COMPONENTS[context.dim])}")
+        return super().parse(data, path, context)
+
+    def _tensor(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return self._fields(model, samples).strain[:, 0, 0]
+
+
+def _measure_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, STRESS_MEASURES, "stress measure")
+
+
+STRESS_MEASURES = ("cauchy", "pk2")
+
+
+@dataclass(frozen=True)
+class Stress(MaterialPointSensor):
+    """Stress (Pa) of the element's material law: ``measure`` cauchy (default; in the current
+    local frame) | pk2 (second Piola-Kirchhoff, in the reference local frame); component
+    ``von_mises`` is that of the Cauchy stress whatever the measure."""
+
+    type: ClassVar[str] = "stress"
+    unit: ClassVar[str] = "Pa"
+    measure: str = key(_measure_key, "cauchy")
+
+    def _tensor(self, model: ModelView, samples: Samples) -> np.ndarray:
+        fields = self._fields(model, samples)
+        chosen = fields.pk2 if self.measure == "pk2" and self.component != "von_mises" \
+            else fields.cauchy
+        return chosen[:, 0, 0]
+
+
+SECTION_COMPONENTS = {2: ("N", "Q2", "M3", "M"), 3: ("N", "Q2", "Q3", "T", "M2", "M3", "M")}
+CABLE_SECTION_COMPONENTS = {2: ("N", "M3", "M"), 3: ("N", "M")}
+
+
+def _section_component_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, SECTION_COMPONENTS[context.dim], "section force")
+
+
+def _position_key(value: Any, path: str, context: Context) -> float:
+    return number(value, path)
+
+
+@dataclass(frozen=True)
+class SectionForce(Sensor):
+    """A section force of a beam ``body`` at local axial position ``x`` (m, from the element's
+    first node) of element ``element``: ``component`` N (axial), Q2, Q3 (shears), T
+    (torsion), M2, M3 (bending), M (the bending moment's magnitude) in the current local
+    frame (2D: N, Q2, M3, M; cables: N, M3 (2D), M), the force and moment that the part
+    beyond the section exerts on the part before it (``runtime.model.items.material_points``)."""
+
+    type: ClassVar[str] = "section"
+    energy: ClassVar[bool] = False
+    body: str = key(_body_key)
+    element: int = key(_integer_key)
+    x: float = key(_position_key)
+    component: str = key(_section_component_key)
+
+    @property
+    def unit(self) -> str:   # type: ignore[override]
+        return "N" if self.component.startswith(("N", "Q")) else "N m"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        body, element = _element_of(sensor, path, context)
+        kind = element_kind(body.element)
+        if kind.mesh_axes != [0]:
+            raise SceneError(f"{path}.body: body {show(body.name)} is a {kind.name} surface; "
+                             f"section forces are those of beams (a line of elements)")
+        point = (sensor.x,) + (0.0,) * (context.dim - 1)
+        _check_point(point, body, f"{path}.x")
+        if kind.energy.structural and sensor.component not in \
+                CABLE_SECTION_COMPONENTS[context.dim]:
+            allowed = CABLE_SECTION_COMPONENTS[context.dim]
+            raise SceneError(f"{path}.component: a cable ({kind.name}) carries no shear, "
+                             f"torsion{' or section orientation' if context.dim == 3 else ''}"
+                             f"; expected one of {', '.join(allowed)}")
+        return dataclasses.replace(sensor, element=element)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        section = material.section_forces(model.bodies[self.body], self.element, self.x,
+                                          samples.q)
+        return section.components()[self.component].copy()
+
+
+@dataclass(frozen=True)
 class StrainEnergy(Sensor):
     """Strain energy (J) of ``body`` (None: the whole model)."""
 
@@ -254,7 +591,8 @@ class ConstraintViolation(Sensor):
 
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
-    DissipatedEnergy, ConstraintViolation, Velocity)
+    DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
+    SectionForce)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
@@ -266,17 +604,35 @@ class Sensors:
         self.sensors = model.scene.sensors
         self.names = [s.name for s in self.sensors]
         self.energy_names = [s.name for s in self.sensors if s.energy]
+        #: some sensor needs the accelerations, multipliers and forces of the samples
+        self.dynamics = any(s.dynamics for s in self.sensors)
 
     def values(self, q: np.ndarray, v: np.ndarray | None = None,
-               t: float | None = 0.0) -> dict[str, float]:
+               t: float | None = 0.0, *, a: np.ndarray | None = None,
+               multipliers: np.ndarray | None = None,
+               force: np.ndarray | None = None) -> dict[str, float]:
         """{sensor name: value} at coordinates q (and velocities v, zero if None), time t
-        (None: loads at their nominal value, as in the static analysis); the energy
-        dissipated so far is the model's ``dissipated_energy``."""
+        (None: loads at their nominal value, as in the static analysis), with the
+        accelerations a (size,), joint multipliers and applied force (size,) of
+        ``Samples`` where a sensor needs them; the energy dissipated so far is the model's
+        ``dissipated_energy``."""
         v = np.zeros_like(q) if v is None else v
+
+        def row(x):
+            return None if x is None else np.asarray(x, float)[None, :]
+
         samples = Samples(None if t is None else np.array([t], float), q[None, :], v[None, :],
-                          np.array([self.model.dissipated_energy]))
+                          np.array([self.model.dissipated_energy]), row(a), row(multipliers),
+                          row(force))
         return {name: float(value[0]) for name, value in self.block(samples).items()}
 
     def block(self, samples: Samples) -> dict[str, np.ndarray]:
-        """{sensor name: values (k,)} over a block of output states."""
+        """{sensor name: values (k,)} over a block of output states (ValueError when a
+        sensor needs the accelerations, multipliers and forces and they are not given)."""
+        if self.dynamics and (samples.a is None or samples.force is None
+                              or samples.multipliers is None):
+            names = ", ".join(s.name for s in self.sensors if s.dynamics)
+            raise ValueError(f"sensors {names}: need the accelerations, multipliers and "
+                             f"forces of the states (Samples.a, multipliers, force: "
+                             f"runtime.solve.python_engine.OutputDynamics)")
         return {s.name: s.values(self.model, samples) for s in self.sensors}
