@@ -268,6 +268,9 @@ def test_functions_are_imported_from_the_scene_folder(tmp_path):
     result = run_scene(data, progress=False)
     assert result.summary["status"] == "ok"
     assert load_scene(path) == data
+    again = tmp_path / "again.toml"
+    again.write_text(data.to_toml())
+    assert load_scene(again) == data
 
 
 @pytest.mark.parametrize("law, load, message", [
