@@ -267,6 +267,10 @@ def test_functions_are_imported_from_the_scene_folder(tmp_path):
     assert data.loads[0].time_law.value(0.001) == pytest.approx(0.5)
     result = run_scene(data, progress=False)
     assert result.summary["status"] == "ok"
+    assert result.summary["loads"] == [
+        'load[1] (pyloads_functions:hub): Jacobians df/dq and df/dv by central finite '
+        'differences over the coordinates of arm:0 (4 k + 1 calls of the function for k '
+        'coordinates); give jacobian = "module:function" for exact ones']
     assert load_scene(path) == data
     again = tmp_path / "again.toml"
     again.write_text(data.to_toml())

@@ -22,6 +22,7 @@ from runtime.app.summary import DynamicSummary, Summary
 from runtime.catalog import INTEGRATORS
 from runtime.kernels.kind import element_kind
 from runtime.model.dae import StateLoads
+from runtime.model.items.python_loads import load_notes
 from runtime.model.items.sensors import Samples, Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
@@ -92,6 +93,7 @@ class Simulation:
         if self.scene.static is not None or (self.scene.modal is not None
                                              and self.scene.modal.about == "static"):
             analysis.check_held(model)   # before any work: a free body has no equilibrium
+        self.summary.loads = load_notes(self.scene.loads) or None
         for text in locking_warnings(self.scene):
             self.summary.warn(text)
         for observer in self.observers:

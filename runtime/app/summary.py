@@ -159,6 +159,8 @@ class Summary:
     kernels: list[str] | None = None
     traceback: str | None = None
     files: list[str] | None = None
+    #: notes on how loads are evaluated (Python loads whose Jacobians are finite differences)
+    loads: list[str] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The document of ``summary.json`` (a copy: later records do not change it)."""

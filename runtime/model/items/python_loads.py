@@ -24,7 +24,7 @@ import scipy.sparse
 from runtime.model.items.follower import Patches
 from runtime.model.time_laws import RATE_STEP, LoadFunctionError, import_function
 
-__all__ = ["MotionPatches", "PythonForce", "PythonFunction"]
+__all__ = ["MotionPatches", "PythonForce", "PythonFunction", "load_notes"]
 
 
 @dataclass(frozen=True)
@@ -180,3 +180,18 @@ def _array(value: Any, shape: tuple[int, ...], key: str, name: str, t: float,
         raise LoadFunctionError(f"{key}: {name} returned a non-finite value {array[bad][0]} "
                                 f"at t = {t:.6g} s")
     return array
+
+
+def load_notes(loads) -> list[str]:
+    """A note per Python load of a scene's ``loads`` whose Jacobians are finite differences
+    (the run summary's ``loads``)."""
+    notes = []
+    for i, load in enumerate(loads):
+        if load.type == "python" and load.jacobian is None:
+            over = "every coordinate" if load.nodes is None else \
+                f"the coordinates of {', '.join(ref.spelled() for ref in load.nodes)}"
+            notes.append(f"load[{i}] ({load.function.name}): Jacobians df/dq and df/dv by "
+                         f"central finite differences over {over} (4 k + 1 calls of the "
+                         "function for k coordinates); give jacobian = \"module:function\" "
+                         "for exact ones")
+    return notes
