@@ -11,7 +11,10 @@ Tables (Markdown):
    Newton; min and median of the repeats, and ratios to Exudyn's default (modified Newton);
 2. the cost of a step from 10 to 100,000 beam3d elements: microseconds per step and per
    element-step, Newton iterations per step, and the shares of the element kernels and of
-   the factorisations in the step.
+   the factorisations in the step;
+3. the cost of a Python load (``type = "python"``: a tip spring-damper f(t, q, v) on the
+   cantilever, with its exact Jacobian or by finite differences) in both engines: calls of
+   the function per step, microseconds per call and its share of the run.
 
 Simulate time is the engine's ``run`` from the initial state to ``t_end`` (the models are
 built and the stepper compiled before; sensors are not evaluated), as Exudyn's solve time.
@@ -26,8 +29,11 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 import scenes
 from runtime.catalog import ENGINES, NEWTON_MODES
+from runtime.model.items.loads import PythonLoad
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
@@ -219,6 +225,70 @@ def step_table(sizes=(10, 100, 1000, 10_000, 100_000), python_limit: int = 10_00
     return "\n".join(lines) + "\n"
 
 
+#: stiffness (N/m) and damping (N s/m) of the tip spring-damper of the Python-load case
+TIP_SPRING, TIP_DAMPER = 1e5, 50.0
+
+
+def _tip_spring(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """A spring-damper holding the position of the last beam3d node (its first 3 of 12
+    coordinates) toward (1, 0, 0): the generalised force (size,) in N."""
+    force = np.zeros(q.size)
+    tip = slice(q.size - 12, q.size - 9)
+    force[tip] = -TIP_SPRING * (q[tip] - (1.0, 0.0, 0.0)) - TIP_DAMPER * v[tip]
+    return force
+
+
+def _tip_spring_jacobian(t: float, q: np.ndarray, v: np.ndarray):
+    """(df/dq, df/dv) of ``_tip_spring``, dense (size, size)."""
+    d_q, d_v = np.zeros((q.size, q.size)), np.zeros((q.size, q.size))
+    tip = np.arange(q.size - 12, q.size - 9)
+    d_q[tip, tip], d_v[tip, tip] = -TIP_SPRING, -TIP_DAMPER
+    return d_q, d_v
+
+
+def python_load_cost(engine: str, exact: bool, t_end: float = 0.2) -> dict:
+    """A dynamic run of the paper cantilever (2 beam3d, h = 1e-3, full Newton) with the tip
+    spring-damper as a Python load (``exact``: its Jacobian given, else finite differences):
+    simulate seconds, calls of the load function, seconds in them and steps."""
+    scene = _scene("cantilever", elements=2, t_end=t_end)
+    load = PythonLoad(_tip_spring, _tip_spring_jacobian if exact else None, nodes=["beam:-1"])
+    scene = Scene(**{f.name: getattr(scene, f.name) for f in dataclasses.fields(scene)
+                     if f.name != "loads"}, loads=(*scene.loads, load))
+    model = Model(scene)
+    runner = engines.make(engine, model, scene.dynamic, model.reference)
+    start = time.perf_counter()
+    runner.run(scene.dynamic.t_end, scene.dynamic.step, lambda t, q, v: None)
+    seconds = time.perf_counter() - start
+    force = runner.dae.state_loads.python_loads[0]
+    return {"engine": engine, "jacobian": "exact" if exact else "finite differences",
+            "simulate_s": seconds, "calls": force.calls, "call_s": force.seconds,
+            "steps": runner.counters.steps, "iterations": runner.counters.newton_iterations}
+
+
+def python_load_table(repeats: int = 3, t_end: float = 0.2, progress: bool = True) -> str:
+    """Markdown table of ``python_load_cost`` for both engines and both Jacobians: min and
+    median simulate time of ``repeats`` runs, calls per step and per Newton iteration,
+    microseconds per call (min over the repeats) and the share of the run in the calls."""
+    lines = ["| engine | Jacobian | simulate s (min) | median | calls per step | "
+             "calls per Newton iteration | us per call | share of the run |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    runs = list(itertools.product(ENGINES, (True, False)))
+    with enabled(progress), Bar("Python load cost", len(runs) * repeats, "runs") as bar:
+        for engine, exact in runs:
+            rows = []
+            for _ in range(repeats):
+                rows.append(python_load_cost(engine, exact, t_end))
+                bar.advance(f"{engine}, {rows[-1]['jacobian']}")
+            times = [r["simulate_s"] for r in rows]
+            best = min(rows, key=lambda r: r["simulate_s"])
+            per_call = min(r["call_s"] / r["calls"] for r in rows)
+            lines.append(f"| {engine} | {best['jacobian']} | {min(times):.4g} | "
+                         f"{statistics.median(times):.4g} | {best['calls'] / best['steps']:.3g} "
+                         f"| {best['calls'] / best['iterations']:.3g} | {per_call * 1e6:.3g} | "
+                         f"{best['call_s'] / best['simulate_s']:.0%} |")
+    return "\n".join(lines) + "\n"
+
+
 def run(quick: bool = False, repeats: int = 3, progress: bool = True) -> str:
     """Both tables as Markdown (``quick``: short runs and small sizes, for tests)."""
     cases = whole_run_cases(quick)
@@ -229,4 +299,7 @@ def run(quick: bool = False, repeats: int = 3, progress: bool = True) -> str:
     return (f"## Whole runs ({repeats} interleaved repeats; peer: {peer})\n\n"
             + whole_run_table(cases)
             + "\n## Cost of a step (trapezoidal, full Newton, gram, C kernels)\n\n"
-            + step_table(sizes, progress=progress))
+            + step_table(sizes, progress=progress)
+            + "\n## Cost of a Python load (tip spring-damper f(t, q, v) on the cantilever, "
+            "2 beam3d, h = 1e-3)\n\n"
+            + python_load_table(repeats, 0.02 if quick else 0.2, progress))
