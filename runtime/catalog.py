@@ -27,8 +27,13 @@ INTEGRATORS = ("trapezoidal", "generalized_alpha")
 ENGINES = ("compiled", "python")
 #: Methods of static analyses (``[analysis.static] method``): the default first.
 STATIC_METHODS = ("load_stepping", "arc_length")
-#: Newton modes of the dynamic integrators (both engines).
-NEWTON_MODES = ("full", "modified")
+#: Newton modes of the dynamic integrators (both engines; ``auto``: modified Newton that
+#: turns to full Newton for steps after one whose kept Jacobian went stale,
+#: ``runtime.solve.python_engine``).
+NEWTON_MODES = ("full", "modified", "auto")
+#: Linear solvers of the Newton iterations (registry: ``runtime.solve.linear.LINEAR_SOLVERS``;
+#: chosen per model when a scene names none).
+LINEAR_SOLVERS = ("banded", "sparse")
 #: The material law of a material that names none.
 DEFAULT_LAW = "svk"
 

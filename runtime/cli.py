@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.catalog import BACKENDS, ENGINES, METHODS
+from runtime.catalog import BACKENDS, ENGINES, LINEAR_SOLVERS, METHODS, NEWTON_MODES
 from runtime.kernels.errors import JitEnvironmentError
 from runtime.studies.options import add_list_option, announce, default_out
 
@@ -244,11 +244,31 @@ def cmd_report(args) -> int:
     return 0
 
 
-def cmd_bench_steps(args) -> int:
-    from runtime.studies import bench_solvers
+def _positive(text: str) -> int:
+    """A positive integer option value (ValueError otherwise: a parser error)."""
+    value = int(text)
+    if value < 1:
+        raise ValueError(f"expected a positive integer, got {text}")
+    return value
 
-    print(bench_solvers.step_table(tuple(args.elements or (10, 100, 1000, 10_000)),
-                                   method=args.method, progress=not args.quiet))
+
+def cmd_bench_steps(args) -> int:
+    from runtime.studies import bench_steps
+
+    cases = bench_steps.plan(
+        plates=tuple(args.plates if args.plates is not None else (4, 8, 16, 32)),
+        chains=tuple(args.elements if args.elements is not None else (1000, 10_000)),
+        solvers=tuple(args.linear_solver or (bench_steps.AUTO, *LINEAR_SOLVERS)),
+        newtons=tuple(args.newton or ("full",)), banded_limit=args.banded_limit)
+    rows = bench_steps.measure(cases, method=args.method, repeats=args.repeats,
+                               progress=not args.quiet)
+    text = bench_steps.table(rows)
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
+    if args.plot:
+        bench_steps.plot(rows, args.plot)
+        print(f"written: {args.plot}")
     return 0
 
 
@@ -354,9 +374,20 @@ def parser() -> argparse.ArgumentParser:
     paper.add_argument("--quick", action="store_true", help="two short rows (smoke test)")
     paper.add_argument("--backend", choices=list(BACKENDS), default="c")
     paper.set_defaults(run=cmd_bench_paper)
-    steps = bench_sub.add_parser("steps", help="cost of one dynamic step against model size")
-    add_list_option(steps, "--elements", "beam3d elements (default 10 100 1000 10000)",
-                    convert=int, metavar="N")
+    steps = bench_sub.add_parser(
+        "steps", help="cost of one dynamic step against model size, body type, linear solver")
+    add_list_option(steps, "--plates", "plate3d grids N (N x N elements; default 4 8 16 32)",
+                    convert=_positive, metavar="N")
+    add_list_option(steps, "--elements", "beam3d chain elements (default 1000 10000)",
+                    convert=_positive, metavar="N")
+    add_list_option(steps, "--linear-solver", "linear solvers (default auto banded sparse)",
+                    choices=["auto", *LINEAR_SOLVERS])
+    add_list_option(steps, "--newton", "Newton modes (default full)", choices=NEWTON_MODES)
+    steps.add_argument("--banded-limit", type=_positive, default=32, metavar="N",
+                       help="banded plates up to N x N (default 32)")
+    steps.add_argument("--repeats", type=_positive, default=3, help="runs of each case (min 1)")
+    steps.add_argument("--out", metavar="FILE", help="also write the table to FILE")
+    steps.add_argument("--plot", metavar="PNG", help="plot us per element-step to PNG")
     steps.add_argument("--method", choices=list(METHODS), default="gram")
     steps.add_argument("--quiet", action="store_true", help="no progress lines")
     steps.set_defaults(run=cmd_bench_steps)

@@ -91,13 +91,15 @@ class EngineReport(Protocol):
 
     engine: str
     newton: str
+    linear_solver: str
     counters: Counters
     timing: dict[str, float]
 
 
 @dataclass
 class DynamicSummary:
-    """The dynamic analysis however it ended: settings, engine, time reached, work counters,
+    """The dynamic analysis however it ended: settings, engine, Newton mode, linear solver
+    (``runtime.catalog.LINEAR_SOLVERS``), time reached, work counters,
     engine times (s), last sensor values and, once measured, the response frequency (rad/s;
     None when the signal allowed no measure)."""
 
@@ -106,6 +108,7 @@ class DynamicSummary:
     integrator: str
     engine: str
     newton: str
+    linear_solver: str
     t_reached: float
     steps: int
     newton_iterations: int
@@ -124,9 +127,10 @@ class DynamicSummary:
         """The summary of a run of ``engine`` with ``settings`` that reached ``t_reached``."""
         counters = engine.counters
         return cls(settings.t_end, settings.step, settings.integrator, engine.engine,
-                   engine.newton, t_reached, counters.steps, counters.newton_iterations,
-                   counters.force_evaluations, counters.jacobian_evaluations,
-                   counters.factorisations, engine.timing["kernel_s"],
+                   engine.newton, engine.linear_solver, t_reached, counters.steps,
+                   counters.newton_iterations, counters.force_evaluations,
+                   counters.jacobian_evaluations, counters.factorisations,
+                   engine.timing["kernel_s"],
                    engine.timing["steps_s"], sensors_final)
 
     def to_dict(self) -> dict[str, Any]:

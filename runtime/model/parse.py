@@ -22,6 +22,7 @@ from runtime.catalog import (
     DEFAULT_LAW,
     ENGINES,
     INTEGRATORS,
+    LINEAR_SOLVERS,
     METHODS,
     NEWTON_MODES,
     STATIC_METHODS,
@@ -381,7 +382,8 @@ def _solver(data: Any) -> Solver:
     return Solver(**_table_fields(data, "solver", {
         "method": lambda v, p: choice(v, p, METHODS, "method"),
         "backend": lambda v, p: choice(v, p, BACKENDS, "backend"),
-        "engine": lambda v, p: choice(v, p, ENGINES, "engine")}))
+        "engine": lambda v, p: choice(v, p, ENGINES, "engine"),
+        "linear_solver": lambda v, p: choice(v, p, LINEAR_SOLVERS, "linear solver")}))
 
 
 def _output(data: Any) -> Output:

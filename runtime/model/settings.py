@@ -60,7 +60,8 @@ class Dynamic:
     """Dynamic analysis from 0 to ``t_end`` (s) with time step ``step`` (s), ``t_end`` an integer
     multiple of ``step``; outputs every ``output_every`` s (a multiple of ``step``; None: every
     step); ``rho_inf`` in [0, 1] for generalized-alpha; ``newton``: ``full`` (a new Jacobian
-    at every iteration) or ``modified`` (Jacobian reused)."""
+    at every iteration, the default), ``modified`` (Jacobian reused) or ``auto`` (modified,
+    and full for the steps after one that needed a new Jacobian)."""
 
     t_end: float
     step: float
@@ -80,13 +81,15 @@ class Dynamic:
 
 @dataclass(frozen=True)
 class Solver:
-    """Elastic force method (gram | cij | quadrature), kernel backend (c | numpy) and engine
+    """Elastic force method (gram | cij | quadrature), kernel backend (c | numpy), engine
     (compiled | python; None: compiled when a C compiler is present and the backend is c, else
-    python)."""
+    python) and linear solver of the Newton iterations (banded | sparse; None: chosen per
+    model, ``runtime.solve.linear.choose``)."""
 
     method: str = "gram"
     backend: str = "c"
     engine: str | None = None
+    linear_solver: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[solver]``."""

@@ -1,8 +1,24 @@
-"""Linear solves of the (saddle-point) systems of static and dynamic analyses."""
+"""Linear solves of the (saddle-point) systems of static and dynamic analyses.
+
+The Newton iterations of both engines and of the static analysis factorise matrices of one
+sparsity pattern, the free-free ``Model.pattern``, given by their values in the pattern's CSR
+order.  A linear solver (``LINEAR_SOLVERS``, names in ``runtime.catalog.LINEAR_SOLVERS``)
+does the structural work once per model and factorises each matrix:
+
+* ``banded``: the band of the node-major numbering (LAPACK storage), Cholesky when positive
+  definite, banded LU otherwise: O(n b^2), the fastest for chains of beams;
+* ``sparse``: CHOLMOD's supernodal Cholesky after a fill-reducing ordering (AMD), the
+  symbolic analysis once (``runtime.solve.cholmod``); SuperLU (SciPy) for matrices that are
+  not positive definite or not symmetric: for plates, meshes and mechanisms.
+
+``choose`` picks one per model by the shape of its pattern, or takes the scene's.
+Joints go through a Schur complement of the factorised matrix (``SchurSolver``).
+"""
 
 from __future__ import annotations
 
 import functools
+import weakref
 
 import numpy as np
 import scipy.linalg
@@ -10,6 +26,9 @@ import scipy.linalg.lapack
 import scipy.sparse
 import scipy.sparse.linalg
 import threadpoolctl
+
+from runtime import catalog
+from runtime.solve import cholmod
 
 #: Systems up to this size are solved dense (LAPACK beats SuperLU's overhead there).
 DENSE_LIMIT = 1500
@@ -59,11 +78,6 @@ class SaddleSolver:
         return self._solve(rhs), np.zeros(0)
 
 
-def solve_symmetric_banded(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Solve a symmetric banded system (upper LAPACK storage, see ``BandedFactor``)."""
-    return BandedFactor(band).solve(rhs)
-
-
 class BandedFactor:
     """Factorisation of a symmetric banded matrix given in upper LAPACK storage
     ((bandwidth + 1, n)): Cholesky when positive definite, otherwise a banded LU with
@@ -82,10 +96,16 @@ class BandedFactor:
         full[u: 2 * u + 1] = band
         for k in range(1, u + 1):          # lower diagonals mirror the upper ones
             full[2 * u + k, : -k] = band[u - k, k:]
-        lu, pivots, info = scipy.linalg.lapack.dgbtrf(full, u, u)
-        if info != 0:
-            raise np.linalg.LinAlgError("singular banded matrix")
-        self._factor = (lu, pivots)
+        self._factor = _banded_lu(full, u)
+
+    @classmethod
+    def lu(cls, full: np.ndarray, bandwidth: int) -> BandedFactor:
+        """Banded LU of a general matrix in dgbtrf storage ((3 b + 1, n), entry (i, j) at
+        [2 b + i - j, j], b = ``bandwidth`` below and above the diagonal)."""
+        factor = cls.__new__(cls)
+        factor.u, factor.cholesky = bandwidth, False
+        factor._factor = _banded_lu(full, bandwidth)
+        return factor
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solution (n,) or (n, k) of the factorised system."""
@@ -97,13 +117,21 @@ class BandedFactor:
         return solution
 
 
-class SchurSolver:
-    """[[S, A^T], [A, 0]] [x; y] = [r; c] for a banded symmetric S (upper LAPACK storage)
-    and a few joint rows A: S is factorised once, y from the small Schur complement
-    A S^-1 A^T, then x = S^-1 (r - A^T y).  Needs S regular (dynamics: S contains M)."""
+def _banded_lu(full: np.ndarray, bandwidth: int):
+    lu, pivots, info = scipy.linalg.lapack.dgbtrf(full, bandwidth, bandwidth)
+    if info != 0:
+        raise np.linalg.LinAlgError("singular banded matrix")
+    return lu, pivots
 
-    def __init__(self, band: np.ndarray, joints: scipy.sparse.spmatrix) -> None:
-        self.factor = BandedFactor(band)
+
+class SchurSolver:
+    """[[S, A^T], [A, 0]] [x; y] = [r; c] for a factorised S (``factor``: a banded symmetric
+    S in upper LAPACK storage, or any factorisation with ``solve``) and a few joint rows A:
+    y from the small Schur complement A S^-1 A^T, then x = S^-1 (r - A^T y).  Needs S
+    regular (dynamics: S contains M)."""
+
+    def __init__(self, factor, joints: scipy.sparse.spmatrix) -> None:
+        self.factor = BandedFactor(factor) if isinstance(factor, np.ndarray) else factor
         self.joints = joints
         self.m = joints.shape[0]
         if self.m:
@@ -118,3 +146,152 @@ class SchurSolver:
         c = np.zeros(self.m) if rhs_constraints is None else rhs_constraints
         y = scipy.linalg.lu_solve(self._schur, self.joints @ x - c, check_finite=False)
         return x - self.coupling @ y, y
+
+
+class SparseFactor:
+    """The factorisation of one matrix by a ``SparseSolver``: CHOLMOD's Cholesky when it
+    holds, else SciPy's SuperLU.  Valid until the solver factorises the next matrix."""
+
+    def __init__(self, cholesky, lu=None) -> None:
+        self._cholesky, self._lu = cholesky, lu
+        self.cholesky = lu is None
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solution (n,) or (n, k) of the factorised system."""
+        return self._cholesky.solve(rhs) if self._lu is None else self._lu.solve(rhs)
+
+
+class BandedSolver:
+    """``banded``: matrices of ``pattern`` in LAPACK band storage, factorised by
+    ``BandedFactor`` (Cholesky, or banded LU); not symmetric: banded LU of the full band."""
+
+    name = "banded"
+
+    def __init__(self, pattern: scipy.sparse.csr_matrix, symmetric: bool = True) -> None:
+        self.pattern, self.symmetric = pattern, symmetric
+        rows, cols = _coordinates(pattern)
+        n = pattern.shape[0]
+        self.bandwidth = int(np.abs(rows - cols).max(initial=0))
+        upper = rows <= cols
+        self._upper_slots = np.flatnonzero(upper)
+        self._upper_index = (self.bandwidth + rows[upper] - cols[upper]) * n + cols[upper]
+        # dgbtrf storage (3 b + 1, n): entry (i, j) at [2 b + i - j, j]
+        self._full_index = (2 * self.bandwidth + rows - cols) * n + cols
+
+    def band(self, values: np.ndarray) -> np.ndarray:
+        """Upper LAPACK band ((bandwidth + 1, n)) of the symmetric matrix ``values``."""
+        n = self.pattern.shape[0]
+        band = np.zeros((self.bandwidth + 1) * n)
+        band[self._upper_index] = values[self._upper_slots]
+        return band.reshape(self.bandwidth + 1, n)
+
+    def factor(self, values: np.ndarray):
+        """The factorisation of the matrix ``values`` (pattern order).  LinAlgError when
+        singular."""
+        if self.symmetric:
+            return BandedFactor(self.band(values))
+        n, b = self.pattern.shape[0], self.bandwidth
+        full = np.zeros((3 * b + 1) * n)
+        full[self._full_index] = values
+        return BandedFactor.lu(full.reshape(3 * b + 1, n), b)
+
+
+class SparseSolver:
+    """``sparse``: matrices of ``pattern`` by CHOLMOD (ordering and symbolic analysis once,
+    here), SuperLU when a matrix is not positive definite or ``symmetric`` is False."""
+
+    name = "sparse"
+
+    def __init__(self, pattern: scipy.sparse.csr_matrix, symmetric: bool = True) -> None:
+        self.pattern, self.symmetric = pattern, symmetric
+        self.cholesky = cholmod.Cholesky(pattern) if symmetric else None
+
+    def factor(self, values: np.ndarray) -> SparseFactor:
+        """The factorisation of the matrix ``values`` (pattern order).  LinAlgError when
+        singular."""
+        if self.cholesky is not None:
+            try:
+                self.cholesky.factorize(values)
+                return SparseFactor(self.cholesky)
+            except cholmod.NotPositiveDefinite:
+                pass
+        return SparseFactor(self.cholesky, superlu(self.pattern, values))
+
+
+def superlu(pattern: scipy.sparse.csr_matrix, values: np.ndarray):
+    """SciPy's SuperLU of the matrix ``values`` of ``pattern`` (LinAlgError when singular)."""
+    matrix = scipy.sparse.csr_matrix((values, pattern.indices, pattern.indptr),
+                                     shape=pattern.shape)
+    try:
+        return scipy.sparse.linalg.splu(matrix.tocsc())
+    except RuntimeError as error:     # "Factor is exactly singular"
+        raise np.linalg.LinAlgError(str(error)) from None
+
+
+LINEAR_SOLVERS = {"banded": BandedSolver, "sparse": SparseSolver}
+assert tuple(LINEAR_SOLVERS) == catalog.LINEAR_SOLVERS
+
+#: the automatic choice takes ``sparse`` when the band holds more than this many times the
+#: entries of the pattern's upper triangle.  Chains of beams: 1.3-1.6 (banded is twice as
+#: fast); square plates: 1.8 at 4 x 4 and 2.6 at 8 x 8 (banded 1.5-2x faster), 4.3 at
+#: 16 x 16 and 7.8 at 32 x 32 (sparse 1.4x and 2x faster; ``ancf bench steps``, docs/design.md)
+BAND_FILL_LIMIT = 4.0
+
+
+def band_fill(pattern: scipy.sparse.csr_matrix) -> float:
+    """Entries of the upper band over the entries of the upper triangle of ``pattern``."""
+    rows, cols = _coordinates(pattern)
+    bandwidth = int(np.abs(rows - cols).max(initial=0))
+    return pattern.shape[0] * (bandwidth + 1) / max(1, int(np.count_nonzero(rows <= cols)))
+
+
+def choose(pattern: scipy.sparse.csr_matrix, requested: str | None = None) -> str:
+    """The linear solver for matrices of ``pattern``: ``requested``, or ``sparse`` when the
+    band would hold more than ``BAND_FILL_LIMIT`` times the pattern's entries (plates,
+    meshes) and CHOLMOD is installed, else ``banded`` (chains).  ValueError naming the
+    option for an unknown name or a sparse solver without CHOLMOD."""
+    if requested is None:
+        sparse = band_fill(pattern) > BAND_FILL_LIMIT and cholmod.available()
+        return "sparse" if sparse else "banded"
+    if requested not in LINEAR_SOLVERS:
+        raise ValueError(f"solver.linear_solver: expected one of "
+                         f"{', '.join(LINEAR_SOLVERS)}, got {requested!r}")
+    if requested == "sparse" and not cholmod.available():
+        raise ValueError("solver.linear_solver: \"sparse\" needs SuiteSparse CHOLMOD, which "
+                         "the cvxopt wheel ships (pip install cvxopt); use \"banded\"")
+    return requested
+
+
+def requested(model) -> str | None:
+    """The linear solver a model's scene asks for (None: automatic)."""
+    return model.scene.solver.linear_solver
+
+
+def make(name: str, pattern: scipy.sparse.csr_matrix, symmetric: bool = True):
+    """A linear solver ``name`` (``LINEAR_SOLVERS``) for matrices of ``pattern``."""
+    return LINEAR_SOLVERS[name](pattern, symmetric)
+
+
+_BY_MODEL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def for_model(model):
+    """The linear solver of ``model`` (chosen by ``choose`` from its scene), made once per
+    model and kept as long as the model lives (the static analysis calls it per iteration)."""
+    solver = _BY_MODEL.get(model)
+    if solver is None:
+        solver = make(choose(model.pattern, requested(model)), model.pattern)
+        _BY_MODEL[model] = solver
+    return solver
+
+
+def pattern_values(matrix: scipy.sparse.spmatrix, pattern: scipy.sparse.csr_matrix) -> np.ndarray:
+    """The entries of ``matrix`` at the entries of ``pattern``, in its order (nnz,)."""
+    rows, cols = _coordinates(pattern)
+    return np.asarray(scipy.sparse.csr_matrix(matrix)[rows, cols]).ravel()
+
+
+def _coordinates(pattern: scipy.sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of the entries of a CSR ``pattern``, in its order."""
+    rows = np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
+    return rows, pattern.indices.astype(np.int64)

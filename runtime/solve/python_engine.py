@@ -11,7 +11,14 @@ Both work on the free coordinates of a ``DAESystem``; prescribed ones (hub rotat
 through their known values, rates and accelerations.  Newton is ``full`` (the exact Jacobian
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
-least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate).
+least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate) or
+``auto``: modified Newton, except that a step in which the kept Jacobian went stale (a
+factorisation was needed) is followed by steps of full Newton, 1 of them and doubling
+(up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale again, back
+to 1 once one does not.  Measured on the shipped scenes (docs/design.md, "Newton"),
+modified Newton is 1.1-5x faster than full except where the Jacobian changes fast (the
+rotating beam: 1.2x slower); ``auto`` follows the faster of the two.  The decisions
+depend on counts only, so both engines take the same.
 """
 
 from __future__ import annotations
@@ -26,11 +33,15 @@ from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.model.time_laws import LoadFunctionError
-from runtime.solve.linear import SaddleSolver, SchurSolver, single_threaded_blas
+from runtime.solve import linear
+from runtime.solve.linear import SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
 #: the previous one (the same rule in both engines).
 CONTRACTION = 0.5
+#: ``auto`` Newton: at most this many steps of full Newton before modified Newton is tried
+#: again
+MAX_FULL_STEPS = 64
 
 
 class Divergence(RuntimeError):
@@ -149,10 +160,26 @@ def newton_mode(settings) -> str:
     return settings.newton
 
 
-def initial_state(dae: DAESystem, t: float = 0.0) -> State:
+def linear_solver(dae: DAESystem):
+    """The linear solver of the Newton iterations on ``dae`` (``runtime.solve.linear``: the
+    scene's, or chosen by the model's pattern); both engines use the same.  A non-symmetric
+    iteration matrix (follower loads) takes the banded LU: the compiled step's sparse path
+    is CHOLMOD's Cholesky (ValueError naming the key if a scene forces ``sparse``)."""
+    model = dae.model
+    requested = linear.requested(model)
+    if not dae.symmetric:
+        if requested == "sparse":
+            raise ValueError("solver.linear_solver: \"sparse\" takes symmetric iteration "
+                             "matrices; the follower loads of this scene make it "
+                             "non-symmetric: use \"banded\" (its LU) or leave the key out")
+        return linear.make("banded", model.pattern, symmetric=False)
+    return linear.make(linear.choose(model.pattern, requested), model.pattern)
+
+
+def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
     prescribed motions), M a = F - M_fp a_p with the joints' accelerations
-    A_f a + A_p a_p = 0."""
+    A_f a + A_p a_p = 0 (M factorised by ``solver``, default ``linear_solver(dae)``)."""
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
@@ -166,8 +193,10 @@ def initial_state(dae: DAESystem, t: float = 0.0) -> State:
                                               dae.full_velocities(v, vp), t)[0][dae.free]
         except LoadFunctionError as error:   # a Python load failed at the start
             raise Divergence(t, str(error)) from None
-    solver = SchurSolver(dae.mass_band, dae.joints_free)
-    a, lam = solver.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
+    solver = solver or linear_solver(dae)
+    mass = linear.pattern_values(dae.mass_ff, dae.model.pattern)
+    a, lam = SchurSolver(solver.factor(mass), dae.joints_free).solve(
+        force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
 
@@ -221,12 +250,20 @@ class Integrator:
         self.settings = settings
         self.newton = newton_mode(settings)
         self.counters = Counters()
-        #: seconds in steps, in element kernels and in factorisations (as the compiled engine)
-        self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0}
+        #: seconds in steps, in element kernels, in factorisations and in the solves with
+        #: them (as the compiled engine)
+        self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0,
+                       "solve_s": 0.0}
         self.scale = self.dae.scale
-        # kept across iterations (modified Newton)
-        self._solver: SchurSolver | SaddleSolver | None = None
+        self.linear = linear_solver(self.dae)
+        #: the name of the linear solver (``runtime.catalog.LINEAR_SOLVERS``)
+        self.linear_solver = self.linear.name
+        self._mass = linear.pattern_values(self.dae.mass_ff, model.pattern)
+        self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
         self._refresh = True
+        self._full_step = self.newton == "full"   # this step rebuilds at every iteration
+        self._full_steps = 0       # auto: steps of full Newton still to do ...
+        self._probe = 1            # ... and how many after the next stale modified step
 
     # --- pieces of a Newton iteration --------------------------------------------------
 
@@ -272,39 +309,28 @@ class Integrator:
         the residual ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy]
         = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) = ``coefficients``.
         Returns (dx, dy)."""
-        rebuild = self.newton == "full" or self._refresh or self._solver is None
+        rebuild = self._full_step or self._refresh or self._solver is None
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
         self.counters.newton_iterations += 1
         if rebuild:
+            mass_coef, jacobian_coef, damping_coef = coefficients
+            values = jacobian_coef * data + mass_coef * self._mass
+            if data_dot is not None:
+                values += damping_coef * data_dot
             start = time.perf_counter()
             try:
-                self._solver = self._factorise(coefficients, data, data_dot)
+                self._solver = SchurSolver(self.linear.factor(values), self.dae.joints_free)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
                 self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
-        return self._solver.solve(-residual_of(force), None if constraint is None
-                                  else -constraint)
-
-    def _factorise(self, coefficients: tuple[float, float, float], data: np.ndarray,
-                   data_dot: np.ndarray | None):
-        """Factorisation of S = c_m M + c_q dF/dq + c_v dF/dv with the joints: banded
-        (Cholesky or LU) when S is symmetric, a general sparse or dense LU of the saddle
-        point otherwise (follower loads)."""
-        mass_coef, jacobian_coef, damping_coef = coefficients
-        dae = self.dae
-        model = dae.model
-        if not dae.symmetric:
-            matrix = jacobian_coef * model.jacobian_matrix(data) + mass_coef * dae.mass_ff
-            if data_dot is not None:
-                matrix = matrix + damping_coef * model.jacobian_matrix(data_dot)
-            return SaddleSolver(matrix, dae.joints_free)
-        band = jacobian_coef * model.banded(data) + mass_coef * dae.mass_band
-        if data_dot is not None:
-            band += damping_coef * model.banded(data_dot)
-        return SchurSolver(band, dae.joints_free)
+        start = time.perf_counter()
+        solution = self._solver.solve(-residual_of(force), None if constraint is None
+                                      else -constraint)
+        self.timing["solve_s"] += time.perf_counter() - start
+        return solution
 
     def dissipation(self, previous: State, q: np.ndarray, v: np.ndarray, prescribed,
                     h: float) -> dict:
@@ -337,7 +363,7 @@ class Integrator:
     # --- the loop ----------------------------------------------------------------------
 
     def initial_state(self, t: float = 0.0) -> State:
-        return initial_state(self.dae, t)
+        return initial_state(self.dae, t, self.linear)
 
     def run(self, t_end: float, step: float, observe=None, progress=None, *,
             observe_block=None) -> State:
@@ -373,6 +399,11 @@ class Integrator:
         """Step ``n`` (to t = n h) from ``state``."""
         t = n * h
         start, kernels = time.perf_counter(), self.dae.model.kernel_seconds
+        # a factorisation this step is a stale Jacobian only if there was one to keep
+        factorisations = self.counters.factorisations if self._solver is not None else None
+        if self.newton == "auto":
+            self._full_step = self._full_steps > 0
+            self._full_steps -= self._full_step
         try:
             prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
             state = self.step(state, t, h, prescribed, self.dae.load_factors([t])[0])
@@ -382,7 +413,18 @@ class Integrator:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
+        if self.newton == "auto" and not self._full_step and factorisations is not None:
+            self._next_steps(self.counters.factorisations > factorisations)
         return state
+
+    def _next_steps(self, stale: bool) -> None:
+        """``auto`` Newton after a modified step: full Newton for the next steps when its
+        Jacobian went ``stale`` (doubling their number while that repeats)."""
+        if stale:
+            self._full_steps = self._probe
+            self._probe = min(2 * self._probe, MAX_FULL_STEPS)
+        else:
+            self._probe = 1
 
     def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
         raise NotImplementedError  # pragma: no cover - abstract

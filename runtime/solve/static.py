@@ -22,7 +22,7 @@ import numpy as np
 
 from runtime.model.dae import StateLoads
 from runtime.model.model import Model
-from runtime.solve.linear import SaddleSolver, single_threaded_blas, solve_symmetric_banded
+from runtime.solve.linear import SaddleSolver, for_model, single_threaded_blas
 
 #: rounding noise over this many times the forces: nothing of the equilibrium is resolved
 NOISE_LIMIT = 1e3
@@ -269,10 +269,11 @@ class _PathEnergy:
 def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
            rhs_constraints: np.ndarray, symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Solve [[c J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free coordinates
-    (J from ``Model.internal_forces`` data).  Without joints the matrix is banded and
-    symmetric: banded Cholesky, O(n b^2), linear in the number of elements; a non-symmetric
-    J (follower loads) goes through the general LU of ``SaddleSolver``."""
+    (J from ``Model.internal_forces`` data).  Without joints and symmetric by the model's
+    linear solver (``runtime.solve.linear.for_model``: banded for chains, sparse for meshes);
+    with joints (where J alone may be singular) or a non-symmetric J (follower loads) by the
+    sparse or small dense LU of the saddle point."""
     if model.joints.shape[0] or not symmetric:
         matrix = jacobian_coef * model.jacobian_matrix(data)
         return SaddleSolver(matrix, model.joints_free).solve(rhs, rhs_constraints)
-    return solve_symmetric_banded(jacobian_coef * model.banded(data), rhs), np.zeros(0)
+    return for_model(model).factor(jacobian_coef * data).solve(rhs), np.zeros(0)

@@ -51,7 +51,8 @@ TOLERANCE = 1e-10           # Newton, relative to the model size, as the project
 #: The element of the planar peer models (rotating beam, cable cantilever, elastica)
 PEER_ELEMENT = "ANCFCable2D"
 #: Newton modes run with Exudyn, its default (modified Newton) first
-NEWTON = tuple(sorted(NEWTON_MODES, key=lambda mode: mode != "modified"))
+NEWTON = tuple(sorted((mode for mode in NEWTON_MODES if mode != "auto"),
+                     key=lambda mode: mode != "modified"))
 
 
 @dataclass

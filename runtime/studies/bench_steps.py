@@ -1,0 +1,236 @@
+"""``ancf bench steps``: the cost of a dynamic step against model size, per body type and
+linear solver.
+
+Cases (trapezoidal, h = 1e-3, gram method, C kernels, loaded from the first step):
+
+* ``plate``: a square 1 m steel plate3d (10 mm) of N x N elements clamped on one edge under
+  a line load on the opposite edge ramped up over 0.2 s (``scenes/plate_cantilever.toml``);
+* ``beam chain``: the paper's cantilever of beam3d elements of the same length (the beam
+  grows with them).
+
+Each case runs ``repeats`` times on one model (min and median per step).  For each case and
+linear solver (``runtime.catalog.LINEAR_SOLVERS``; ``auto`` is the model's
+automatic choice) and Newton mode: milliseconds per step, microseconds per element-step,
+Newton iterations per step and the shares of the step spent in the element kernels (with
+assembly), in factorisations and in solves.  The model is built and the stepper compiled
+before the timed run (``build_s``); only the steps are timed, by the engine itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+import time
+
+import scenes
+from runtime.catalog import LINEAR_SOLVERS, NEWTON_MODES
+from runtime.model.items.constraints import Clamp
+from runtime.model.items.loads import LineForce
+from runtime.model.model import Model
+from runtime.model.scene import Scene, load_scene
+from runtime.model.time_laws import Constant, CosineRamp
+from runtime.progress import Bar, enabled
+from runtime.solve import engines
+
+#: the choice of the model, besides the catalog's solvers
+AUTO = "auto"
+#: the plate's load law (the shipped plate scene's): two Newton iterations a step at first
+RAMP = CosineRamp(0.2)
+
+
+def plate_scene(grid: int, steps: int) -> Scene:
+    """The plate case with ``grid`` x ``grid`` elements, ``steps`` steps."""
+    scene = load_scene(scenes.path("plate_cantilever"))
+    body = scene.bodies[0]
+    body = dataclasses.replace(body, elements=None, rectangle=dataclasses.replace(
+        body.rectangle, size=(1.0, 1.0), grid=(grid, grid)))
+    return _dynamic(dataclasses.replace(
+        scene, bodies=(body,), constraints=(Clamp(edge="plate:x=0"),),
+        loads=(LineForce("plate:x=-1", (0.0, 0.0, -100.0), time_law=RAMP),)), steps)
+
+
+def chain_scene(elements: int, steps: int) -> Scene:
+    """The beam chain case with ``elements`` beam3d elements, ``steps`` steps."""
+    scene = load_scene(scenes.path("cantilever"))
+    body = scene.bodies[0]
+    end = (body.start[0] + (body.end[0] - body.start[0]) * elements / body.elements,
+           *body.end[1:])
+    body = dataclasses.replace(body, elements=elements, end=end)
+    loads = tuple(dataclasses.replace(load, time_law=Constant()) for load in scene.loads)
+    return _dynamic(dataclasses.replace(scene, bodies=(body,), loads=loads), steps)
+
+
+def _dynamic(scene: Scene, steps: int) -> Scene:
+    dynamic = dataclasses.replace(scene.dynamic, t_end=steps * 1e-3, step=1e-3,
+                                  integrator="trapezoidal", output_every=steps * 1e-3,
+                                  frequency_of=None, frequency_after=0.0)
+    return dataclasses.replace(scene, static=None, modal=None, dynamic=dynamic)
+
+
+def step_cost(scene: Scene, case: str, linear_solver: str = AUTO, newton: str = "full",
+              engine: str = "compiled", method: str = "gram", repeats: int = 3) -> dict:
+    """One row: the cost of the steps of ``scene`` with ``linear_solver`` (``AUTO``: the
+    model's choice), Newton mode ``newton`` and ``engine``, run ``repeats`` times on one
+    model (min and median per step; the shares are those of the fastest run)."""
+    solver = dataclasses.replace(scene.solver, method=method,
+                                 linear_solver=None if linear_solver == AUTO else linear_solver)
+    scene = dataclasses.replace(scene, solver=solver)
+    settings = dataclasses.replace(scene.dynamic, newton=newton)
+    start = time.perf_counter()
+    model = Model(scene, method=method)
+    engines.make(engine, model, settings, model.reference)     # compiled once, untimed
+    build = time.perf_counter() - start
+    runs = []
+    for _ in range(repeats):
+        runner = engines.make(engine, model, settings, model.reference)
+        runner.run(settings.t_end, settings.step, lambda t, q, v: None)
+        runs.append((runner.timing["steps_s"] / runner.counters.steps, runner))
+    per_step, runner = min(runs, key=lambda run: run[0])
+    timing, counters = runner.timing, runner.counters
+    elements = sum(body.elements for body in model.bodies.values())
+    return {"case": case, "elements": elements, "coordinates": model.free.size,
+            "linear_solver": runner.linear_solver, "requested": linear_solver,
+            "newton": newton, "engine": engine, "build_s": build,
+            "step_ms": per_step * 1e3,
+            "median_ms": statistics.median(run[0] for run in runs) * 1e3,
+            "element_step_us": per_step * 1e6 / elements,
+            "newton_per_step": counters.newton_iterations / counters.steps,
+            "factorisations_per_step": counters.factorisations / counters.steps,
+            "kernel_share": timing["kernel_s"] / timing["steps_s"],
+            "factorisation_share": timing["factorisation_s"] / timing["steps_s"],
+            "solve_share": timing["solve_s"] / timing["steps_s"]}
+
+
+def _steps(elements: int) -> int:
+    """Steps timed for a model of ``elements``: fewer for large ones (seconds per case)."""
+    return 50 if elements <= 100 else 10 if elements <= 1000 else 3
+
+
+def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SOLVERS),
+         newtons=("full",), banded_limit: int = 32) -> list[tuple]:
+    """The cases: (scene maker, size, case label, solver, newton); banded plates up to
+    ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation)."""
+    cases = []
+    for grid in plates:
+        for solver in solvers:
+            if solver == "banded" and grid > banded_limit:
+                continue
+            cases += [(plate_scene, grid, f"plate {grid} x {grid}", solver, newton)
+                      for newton in newtons]
+    for elements in chains:
+        cases += [(chain_scene, elements, f"beam chain {elements}", solver, newton)
+                  for solver in solvers for newton in newtons]
+    return cases
+
+
+def measure(cases: list[tuple], method: str = "gram", repeats: int = 3,
+            progress: bool = True) -> list[dict]:
+    """Run every case ``repeats`` times with ``method`` (in this process, one case after
+    the other)."""
+    rows = []
+    with enabled(progress), Bar("bench steps", len(cases), "cases") as bar:
+        for make, size, label, solver, newton in cases:
+            elements = size * size if make is plate_scene else size
+            rows.append(step_cost(make(size, _steps(elements)), label, solver, newton,
+                                  method=method, repeats=repeats))
+            bar.advance(f"{label}, {solver}, {newton}")
+    return rows
+
+
+def table(rows: list[dict]) -> str:
+    """Markdown table of measured rows."""
+    lines = ["| case | elements | free coordinates | linear solver | Newton | ms per step "
+             "(min) | median | us per element-step | Newton per step | factorisations per "
+             "step | kernel share | factorisation share | solve share |",
+             "|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        solver = r["linear_solver"] + (" (auto)" if r["requested"] == AUTO else "")
+        lines.append(f"| {r['case']} | {r['elements']} | {r['coordinates']} | {solver} | "
+                     f"{r['newton']} | {r['step_ms']:.4g} | {r['median_ms']:.4g} | "
+                     f"{r['element_step_us']:.3g} | {r['newton_per_step']:.2f} | "
+                     f"{r['factorisations_per_step']:.2f} | {r['kernel_share']:.0%} | "
+                     f"{r['factorisation_share']:.0%} | {r['solve_share']:.0%} |")
+    return "\n".join(lines) + "\n"
+
+
+def plot(rows: list[dict], path) -> None:
+    """Cost per element-step against elements, one line per body type, solver and Newton
+    mode (log-log), with the n^1.5 growth of a 2D sparse factorisation for reference."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(7, 4.5))
+    lines = {}
+    for r in rows:
+        body = r["case"].rsplit(" ", 3)[0] if r["case"].startswith("plate") else "beam chain"
+        body = "plate3d" if body.startswith("plate") else "beam3d chain"
+        key = (body, r["linear_solver"], r["newton"], r["requested"] == AUTO)
+        lines.setdefault(key, []).append((r["elements"], r["element_step_us"]))
+    for (body, solver, newton, auto), points in sorted(lines.items()):
+        if auto:
+            continue                     # the same as the solver it chose
+        points.sort()
+        x, y = zip(*points, strict=True)
+        axes.loglog(x, y, "o-", label=f"{body}, {solver}, {newton} Newton")
+    plates = sorted(p for (body, _, _, auto), pts in lines.items()
+                    if body == "plate3d" and not auto for p in pts)
+    if plates:
+        x0, y0 = min(plates)
+        x1 = max(p[0] for p in plates)
+        axes.loglog([x0, x1], [y0, y0 * (x1 / x0) ** 0.5], "k:",
+                    label="n^1.5 total (2D nested dissection)")
+    axes.set_xlabel("elements")
+    axes.set_ylabel("us per element-step")
+    axes.set_title("Cost of a trapezoidal step (compiled engine, gram, h = 1e-3)")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+def scene_runs(names, newtons=NEWTON_MODES, repeats: int = 3,
+               progress: bool = True) -> list[dict]:
+    """Whole dynamic runs of the shipped scenes ``names`` (``scenes/*.toml``, as shipped,
+    no sensors nor outputs evaluated) per Newton mode, compiled engine: simulate seconds
+    (min and median of ``repeats``), steps, Newton iterations and factorisations."""
+    rows = []
+    with enabled(progress), Bar("bench steps: scenes", len(names) * len(newtons),
+                                "runs") as bar:
+        for name in names:
+            scene = load_scene(scenes.path(name))
+            if scene.dynamic is None:
+                continue
+            model = Model(scene)
+            for newton in newtons:
+                settings = dataclasses.replace(scene.dynamic, newton=newton)
+                times = []
+                for _ in range(repeats):
+                    runner = engines.make("compiled", model, settings, model.reference)
+                    start = time.perf_counter()
+                    runner.run(settings.t_end, settings.step, lambda t, q, v: None)
+                    times.append(time.perf_counter() - start)
+                c = runner.counters
+                rows.append({"scene": name, "newton": newton, "seconds": min(times),
+                             "median_s": statistics.median(times), "steps": c.steps,
+                             "newton_iterations": c.newton_iterations,
+                             "factorisations": c.factorisations,
+                             "linear_solver": runner.linear_solver})
+                bar.advance(f"{name}, {newton}")
+    return rows
+
+
+def scene_table(rows: list[dict]) -> str:
+    """Markdown table of ``scene_runs``, each run against the faster Newton mode."""
+    lines = ["| scene | linear solver | Newton | simulate s (min) | median | steps | Newton "
+             "iterations | factorisations | / faster mode |",
+             "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        best = min(o["seconds"] for o in rows if o["scene"] == r["scene"])
+        lines.append(f"| {r['scene']} | {r['linear_solver']} | {r['newton']} | "
+                     f"{r['seconds']:.4g} | {r['median_s']:.4g} | {r['steps']} | "
+                     f"{r['newton_iterations']} | {r['factorisations']} | "
+                     f"{r['seconds'] / best:.2f} |")
+    return "\n".join(lines) + "\n"

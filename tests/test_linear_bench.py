@@ -1,0 +1,31 @@
+"""``ancf bench steps`` on tiny cases: one row per case, solver and Newton mode, the solver
+the model chose named, shares of the step between 0 and 1, the table and the plot written."""
+
+from __future__ import annotations
+
+from runtime.cli import main
+from runtime.studies import bench_steps
+
+
+def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
+    cases = bench_steps.plan(plates=(2,), chains=(4,), solvers=(bench_steps.AUTO, "sparse"),
+                             newtons=("full", "modified"))
+    rows = bench_steps.measure(cases, repeats=1, progress=False)
+    assert [(r["case"], r["requested"], r["newton"]) for r in rows] == [
+        (label, solver, newton) for _, _, label, solver, newton in cases]
+    for r in rows:
+        assert r["linear_solver"] == ("sparse" if r["requested"] == "sparse" else "banded")
+        shares = r["kernel_share"] + r["factorisation_share"] + r["solve_share"]
+        assert 0.0 < shares <= 1.0 and r["step_ms"] > 0
+        assert r["factorisations_per_step"] <= r["newton_per_step"]
+    full = next(r for r in rows if r["newton"] == "full" and r["case"].startswith("plate"))
+    assert full["factorisations_per_step"] == full["newton_per_step"]
+    text = bench_steps.table(rows)
+    assert text.count("\n") == len(rows) + 2 and "banded (auto)" in text
+    bench_steps.plot(rows, tmp_path / "steps.png")
+    assert (tmp_path / "steps.png").stat().st_size > 1000
+
+
+def test_bench_steps_refuses_a_bad_size(capsys):
+    assert main(["bench", "steps", "--plates", "0"]) == 2
+    assert "--plates" in capsys.readouterr().err
