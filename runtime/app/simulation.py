@@ -288,7 +288,7 @@ class Simulation:
         names = self.sensors.names
         start = time.perf_counter()
         engine = engines.make(self.engine_name, self.model, settings, self.model.reference)
-        self._dynamics = OutputDynamics(engine.dae) if self.sensors.dynamics else None
+        self._dynamics = OutputDynamics(engine.dae, engine.mass) if self.sensors.dynamics else None
         self._limits = StateLimits.of(engine.dae, settings.t_end)
         self._charge_setup(engine, time.perf_counter() - start)
         self.history = {name: [] for name in ["t", *names]}

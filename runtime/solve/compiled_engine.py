@@ -36,6 +36,7 @@ from runtime.solve.python_engine import (
     alpha_parameters,
     initial_state,
     linear_solver,
+    mass_solver,
     newton_mode,
     newton_not_converged,
     one_by_one,
@@ -46,8 +47,9 @@ from templates import environment
 STEPPER_VERSION = "3"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
-#: a call of the compiled step covers more output times while it lasts less than this (s),
-#: up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress latency stays short)
+#: a call of the compiled step covers as many output times as the previous calls' time per
+#: output says fit in this (s), up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress
+#: latency stays short, the calls few)
 BLOCK_SECONDS = 0.05
 MAX_BLOCK_OUTPUTS = 1024
 
@@ -173,6 +175,12 @@ class CompiledEngine:
         self.modules = [f"stepper/{self.integrator}"]
         self._ffi, self._lib = compiled.module.ffi, compiled.module.lib
         self._keep: list = []
+        #: the constant mass matrix with the joints, factorised once (``mass_solver``)
+        self.mass = mass_solver(self.dae)
+        #: the step's model for the settings' time step, bound before the run (its arrays
+        #: are constant; a second run or another step binds a new one: the step keeps its
+        #: factorisation in it)
+        self._prepared = self._model(settings.step) if settings.step else None
 
     # --- binding arrays ----------------------------------------------------------------
 
@@ -398,15 +406,17 @@ class CompiledEngine:
 
     def _run(self, t_end: float, step: float, observe_block, progress) -> State:
         dae = self.dae
-        state = initial_state(dae, solver=self.linear)
-        m = self._model(step)
+        state = initial_state(dae, mass=self.mass)
+        m, self._prepared = self._prepared, None
+        if m is None or m.h != step:
+            m = self._model(step)
         s = self._state(state)
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
         self._emit(observe_block, np.zeros(1), state.q[None, :], state.v[None, :],
                    np.zeros(1))
-        outputs = 1      # output times per call: doubled while calls stay short
+        outputs = 1      # output times per call: sized by the time the calls take
         first = 1
         try:
             while first <= steps:
@@ -415,8 +425,10 @@ class CompiledEngine:
                 done = self._advance(m, s, first, last, stride, steps, step, observe_block)
                 if progress is not None:
                     progress.update(done * step)
-                if s.advance_seconds - seconds < BLOCK_SECONDS and outputs < MAX_BLOCK_OUTPUTS:
-                    outputs *= 2
+                per_output = (s.advance_seconds - seconds) / max(1, -(-(done - first + 1)
+                                                                      // stride))
+                outputs = int(min(MAX_BLOCK_OUTPUTS, max(1.0, BLOCK_SECONDS
+                                                          / max(per_output, 1e-9))))
                 first = last + 1
         finally:
             self._sync(s)
@@ -453,16 +465,19 @@ class CompiledEngine:
         done = first - 1 + (s.steps - before)
         written = int(np.count_nonzero(output_steps <= done))
         if written:
+            rows = output_steps[:written] - first
             self._emit(observe_block, output_steps[:written] * step, out_q[:written],
-                       out_v[:written], out_dissipated[:written])
+                       out_v[:written], out_dissipated[:written],
+                       (block[0][rows], block[1][rows]))
         if status:
             raise Divergence(s.failed_at, self._cause(status, s))
         return done
 
     def _emit(self, observe_block, times: np.ndarray, q_free: np.ndarray, v_free: np.ndarray,
-              dissipated: np.ndarray) -> None:
-        """Observe a block of output states given over the free coordinates."""
-        qp, vp, _ = self.dae.prescribed_motion(times)
+              dissipated: np.ndarray, prescribed: tuple | None = None) -> None:
+        """Observe a block of output states given over the free coordinates; ``prescribed``:
+        the prescribed values and rates at ``times`` if known (else computed)."""
+        qp, vp = prescribed or self.dae.prescribed_motion(times)[:2]
         observe_block(times, self.dae.full_coordinates(q_free, qp),
                       self.dae.full_velocities(v_free, vp), dissipated)
 
@@ -503,7 +518,7 @@ class CompiledStatic:
         self.compile_s, self.modules = self.engine.compile_s, self.engine.modules
         dae = self.engine.dae
         self.convergence = Convergence.of(model, settings.tolerance)
-        self._m = self.engine._model(1.0)
+        self._m, self.engine._prepared = self.engine._prepared, None
         self._m.newton = NEWTON_MODES.index("full")
         self._m.residual_tolerance = settings.tolerance
         self._m.residual_floor = self.convergence.floor

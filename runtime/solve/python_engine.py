@@ -176,10 +176,17 @@ def linear_solver(dae: DAESystem):
     return linear.make(linear.choose(model.pattern, requested), model.pattern)
 
 
-def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
+def mass_solver(dae: DAESystem) -> SchurSolver:
+    """The mass matrix with the joints, factorised once (banded Cholesky of the constant
+    ``M_ff``, the joints by their Schur complement): the solves of consistent
+    accelerations (``initial_state``, ``OutputDynamics``)."""
+    return SchurSolver(dae.mass_band, dae.joints_free)
+
+
+def initial_state(dae: DAESystem, t: float = 0.0, mass: SchurSolver | None = None) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
     prescribed motions), M a = F - M_fp a_p with the joints' accelerations
-    A_f a + A_p a_p = 0 (M factorised by ``solver``, default ``linear_solver(dae)``)."""
+    A_f a + A_p a_p = 0 (``mass``: ``mass_solver(dae)``, factorised once per engine)."""
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
@@ -193,10 +200,8 @@ def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
                                               dae.full_velocities(v, vp), t)[0][dae.free]
         except LoadFunctionError as error:   # a Python load failed at the start
             raise Divergence(t, str(error)) from None
-    solver = solver or linear_solver(dae)
-    mass = linear.pattern_values(dae.mass_ff, dae.model.pattern)
-    a, lam = SchurSolver(solver.factor(mass), dae.joints_free).solve(
-        force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
+    a, lam = (mass or mass_solver(dae)).solve(force - dae.mass_fp @ ap,
+                                              -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
 
@@ -209,9 +214,9 @@ class OutputDynamics:
     follower loads at the state).  Both engines' output states go through it, so their
     sensors differ only as their states do."""
 
-    def __init__(self, dae: DAESystem) -> None:
+    def __init__(self, dae: DAESystem, mass: SchurSolver | None = None) -> None:
         self.dae = dae
-        self.solver = SchurSolver(dae.mass_band, dae.joints_free)
+        self.solver = mass or mass_solver(dae)
         loads = dae.model.nominal_loads()
         self.load_vectors = (np.array([vector for _, vector in loads]) if loads
                              else np.zeros((0, dae.size)))
@@ -259,6 +264,8 @@ class Integrator:
         #: the name of the linear solver (``runtime.catalog.LINEAR_SOLVERS``)
         self.linear_solver = self.linear.name
         self._mass = linear.pattern_values(self.dae.mass_ff, model.pattern)
+        #: the constant mass matrix with the joints, factorised once (``mass_solver``)
+        self.mass = mass_solver(self.dae)
         self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
         self._refresh = True
         self._full_step = self.newton == "full"   # this step rebuilds at every iteration
@@ -363,7 +370,7 @@ class Integrator:
     # --- the loop ----------------------------------------------------------------------
 
     def initial_state(self, t: float = 0.0) -> State:
-        return initial_state(self.dae, t, self.linear)
+        return initial_state(self.dae, t, self.mass)
 
     def run(self, t_end: float, step: float, observe=None, progress=None, *,
             observe_block=None) -> State:
