@@ -8,6 +8,7 @@ never copied from the code under test.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -275,24 +276,44 @@ def test_combined_force_and_jacobian_kernel(kind, method, backend, shape):
 
 
 @all_kinds
-def test_element_file_has_the_literature_shape_functions(kind):
-    """The reference integrates shape functions typed from the literature; the element file
-    must define the same polynomials (a kind without them is not independently checked)."""
-    assert kind in reference.LITERATURE, (
-        f"{kind}: type its shape functions from the literature into "
-        "runtime/studies/highprecision.py LITERATURE (docs/new-element.md section 4)")
-    literature = reference.shape_functions(kind, "literature")
+def test_element_file_has_the_shape_functions_of_its_node_layout(kind):
+    """The reference integrates shape functions derived from the node layout (the
+    interpolation conditions its nodal vectors state) or typed from the literature; the
+    element file must define exactly those polynomials."""
+    derived = reference.shape_functions(kind, "derived")
     own = reference.shape_functions(kind, "element")
-    assert len(literature) == len(own) == element_kind(kind).n_shape
-    for k, (expected, actual) in enumerate(zip(literature, own, strict=True)):
+    assert len(derived) == len(own) == element_kind(kind).n_shape
+    for k, (expected, actual) in enumerate(zip(derived, own, strict=True)):
         assert sp.expand(expected - actual) == 0, (k, expected, actual)
 
 
+@pytest.mark.parametrize("kind", sorted(reference.LITERATURE))
+def test_shape_functions_derived_from_the_layout_are_the_literature_ones(kind):
+    """The derivation (nodes and nodal vectors -> interpolating functions) reproduces every
+    element typed from the literature, so a new element needs no second typed entry."""
+    for k, (expected, actual) in enumerate(zip(reference.shape_functions(kind, "literature"),
+                                               reference.derived(kind), strict=True)):
+        assert sp.expand(expected - actual) == 0, (k, expected, actual)
+
+
+def test_a_layout_that_does_not_determine_its_functions_is_refused(monkeypatch):
+    """Two nodes at one point state dependent conditions: a named error, not a singular
+    solve."""
+    kind = element_kind("beam2d")
+    twin = dataclasses.replace(kind, nodes=(kind.nodes[0], kind.nodes[0]))
+    monkeypatch.setattr(reference, "element_kind", lambda name: twin)
+    reference._derived.cache_clear()
+    try:
+        with pytest.raises(ValueError, match="not independent"):
+            reference.derived("beam2d")
+    finally:
+        reference._derived.cache_clear()
+
+
 def mp_reference(kind: str, e: np.ndarray, e0: np.ndarray) -> tuple[float, np.ndarray]:
-    """50-digit (U, force) from the literature's shape functions
-    (runtime/studies/highprecision.py)."""
-    return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU,
-                                      source="literature")
+    """50-digit (U, force) from the literature's shape functions, or those derived from the
+    node layout for a kind not typed there (runtime/studies/highprecision.py)."""
+    return reference.energy_and_force(kind, e, e0, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU)
 
 
 

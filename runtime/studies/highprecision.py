@@ -10,9 +10,13 @@ states as data is read from its metadata (``generated/<kind>/element.json``): th
 the domain (the span of each local axis in the geometry parameters, the thickness of a planar
 element) and the Gauss orders that integrate the straight element exactly.
 
-A kind without literature shape functions (a new element file) is integrated with the element
-file's own (``symgen/elements``): the arithmetic stays independent of the invariants and the
-kernels, the shape functions do not; ``shape_functions`` says which are used.
+A kind without literature shape functions (a new element file) takes shape functions
+**derived from its node layout** (``derived``): the nodes and nodal vectors of its metadata
+state the interpolation conditions (``r`` its value at a node, ``r_x`` its x-derivative,
+``r_zz`` its second z-derivative, ...), and the functions that meet them are solved for in
+the polynomial space the element file's functions span.  That confirms the element file's
+coefficients (they must be those functions) without a second hand-typed entry; only the
+space comes from the element file.  ``shape_functions`` says which are used.
 """
 
 from __future__ import annotations
@@ -112,15 +116,93 @@ LITERATURE = {
 
 def shape_functions(kind: str, source: str | None = None) -> list[sp.Expr]:
     """Shape functions of ``kind`` in X, Y, Z, L, H, W: ``source`` "literature" (typed here),
-    "element" (the element file's, renamed) or None (the literature's when typed)."""
+    "derived" (from the node layout, ``derived``), "element" (the element file's, renamed)
+    or None (the literature's when typed, else the derived ones)."""
     if source == "literature" or (source is None and kind in LITERATURE):
         return LITERATURE[kind]()
+    if source in (None, "derived"):
+        return derived(kind)
+    if source != "element":
+        raise ValueError(f"source: expected 'literature', 'derived' or 'element', got "
+                         f"{source!r}")
+    return _element_functions(kind)
+
+
+def _element_functions(kind: str) -> list[sp.Expr]:
     from symgen.elements import get
 
     spec = get(kind)
     names = dict(zip(spec.coordinates, (X, Y, Z), strict=False))
     names.update(zip(spec.domain.parameters, (L, H, W), strict=True))
     return [s.xreplace(names) for s in spec.shape_functions]
+
+
+def _derivative_orders(vector: str, dim: int) -> tuple[int, ...]:
+    """Derivative orders per axis that a nodal vector names: r -> (0, 0, 0), r_x -> (1, 0,
+    0), r_zz -> (0, 0, 2), r_xy -> (1, 1, 0)."""
+    letters = vector[2:] if vector.startswith("r_") else ""
+    if vector != "r" and (not letters or set(letters) - set("xyz"[:dim])):
+        raise ValueError(f"nodal vector {vector!r}: expected r or r_ followed by axes of "
+                         f"{'xyz'[:dim]}")
+    return tuple(letters.count(axis) for axis in "xyz"[:dim])
+
+
+@functools.cache
+def _derived(kind: str) -> tuple[sp.Expr, ...]:
+    info = element_kind(kind)
+    dim = info.dim
+    unit = sp.symbols("u0:3")[:dim]          # x / L, y / H, z / W
+    scales = (L, H, W)[:dim]
+    physical = dict(zip((X, Y, Z)[:dim], [u * p for u, p in zip(unit, scales, strict=True)],
+                        strict=True))
+    space = sorted({m for s in _element_functions(kind)
+                    for m in sp.Poly(sp.expand(s.xreplace(physical)), *unit).monoms()})
+    points = []
+    for node in info.nodes:                  # each coordinate [a_L, a_H, a_W, b]
+        point = []
+        for axis, coefficients in enumerate(node[:dim]):
+            own = [float(c) for i, c in enumerate(coefficients) if i != axis]
+            if any(own):
+                raise ValueError(f"{kind}: node coordinate {coefficients} is not a multiple "
+                                 f"of the {'xyz'[axis]} axis' parameter alone")
+            point.append(sp.nsimplify(coefficients[axis]))
+        points.append(point)
+    conditions = [(point, _derivative_orders(vector, dim)) for point in points
+                  for vector in info.vectors]
+    if len(space) != len(conditions):
+        raise ValueError(f"{kind}: its shape functions span {len(space)} monomials but its "
+                         f"nodes state {len(conditions)} interpolation conditions")
+    monomials = [sp.Mul(*[u**p for u, p in zip(unit, powers, strict=True)])
+                 for powers in space]
+
+    def condition(monomial, point, orders):
+        for u, order in zip(unit, orders, strict=True):
+            monomial = sp.diff(monomial, u, order)
+        return monomial.subs(dict(zip(unit, point, strict=True)))
+
+    values = sp.Matrix([[condition(m, point, orders) for m in monomials]
+                        for point, orders in conditions])
+    if values.rank() < len(conditions):
+        raise ValueError(f"{kind}: its nodes' interpolation conditions are not independent "
+                         "in the space its shape functions span")
+    coefficients = values.T.inv()            # row j: shape function j in the monomials
+    functions = []
+    for j, (_, orders) in enumerate(conditions):
+        scale = sp.Mul(*[p**o for p, o in zip(scales, orders, strict=True)])
+        combination = sum(c * m for c, m in zip(coefficients.row(j), monomials, strict=True))
+        normal = dict(zip(unit, [c / p for c, p in zip((X, Y, Z), scales, strict=False)],
+                          strict=True))
+        functions.append(sp.expand(scale * combination.xreplace(normal)))
+    return tuple(functions)
+
+
+def derived(kind: str) -> list[sp.Expr]:
+    """Shape functions of ``kind`` derived from its node layout (element.json ``nodes``,
+    ``vectors``): the functions s_j of the polynomial space the element file's functions
+    span with D_i s_j(node of i) = delta_ij for every coordinate i (D_i its nodal vector's
+    derivative: value, r_x, r_zz, ...), in X, Y, Z, L, H, W.  ValueError when the layout
+    does not determine them (conditions and space of different sizes, or dependent)."""
+    return list(_derived(kind))
 
 
 def domain(kind: str, length, height, width) -> tuple[list[tuple], object]:
