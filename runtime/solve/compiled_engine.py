@@ -44,9 +44,14 @@ from runtime.solve.python_engine import (
 from runtime.solve.static import Convergence, ConvergenceError
 from templates import environment
 
-STEPPER_VERSION = "3"
+STEPPER_VERSION = "4"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
+#: bandwidths from which the band's Cholesky is LAPACK's (SciPy's dpbtrf, blocked); narrower
+#: bands take the step's own loops with the bandwidth a compile-time constant (measured:
+#: LAPACK 1.4x slower on beam3d chains, bandwidth 23; 1.1-1.3x faster on 8 x 8 and 16 x 16
+#: plates, 119 and 215)
+LAPACK_BANDWIDTH = 48
 #: a call of the compiled step covers as many output times as the previous calls' time per
 #: output says fit in this (s), up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress
 #: latency stays short, the calls few)
@@ -126,7 +131,8 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded") -> tuple[str
     source = env.get_template("stepper.c.j2").render(
         banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
         bandwidth=dae.bandwidth, damped=any(g["damped"] for g in groups), follower=follower,
-        sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip())
+        sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip(),
+        lapack_band=dae.bandwidth >= LAPACK_BANDWIDTH)
     return source, header
 
 
@@ -245,6 +251,7 @@ class CompiledEngine:
             self._sparse(m)
             ld = bw = 0                  # no band
         m.band = self._work(nf * ld)
+        m.work = self._work(ld)
         m.lu = self._work(nf * (3 * bw + 1))
         m.lu_pivots = self._work(nf, "int")
         m.coupling = self._work(nf * nj)
@@ -252,7 +259,6 @@ class CompiledEngine:
         m.schur_pivots = self._work(nj, "int")
         for name, address in lapack.functions().items():
             setattr(m, name, self._ffi.cast("void *", address))
-        m.work = self._work(ld)
         m.y = self._work(nj)
         return m
 

@@ -11,8 +11,9 @@ import functools
 
 import scipy.linalg.cython_lapack
 
-#: routines the compiled step calls: LU factorisation and solve of a general matrix
-FUNCTIONS = ("dgetrf", "dgetrs")
+#: routines the compiled step calls: LU factorisation and solve of a general matrix (the
+#: Schur complement), Cholesky factorisation and solve of a symmetric band
+FUNCTIONS = ("dgetrf", "dgetrs", "dpbtrf", "dpbtrs")
 
 
 @functools.cache
