@@ -253,8 +253,21 @@ def _positive(text: str) -> int:
 
 
 def cmd_bench_steps(args) -> int:
+    import scenes
     from runtime.studies import bench_steps
 
+    if args.scenes is not None:
+        names = args.scenes or scenes.names()
+        unknown = sorted(set(names) - set(scenes.names()))
+        if unknown:
+            raise ValueError(f"--scenes: unknown scene {unknown[0]!r}; shipped: "
+                             f"{', '.join(scenes.names())}")
+        text = bench_steps.scene_table(bench_steps.scene_runs(
+            names, tuple(args.newton or NEWTON_MODES), args.repeats, not args.quiet))
+        print(text)
+        if args.out:
+            Path(args.out).write_text(text)
+        return 0
     cases = bench_steps.plan(
         plates=tuple(args.plates if args.plates is not None else (4, 8, 16, 32)),
         chains=tuple(args.elements if args.elements is not None else (1000, 10_000)),
@@ -383,6 +396,10 @@ def parser() -> argparse.ArgumentParser:
     add_list_option(steps, "--linear-solver", "linear solvers (default auto banded sparse)",
                     choices=["auto", *LINEAR_SOLVERS])
     add_list_option(steps, "--newton", "Newton modes (default full)", choices=NEWTON_MODES)
+    steps.add_argument("--scenes", nargs="*", metavar="NAME",
+                       help="instead: whole runs of these shipped scenes (default all with a "
+                            "dynamic analysis) per Newton mode (default all modes), the modes "
+                            "interleaved")
     steps.add_argument("--banded-limit", type=_positive, default=32, metavar="N",
                        help="banded plates up to N x N (default 32)")
     steps.add_argument("--repeats", type=_positive, default=3, help="runs of each case (min 1)")

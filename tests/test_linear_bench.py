@@ -29,3 +29,20 @@ def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
 def test_bench_steps_refuses_a_bad_size(capsys):
     assert main(["bench", "steps", "--plates", "0"]) == 2
     assert "--plates" in capsys.readouterr().err
+
+
+def test_bench_steps_scenes_compares_the_newton_modes_of_a_shipped_scene(tmp_path, capsys):
+    out = tmp_path / "scenes.md"
+    assert main(["bench", "steps", "--scenes", "cable_cantilever", "--newton", "full",
+                 "modified", "--repeats", "1", "--quiet", "--out", str(out)]) == 0
+    rows = [line for line in out.read_text().splitlines() if line.startswith("| cable")]
+    assert [row.split("|")[3].strip() for row in rows] == ["full", "modified"]
+    # full Newton factorises at every iteration, modified keeps its factorisation
+    iterations, factorisations = ([int(row.split("|")[k]) for row in rows] for k in (7, 8))
+    assert factorisations[0] == iterations[0] and factorisations[1] < iterations[1]
+    assert min(float(row.split("|")[9]) for row in rows) == 1.0
+
+
+def test_bench_steps_scenes_refuses_an_unknown_scene(capsys):
+    assert main(["bench", "steps", "--scenes", "nope"]) == 2
+    assert "--scenes" in capsys.readouterr().err

@@ -194,8 +194,9 @@ def plot(rows: list[dict], path) -> None:
 def scene_runs(names, newtons=NEWTON_MODES, repeats: int = 3,
                progress: bool = True) -> list[dict]:
     """Whole dynamic runs of the shipped scenes ``names`` (``scenes/*.toml``, as shipped,
-    no sensors nor outputs evaluated) per Newton mode, compiled engine: simulate seconds
-    (min and median of ``repeats``), steps, Newton iterations and factorisations."""
+    no sensors nor outputs evaluated) per Newton mode, compiled engine, the modes
+    interleaved in each repeat: simulate seconds (min and median of ``repeats``), steps,
+    Newton iterations and factorisations."""
     rows = []
     with enabled(progress), Bar("bench steps: scenes", len(names) * len(newtons),
                                 "runs") as bar:
@@ -204,17 +205,21 @@ def scene_runs(names, newtons=NEWTON_MODES, repeats: int = 3,
             if scene.dynamic is None:
                 continue
             model = Model(scene)
-            for newton in newtons:
-                settings = dataclasses.replace(scene.dynamic, newton=newton)
-                times = []
-                for _ in range(repeats):
+            times: dict[str, list[float]] = {newton: [] for newton in newtons}
+            last = {}
+            for _ in range(repeats):         # the modes interleaved: a drift hits them alike
+                for newton in newtons:
+                    settings = dataclasses.replace(scene.dynamic, newton=newton)
                     runner = engines.make("compiled", model, settings, model.reference)
                     start = time.perf_counter()
                     runner.run(settings.t_end, settings.step, lambda t, q, v: None)
-                    times.append(time.perf_counter() - start)
+                    times[newton].append(time.perf_counter() - start)
+                    last[newton] = runner
+            for newton in newtons:
+                runner = last[newton]
                 c = runner.counters
-                rows.append({"scene": name, "newton": newton, "seconds": min(times),
-                             "median_s": statistics.median(times), "steps": c.steps,
+                rows.append({"scene": name, "newton": newton, "seconds": min(times[newton]),
+                             "median_s": statistics.median(times[newton]), "steps": c.steps,
                              "newton_iterations": c.newton_iterations,
                              "factorisations": c.factorisations,
                              "linear_solver": runner.linear_solver})
