@@ -19,7 +19,8 @@ from runtime import Body, Material, Modal, Rectangle, Scene, SceneError, Weld, l
 from runtime.app.shapes import Shape, write_vtu
 from runtime.element import reference as geometry
 from runtime.kernels.kind import element_kind
-from symgen.element import vector_axes
+from symgen import domains
+from symgen.element import ElementSpec, vector_axes, x
 from symgen.elements import get
 
 KIND = "shell3d_3833"
@@ -52,6 +53,24 @@ def test_interpolation_check_reads_second_derivatives():
     wrong[2] = 2 * wrong[2]
     with pytest.raises(ValueError, match="shape function 2 gives 2 for r_zz of node 0"):
         dataclasses.replace(spec, shape_functions=tuple(wrong)).check_interpolation()
+
+
+def test_a_derivative_along_the_axis_is_a_vector_like_any_other():
+    # a quintic Hermite beam (r, r_x, r_xx at both ends): its file is accepted, its
+    # interpolation checked by second x derivatives, its straight reference has r_xx = 0
+    t, length = x / domains.length, domains.length
+    ends = ((1 - 10 * t**3 + 15 * t**4 - 6 * t**5, length * (t - 6 * t**3 + 8 * t**4 - 3 * t**5),
+             length**2 / 2 * (t**2 - 3 * t**3 + 3 * t**4 - t**5)),
+            (10 * t**3 - 15 * t**4 + 6 * t**5, length * (-4 * t**3 + 7 * t**4 - 3 * t**5),
+             length**2 / 2 * (t**3 - 2 * t**4 + t**5)))
+    spec = ElementSpec(name="quintic", domain=domains.beam(2), nodes=((0, 0), (length, 0)),
+                       vectors=("r", "r_x", "r_xx"), shape_functions=ends[0] + ends[1],
+                       quadrature=(5, 3))
+    spec.check_interpolation()
+    assert spec.straight_reference() == [0, 0, 1, 0, 0, 0, length, 0, 1, 0, 0, 0]
+    swapped = ends[0][:1] + ends[0][2:0:-1] + ends[1]   # r_x and r_xx functions exchanged
+    with pytest.raises(ValueError, match="for r_x of node 0"):
+        dataclasses.replace(spec, shape_functions=swapped).check_interpolation()
 
 
 def test_straight_reference_has_unit_normals_and_zero_r_zz():
