@@ -20,8 +20,22 @@ from symgen.domains import LOCAL, Domain, x, y, z  # noqa: F401  (element files 
 # The beam box parameters, kept importable from here for the element files.
 length, height, width = domains.length, domains.height, domains.width
 
-#: Names of the nodal vectors an element may carry: the position and its local gradients.
-VECTOR_KINDS = ("r", "r_x", "r_y", "r_z")
+#: Letters of the local axes in nodal vector names (``r_<letters>``).
+AXIS_LETTERS = "xyz"
+
+
+def vector_axes(name: str, dim: int) -> tuple[int, ...] | None:
+    """The local axes a nodal vector differentiates the position along, in order: ``"r"``
+    (the position) (), ``"r_x"`` (0,), ``"r_zz"`` (2, 2) (d^2 r / dz^2), ``"r_xy"`` (0, 1).
+    Names are ``r`` or ``r_`` followed by axis letters of the first ``dim`` in alphabetical
+    order (one name per derivative: ``r_xy``, never ``r_yx``); None for any other name."""
+    if name == "r":
+        return ()
+    letters = AXIS_LETTERS[:dim]
+    if not name.startswith("r_") or len(name) < 3 or any(c not in letters for c in name[2:]):
+        return None
+    axes = tuple(letters.index(c) for c in name[2:])
+    return axes if list(axes) == sorted(axes) else None
 
 
 @dataclass(frozen=True)
@@ -33,7 +47,9 @@ class ElementSpec:
         dimension is the element's.
     nodes: each node as a point of the domain: ``dim`` expressions in the domain parameters
         (e.g. ``(l / 2, 0, 0)``).
-    vectors: the nodal vectors carried by every node, from ``VECTOR_KINDS``, in storage order.
+    vectors: the nodal vectors carried by every node, in storage order: the position ``r``
+        and its local derivatives, first (``r_x``, ``r_y``, ``r_z``) or higher (``r_zz``,
+        ``r_xy``, ...; ``vector_axes``).
     shape_functions: one SymPy expression per nodal vector (node-major), in the local
         coordinates and the domain parameters; s_k must be 1 for its own nodal vector and 0
         for the others at the nodes (checked).
@@ -58,9 +74,13 @@ class ElementSpec:
         object.__setattr__(self, "nodes", nodes)
         object.__setattr__(self, "shape_functions",
                            tuple(sp.sympify(s) for s in self.shape_functions))
-        unknown = [v for v in self.vectors if v not in VECTOR_KINDS[: self.dim + 1]]
+        unknown = [v for v in self.vectors if vector_axes(v, self.dim) is None]
         if unknown:
-            raise ValueError(f"element {self.name!r}: unknown nodal vectors {unknown}")
+            raise ValueError(f"element {self.name!r}: unknown nodal vectors {unknown} "
+                             f"(expected r or r_ and axis letters of {AXIS_LETTERS[:self.dim]} "
+                             "in order: r_x, r_zz, r_xy, ...)")
+        if len(set(self.vectors)) != len(self.vectors):
+            raise ValueError(f"element {self.name!r}: repeated nodal vectors {self.vectors}")
         if "r" not in self.vectors:
             raise ValueError(f"element {self.name!r}: every node needs its position r")
         if any(len(node) != self.dim for node in nodes):
@@ -122,32 +142,36 @@ class ElementSpec:
     def straight_reference(self) -> list[sp.Expr]:
         """Reference coordinates e0 of the straight (flat) element: r0(x) = x.
 
-        Positions sit at the nodes' points; gradients are the unit vectors.
+        Positions sit at the nodes' points; first gradients are the unit vectors, higher
+        derivatives (r_zz, ...) of the linear map are zero.
         """
         e0: list[sp.Expr] = []
         for node in self.nodes:
             for kind in self.vectors:
-                if kind == "r":
+                axes = vector_axes(kind, self.dim)
+                if not axes:
                     e0.extend(node)
-                else:
-                    vec = [sp.Integer(0)] * self.dim
-                    vec["xyz".index(kind[-1])] = sp.Integer(1)
-                    e0.extend(vec)
+                    continue
+                vec = [sp.Integer(0)] * self.dim
+                if len(axes) == 1:
+                    vec[axes[0]] = sp.Integer(1)
+                e0.extend(vec)
         return e0
 
     def check_interpolation(self) -> None:
         """Raise ValueError unless the shape functions interpolate the nodal vectors: at node
-        i, s_k = 1 for its position and 0 for the others, d s_k/d x_a = 1 for its r_a and 0
+        i, s_k = 1 for its position and 0 for the others, the derivative of s_k that a nodal
+        vector names (d s_k/d x_a for r_a, d^2 s_k/d z^2 for r_zz, ...) 1 for its own and 0
         for every other nodal vector."""
         for i, node in enumerate(self.nodes):
             at = dict(zip(self.coordinates, node, strict=True))
             for j, kind in enumerate(self.vectors):
                 row = i * len(self.vectors) + j
                 for k, s in enumerate(self.shape_functions):
-                    if kind == "r":
-                        value = s.subs(at)
-                    else:
-                        value = sp.diff(s, LOCAL["xyz".index(kind[-1])]).subs(at)
+                    value = s
+                    for axis in vector_axes(kind, self.dim):
+                        value = sp.diff(value, LOCAL[axis])
+                    value = value.subs(at)
                     expected = 1 if k == row else 0
                     if sp.simplify(value - expected) != 0:
                         raise ValueError(

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from runtime import Element
 from runtime.catalog import generated_kinds
-from runtime.kernels.kind import element_kind
+from runtime.kernels.kind import element_kind, vector_axes
 
 #: Every generated element kind (generated/*/element.json): the tests cover each one.
 KINDS = generated_kinds()
@@ -84,13 +84,16 @@ def degenerate_reference(kind: str) -> np.ndarray:
 
 def _nodal_reference(kind: str, position, frame) -> np.ndarray:
     """e0 from the node points of the kind: ``position(p)`` and ``frame(p)`` (columns
-    dr0/dx, dr0/dy[, dr0/dz]) at each node's local point p."""
+    dr0/dx, dr0/dy[, dr0/dz]) at each node's local point p; higher derivatives (r_zz) zero
+    (the straight fibres of every reference here)."""
     info = element_kind(kind)
     vectors = []
     for point in info.node_points(LENGTH, HEIGHT, WIDTH):
         columns = frame(point)
         for name in info.vectors:
-            vectors.append(position(point) if name == "r" else columns[:, "xyz".index(name[-1])])
+            axes = vector_axes(name)
+            vectors.append(position(point) if not axes else columns[:, axes[0]]
+                           if len(axes) == 1 else np.zeros(info.dim))
     return np.concatenate(vectors)
 
 

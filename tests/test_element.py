@@ -48,6 +48,19 @@ from runtime.kernels.loader import kernel_family
 from runtime.studies import highprecision as reference
 
 EPS = np.finfo(float).eps
+
+
+def invariant_rounding(kind: str) -> float:
+    """How much more the sums over the invariants round for ``kind`` than for the 16 shape
+    functions of the plates, on which the tolerances below were set: their terms are products
+    of two shape-function pairs, (n (n + 1) / 2)^2 of them (136^2 for 16), and the rounding
+    left after their cancellation grows with that count (measured on curved references
+    against the 50-digit reference: the 8-node shell's gram force 4.3e-13, energy 1.7e-13;
+    the 24 shape functions of ANCF-3833, 4.9 times the terms: 2.0e-12 and 3.0e-12, varying
+    by 1.7e-12 with a rigid rotation of the same problem; the quadrature method, which sums
+    no invariants, stays at 1e-15 on both); 1 up to 16 shape functions."""
+    n = element_kind(kind).n_shape
+    return max(1.0, (n * (n + 1) / 2 / 136) ** 2)
 VOLUME = LENGTH * HEIGHT * WIDTH
 SHAPES = ["straight", "curved"]
 
@@ -134,7 +147,7 @@ def test_rigid_motion_gives_zero_force_and_energy(kind, method, backend, shape, 
         q = batch.reshape(len(batch), -1, d)
         q = q - q[:, position_rows(kind)[:1]]
         terms = np.abs(el.elastic_jacobian(batch)).max() * np.abs(q).max()
-        tolerance = max(tolerance, 16 * EPS * el.ndof * terms)
+        tolerance = max(tolerance, 16 * EPS * el.ndof * terms * invariant_rounding(kind))
     assert np.abs(force).max() <= tolerance
     energy = el.strain_energy(batch)
     if method == "cij":
@@ -146,7 +159,8 @@ def test_rigid_motion_gives_zero_force_and_energy(kind, method, backend, shape, 
         tolerance = 32 * EPS * u0_formula(kind, VOLUME)
         # (the plate's quartic and quadratic terms are far above U0: their rounding, as for
         # the force, is a few eps |K| |e|^2 per coordinate)
-        tolerance = max(tolerance, 16 * EPS * el.ndof * terms * np.abs(q).max())
+        tolerance = max(tolerance, 16 * EPS * el.ndof * terms * np.abs(q).max()
+                        * invariant_rounding(kind))
     else:
         tolerance = 1e-9 * energy_scale()
     assert np.abs(energy).max() <= tolerance
@@ -223,8 +237,10 @@ def test_methods_and_backends_agree(kind, method, backend, shape):
     assert energy.shape == (m,)
     assert rel_diff(force, force_b) <= 1e-10
     assert rel_diff(jacobian, jacobian_b) <= 1e-10
-    # cij's energy (eq. 39) adds large terms that cancel: a digit fewer (as for mpmath)
-    assert rel_diff(energy, energy_b) <= (1e-9 if "cij" in (method, baseline[0]) else 1e-10)
+    # cij's energy (eq. 39) adds large terms that cancel: a digit fewer (as for mpmath), and
+    # more rounding with more shape-function pairs (invariant_rounding)
+    assert rel_diff(energy, energy_b) <= (1e-9 * invariant_rounding(kind)
+                                          if "cij" in (method, baseline[0]) else 1e-10)
 
 
 @all_kinds
@@ -337,6 +353,8 @@ def test_matches_mpmath_reference(kind, method, backend, shape):
     # cij evaluates K(e) e with K = K2(e) + K1, two large terms that largely cancel at a
     # moderate strain: one to two digits fewer than forming the strain first
     force_tol, energy_tol = (1e-10, 1e-9) if method == "cij" else (1e-12, 1e-12)
+    if method != "quadrature":   # it sums no invariants
+        force_tol, energy_tol = (t * invariant_rounding(kind) for t in (force_tol, energy_tol))
     assert rel_diff(el.elastic_force(e), force) <= force_tol
     assert abs(el.strain_energy(e) - energy) <= energy_tol * abs(energy)
 

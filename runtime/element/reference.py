@@ -6,21 +6,38 @@ from __future__ import annotations
 
 import numpy as np
 
-from runtime.kernels.kind import ElementKind
+from runtime.kernels.kind import ElementKind, is_first_gradient, vector_axes
 
 
 def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """e0 (ndof,) from node positions (nodes, dim) and node frames (nodes, dim, dim).
 
     frames[i][:, a] is the gradient dr0/dx_a at node i (a unit-speed parameterisation has
-    orthonormal frames).  Nodal vectors are taken in the kind's storage order.
+    orthonormal frames).  Nodal vectors are taken in the kind's storage order; higher
+    derivatives (r_zz, r_xy, ...) are zero: the reference is linear in the local
+    coordinates around each node (straight, flat, or with straight fibres across a curved
+    axis: ``curved_reference_check``).
     """
-    vectors = kind.vectors
     e0 = []
+    zero = np.zeros(kind.dim)
     for position, frame in zip(positions, frames, strict=True):
-        for name in vectors:
-            e0.extend(position if name == "r" else frame[:, "xyz".index(name[-1])])
+        for name in kind.vectors:
+            axes = vector_axes(name)
+            e0.extend(position if not axes else frame[:, axes[0]] if len(axes) == 1 else zero)
     return np.array(e0, dtype=float)
+
+
+def curved_reference_check(kind: ElementKind, what: str) -> None:
+    """Raise ValueError if ``kind`` carries a higher derivative along a meshed axis (r_xx,
+    r_xz of a beam or shell): on a reference curved along that axis it is the curvature,
+    which these placements do not compute.  Derivatives across the section or the thickness
+    only (r_zz of a shell) are zero on them: their fibres are straight."""
+    curved = [name for name in kind.vectors if len(vector_axes(name)) > 1
+              and set(vector_axes(name)) & set(kind.mesh_axes)]
+    if curved:
+        raise ValueError(f"{what} element: {kind.name} carries {', '.join(curved)}, "
+                         "derivatives along the curved axis that this placement does not "
+                         "compute; expected a straight or flat placement")
 
 
 def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
@@ -30,7 +47,8 @@ def gradient_frame(gradients: dict[str, np.ndarray], dim: int) -> np.ndarray:
     2D (so the frame stays right-handed).  Gradients of shape (k, dim) give k frames
     (k, dim, dim)."""
     axes = "xyz"[:dim]
-    columns = {name[-1]: np.asarray(value, float) for name, value in gradients.items()}
+    columns = {name[-1]: np.asarray(value, float) for name, value in gradients.items()
+               if is_first_gradient(name)}
     missing = [a for a in axes if a not in columns]
     if len(missing) > 1:
         raise ValueError(f"frame: a node with gradients {sorted(gradients)} has too few to "
@@ -102,6 +120,7 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
     a circle of ``radius`` (x is arc length): beams in the x-y plane from the origin towards
     +y (r_y pointing to the centre); plates into a cylindrical panel about an axis parallel
     to y, towards +z (r_z the outward normal of the flat panel turned with it)."""
+    curved_reference_check(kind, "bent")
     points = kind.node_points(*geometry)
     positions, frames = [], []
     plate = kind.mesh_axes == [0, 1]
@@ -129,6 +148,7 @@ def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
     """
     if kind.mesh_axes != [0]:
         raise ValueError(f"arc element: {kind.name} is not a line element")
+    curved_reference_check(kind, "arc")
     center = np.asarray(center, float)[: kind.dim]
     positions, frames = [], []
     sign = 1.0 if angle > 0 else -1.0

@@ -23,6 +23,19 @@ AXIS_RULES = {"gauss2": np.polynomial.legendre.leggauss(2),
               "lobatto2": (np.array([-1.0, 1.0]), np.ones(2))}
 
 
+def vector_axes(name: str) -> tuple[int, ...]:
+    """The local axes a nodal vector of element.json differentiates the position along
+    (``symgen.element.vector_axes``, which checked the name): "r" (), "r_x" (0,),
+    "r_zz" (2, 2), "r_xy" (0, 1)."""
+    return () if name == "r" else tuple("xyz".index(c) for c in name[2:])
+
+
+def is_first_gradient(name: str) -> bool:
+    """Whether nodal vector ``name`` is a first gradient (r_x, r_y, r_z): the vectors a node
+    frame is made of; higher derivatives (r_zz, ...) are not directions of the node."""
+    return len(vector_axes(name)) == 1
+
+
 @dataclass(frozen=True)
 class Axis:
     """One axis of the reference domain: ``coordinate`` (x, y, z), its bounds ``low`` and
@@ -239,13 +252,18 @@ class ElementKind:
                                 for f in fractions[:, a]))
                      for a in range(fractions.shape[1]))
 
+    @property
+    def first_gradients(self) -> tuple[str, ...]:
+        """The first gradients its nodes carry (r_x, r_y, r_z), in storage order."""
+        return tuple(v for v in self.vectors if is_first_gradient(v))
+
     def frame_gap(self) -> str | None:
         """Why a node of this kind cannot carry an orthonormal frame (None when it can): the
         gradients it carries must fix every axis, r_x, r_y and r_z completed from two in 3D,
         from one in 2D.  One gradient in 3D fixes one direction only: the normal of a
         surface (r_z of a shell) or the tangent of a line (r_x of a cable), not the turn
         about it."""
-        gradients = [v for v in self.vectors if v != "r"]
+        gradients = self.first_gradients
         if len(gradients) >= self.dim - 1:
             return None
         carried = f"its nodes carry only {', '.join(self.vectors)}"

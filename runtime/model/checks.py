@@ -116,7 +116,7 @@ def check_hub_axis(path: str, hub: Hub, body: Body) -> None:
     a cable's r_x, a shell's r_z) about the direction of that gradient would turn nothing:
     the node stays clamped.  Refused, naming the line's axis or the surface's normal."""
     kind = element_kind(body.element)
-    gradients = [v for v in kind.vectors if v != "r"]
+    gradients = kind.first_gradients
     if kind.dim != 3 or len(gradients) != 1:
         return
     element, local = np.argwhere(body.mesh.connectivity == hub.node.index)[0]
@@ -135,16 +135,18 @@ def check_hub_axis(path: str, hub: Hub, body: Body) -> None:
 
 
 def check_weld(path: str, a: Body, b: Body) -> None:
-    """A weld shares the deformation gradient of two nodes: both must carry every gradient
-    (r_x, r_y[, r_z]) to define it."""
+    """A weld shares the deformation gradient of two nodes: both must carry every first
+    gradient (r_x, r_y[, r_z]) to define it, and nothing else (a higher derivative, r_zz,
+    would need the second derivatives of the map between the two nodes' frames)."""
     for body in (a, b):
         kind = element_kind(body.element)
-        if len(kind.vectors) != kind.dim + 1:
+        if len(kind.first_gradients) != kind.dim or len(kind.vectors) != kind.dim + 1:
             frame = ", ".join(f"r_{a}" for a in "xyz"[:kind.dim])
             raise SceneError(f"{path}: a weld ties the full frames ({frame}) of its nodes; "
                              f"{body.element} nodes of body {show(body.name)} carry "
                              f"{', '.join(kind.vectors)}; expected nodes of an element with "
-                             f"every gradient, or a spherical joint")
+                             f"every first gradient and no higher derivative, or a spherical "
+                             f"joint")
 
 
 def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],

@@ -93,6 +93,20 @@ def _shell_8node() -> list[sp.Expr]:
     return [f for node in n for f in (node, z * node)]
 
 
+def _shell_3833() -> list[sp.Expr]:
+    """Chrono 3833 (lenX = L, lenY = H, one layer of thickness W on the mid-surface):
+    Calc_Sxi_compact, whose node functions carry the factor f = T - 2 zoffset - t - t zeta
+    (T = t = W, zoffset = 0) for r_z and f^2 for r_zz: per node n, -n f / 2, n f^2 / 8."""
+    u, v = 2 * X / L - 1, 2 * Y / H - 1
+    zeta = 2 * Z / W
+    f = W - 2 * 0 - W - W * zeta
+    n = [-(u - 1) * (v - 1) * (v + u + 1) / 4, (u + 1) * (v - 1) * (v - u + 1) / 4,
+         (u + 1) * (v + 1) * (v + u - 1) / 4, -(u - 1) * (v + 1) * (v - u - 1) / 4,
+         (u - 1) * (u + 1) * (v - 1) / 2, -(v - 1) * (v + 1) * (u + 1) / 2,
+         -(u - 1) * (u + 1) * (v + 1) / 2, (v - 1) * (v + 1) * (u - 1) / 2]
+    return [g for node in n for g in (node, -node * f / 2, node * f**2 / 8)]
+
+
 def _cable() -> list[sp.Expr]:
     """Cubic Hermite functions of the ANCF cable (Berzeri and Shabana; Gerstmayr and
     Irschik): s = [1 - 3xi^2 + 2xi^3, L (xi - 2xi^2 + xi^3), 3xi^2 - 2xi^3, L (xi^3 - xi^2)]."""
@@ -111,6 +125,7 @@ LITERATURE = {
     "beam3d_3node": lambda: _beam_3node(3),
     "plate3d": _plate,
     "shell3d_8node": _shell_8node,
+    "shell3d_3833": _shell_3833,
 }
 
 

@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from runtime.kernels.kind import is_first_gradient
 from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
@@ -223,7 +224,7 @@ class Weld(Joint):
         super().apply(model, built)
         dim = model.dim
         a, b = (model.node_index(n) for n in self.nodes)
-        gradients = [name for name in model.node_vectors(a) if name != "r"]
+        gradients = [name for name in model.node_vectors(a) if is_first_gradient(name)]
 
         def coordinates(node: int) -> np.ndarray:   # (gradients, dim) global indices
             return np.array([model.node_dofs(node, name) for name in gradients])
