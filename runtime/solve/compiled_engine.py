@@ -245,7 +245,7 @@ class CompiledEngine:
         m.f_full = self._work(dae.size)
         m.v_full = self._work(dae.size)
         for name in ("force", "residual", "x", "a_old", "base", "base_v", "v_iter",
-                     "abar_new"):
+                     "abar_new", "saved_q", "saved_v", "saved_a", "saved_abar"):
             setattr(m, name, self._work(nf))
         if sparse:
             self._sparse(m)
@@ -260,6 +260,7 @@ class CompiledEngine:
         for name, address in lapack.functions().items():
             setattr(m, name, self._ffi.cast("void *", address))
         m.y = self._work(nj)
+        m.saved_lam = self._work(nj)
         return m
 
     def _follower(self, m) -> None:
