@@ -18,7 +18,14 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.catalog import BACKENDS, ENGINES, LINEAR_SOLVERS, METHODS, NEWTON_MODES
+from runtime.catalog import (
+    BACKENDS,
+    DEFAULT_LAW,
+    ENGINES,
+    LINEAR_SOLVERS,
+    METHODS,
+    NEWTON_MODES,
+)
 from runtime.kernels.errors import JitEnvironmentError
 from runtime.studies.options import add_list_option, announce, default_out
 
@@ -141,7 +148,7 @@ def cmd_invariants(args) -> int:
     from runtime.studies.invariant_comparison import compare, report
 
     orders = tuple(args.quadrature) if args.quadrature else None
-    print(report(compare(args.element, args.reference, orders, args.backend)))
+    print(report(compare(args.element, args.reference, orders, args.backend, args.law)))
     return 0
 
 
@@ -319,6 +326,8 @@ def parser() -> argparse.ArgumentParser:
     add_list_option(invariants, "--quadrature", "Gauss orders per direction, e.g. 5 3 3",
                     convert=int, metavar="N")
     invariants.add_argument("--backend", choices=list(BACKENDS), default="numpy")
+    invariants.add_argument("--law", default=DEFAULT_LAW,
+                            help="material law of the element kind (docs/laws.md)")
     invariants.set_defaults(run=cmd_invariants)
 
     run = sub.add_parser("run", help="run a scene: static, modal and dynamic analyses")

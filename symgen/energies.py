@@ -14,7 +14,8 @@
   ``EI/2 sum_kl K_kl G_kl`` with the constant shape-level matrix ``K_kl = int s_k'' s_l'' dx``,
   so it adds ``EI K`` to K1 (cij) and a linear term to the gram kernels (``gram_linear``).
   Its modulus is the law's axial one: the E11 coefficient on the axis (E for ``svk``, the
-  1D St. Venant-Kirchhoff law, which is exactly EA eps^2 / 2 with the Green strain).
+  1D St. Venant-Kirchhoff law, which is exactly EA eps^2 / 2 with the Green strain), an input
+  of the straight invariants (``bending``: 0 for the exact curvature).
   ``I = w h^3 / 12`` in 2D (h the height in the bending plane, w the thickness); a 3D cable
   has no section orientation, so it takes one bending stiffness, the mean of the two
   principal moments of the h x w rectangle, ``I = h w (h^2 + w^2) / 24`` (exact for square
@@ -23,9 +24,21 @@
 
 Kelvin-Voigt damping (stress = D (eps + alpha eps_dot)) applies to both parts: the axial one
 through the gram tensor as for any law, the bending one as ``-alpha EI K r_dot``.
+
+The cable laws choose the bending model (``BENDING_MODELS``): ``svk`` the simple one above,
+``svk_exact_curvature`` the exact curvature of Gerstmayr and Irschik (Exudyn's ANCFCable2D),
+
+    U_bending = EI/2 int |kappa|^2 dx,    kappa = r_x x r_xx / |r_x|^2
+
+(a scalar in 2D), rational in the coordinates, so it is integrated by Gauss quadrature along
+the axis in the kernels (``symgen.methods.curvature``) while the axial part stays
+pre-integrated; its Kelvin-Voigt damping is ``alpha EI/2 int |kappa_dot|^2 dx`` (the
+curvature rate), objective for any motion.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import sympy as sp
 
@@ -37,7 +50,9 @@ ENERGIES = ("continuum", "cable")
 
 #: Why cable elements refuse curved references (element.json ``energy.curved``).
 CURVED_REFUSED = ("the cable energy's simple bending model EI/2 int r_xx . r_xx dx is not "
-                  "rotation invariant for a curved reference (it is only for straight ones)")
+                  "rotation invariant for a curved reference (it is only for straight ones), "
+                  "and its axial invariants are those of a straight reference (with either "
+                  "bending model)")
 
 
 def _cable_svk(dim: int) -> tuple[laws.LawPart, ...]:
@@ -46,15 +61,36 @@ def _cable_svk(dim: int) -> tuple[laws.LawPart, ...]:
     return (laws.LawPart("axial", "axis", voigt),)
 
 
-#: The laws of the cable energy: the 1D St. Venant-Kirchhoff law (E on E11 along the axis).
-CABLE_LAWS: dict[str, laws.Law] = {
-    "svk": laws.Law("svk", "1D St. Venant-Kirchhoff: EA eps^2/2 on the axis with the Green "
+#: Bending models of the cable energy: Berzeri and Shabana's pre-integrated r_xx . r_xx, and
+#: the exact curvature by quadrature (module docstring).
+BENDING_MODELS = ("simple", "exact_curvature")
+
+
+@dataclass(frozen=True)
+class CableLaw(laws.Law):
+    """A law of the cable energy: the axial law parts and the ``bending`` model
+    (``BENDING_MODELS``)."""
+
+    bending: str = "simple"
+
+
+#: The laws of the cable energy: the 1D St. Venant-Kirchhoff law (E on E11 along the axis)
+#: with either bending model.
+CABLE_LAWS: dict[str, CableLaw] = {
+    "svk": CableLaw("svk", "1D St. Venant-Kirchhoff: EA eps^2/2 on the axis with the Green "
                     "strain eps = (r_x.r_x - 1)/2, bending EI/2 r_xx.r_xx", _cable_svk),
+    "svk_exact_curvature": CableLaw(
+        "svk_exact_curvature", "1D St. Venant-Kirchhoff axial part as svk, bending EI/2 "
+        "|kappa|^2 with the exact curvature kappa = r_x x r_xx / |r_x|^2 by Gauss quadrature",
+        _cable_svk, bending="exact_curvature"),
 }
 
 _CABLE_REFUSES = ("law {name!r} does not apply to the cable energy: it corrects the shear "
                   "and Poisson strains of a continuum, which a cable (axial strain and bending "
                   "of r, r_x) has not")
+
+_CONTINUUM_REFUSES = ("law {name!r} is a law of the cable energy (axial strain and bending of "
+                      "r, r_x), not of a continuum")
 
 
 def check(spec) -> None:
@@ -83,7 +119,8 @@ def offered_laws(spec) -> dict[str, laws.Law]:
 
 def not_applicable(spec) -> dict[str, str]:
     """{law: why it does not apply to ``spec``} over every known law name."""
-    out = {}
+    out = {name: _CONTINUUM_REFUSES.format(name=name) for name in CABLE_LAWS
+           if not is_cable(spec) and name not in laws.LAWS}
     for name, law in laws.LAWS.items():
         if is_cable(spec) and name not in CABLE_LAWS:
             out[name] = _CABLE_REFUSES.format(name=name)
@@ -131,9 +168,9 @@ def bending_terms(spec, pairs, modulus) -> dict[str, list]:
                             for k, m in pairs]}
 
 
-def bending_modulus(coefficients: dict):
-    """The modulus of the bending part: the law's E11 coefficient on the axis."""
-    return coefficients["axis"][0]
+def bending_model(spec, law: laws.Law) -> str | None:
+    """The bending model of ``law`` on ``spec`` (None for a continuum)."""
+    return law.bending if is_cable(spec) else None
 
 
 def _along(weights, vec, dim: int) -> list:
@@ -141,23 +178,62 @@ def _along(weights, vec, dim: int) -> list:
     return [sum(w * vec[k * dim + c] for k, w in enumerate(weights)) for c in range(dim)]
 
 
-def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending):
-    """The cable energy density at one point times its weight: ``w_axial eps^2 / 2 +
-    w_bending r_xx.r_xx / 2``, with eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the reference)
-    from the shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the node-major
-    reference ``q0`` and displacements ``dq``."""
+def _cross(a, b) -> list:
+    """a x b: one entry in 2D (the scalar cross product), three in 3D."""
+    if len(a) == 2:
+        return [a[0] * b[1] - a[1] * b[0]]
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
+def curvature(rx, rxx) -> list:
+    """The exact curvature kappa = r_x x r_xx / |r_x|^2 (1/m; one entry in 2D, three in 3D)."""
+    norm2 = _dot(rx, rx)
+    return [c / norm2 for c in _cross(rx, rxx)]
+
+
+def curvature_rate(rx, rxx, rdx, rdxx) -> list:
+    """d kappa / dt from r_x, r_xx and their rates (1/(m s))."""
+    norm2 = _dot(rx, rx)
+    cross = _cross(rx, rxx)
+    rate = [a + b for a, b in zip(_cross(rdx, rxx), _cross(rx, rdxx), strict=True)]
+    return [(r * norm2 - 2 * _dot(rx, rdx) * c) / norm2**2
+            for r, c in zip(rate, cross, strict=True)]
+
+
+def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending, bending: str = "simple"):
+    """The cable energy density at one point times its weight: ``w_axial eps^2 / 2`` plus,
+    with the ``bending`` model, ``w_bending r_xx.r_xx / 2`` (simple) or ``w_bending
+    |kappa|^2 / 2`` (exact curvature), with eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the
+    reference) from the shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the
+    node-major reference ``q0`` and displacements ``dq``.  ``w_axial = 0`` gives the bending
+    part alone."""
     r0x, drx = _along(s1, q0, dim), _along(s1, dq, dim)
     rxx = [a + b for a, b in zip(_along(s2, q0, dim), _along(s2, dq, dim), strict=True)]
-    eps = sum(a * b for a, b in zip(r0x, drx, strict=True)) + sum(b * b for b in drx) / 2
-    return w_axial * eps**2 / 2 + w_bending * sum(c * c for c in rxx) / 2
+    eps = _dot(r0x, drx) + _dot(drx, drx) / 2
+    if bending == "simple":
+        measure = _dot(rxx, rxx)
+    else:
+        kappa = curvature([a + b for a, b in zip(r0x, drx, strict=True)], rxx)
+        measure = _dot(kappa, kappa)
+    return w_axial * eps**2 / 2 + w_bending * measure / 2
 
 
-def point_dissipation(s1, s2, q, qd, dim: int, w_axial, w_bending):
+def point_dissipation(s1, s2, q, qd, dim: int, w_axial, w_bending, bending: str = "simple"):
     """The Kelvin-Voigt dissipation potential at one point over alpha: ``w_axial eps_dot^2 / 2
-    + w_bending rd_xx.rd_xx / 2`` with eps_dot = r_x . rd_x."""
+    + w_bending rd_xx.rd_xx / 2`` (simple bending) or ``+ w_bending |kappa_dot|^2 / 2`` (exact
+    curvature), with eps_dot = r_x . rd_x; ``w_axial = 0`` gives the bending part alone."""
     rx, rdx, rdxx = _along(s1, q, dim), _along(s1, qd, dim), _along(s2, qd, dim)
-    eps_dot = sum(a * b for a, b in zip(rx, rdx, strict=True))
-    return w_axial * eps_dot**2 / 2 + w_bending * sum(c * c for c in rdxx) / 2
+    eps_dot = _dot(rx, rdx)
+    if bending == "simple":
+        measure = _dot(rdxx, rdxx)
+    else:
+        rate = curvature_rate(rx, _along(s2, q, dim), rdx, rdxx)
+        measure = _dot(rate, rate)
+    return w_axial * eps_dot**2 / 2 + w_bending * measure / 2
 
 
 def metadata(spec) -> dict | None:
@@ -165,6 +241,6 @@ def metadata(spec) -> dict | None:
     element.json has no ``energy`` entry)."""
     if not is_cable(spec):
         return None
-    return {"name": "cable", "bending": "simple", "variants": ["straight"],
+    return {"name": "cable", "variants": ["straight"],
             "curved": CURVED_REFUSED,
             "second_moment": "w h^3 / 12" if spec.dim == 2 else "h w (h^2 + w^2) / 24"}

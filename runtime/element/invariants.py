@@ -315,12 +315,15 @@ def cable_table(kind: ElementKind, family: KernelFamily, geometry, order: int,
 
 
 def cable_invariants(kind: ElementKind, family: KernelFamily, geometry, orders,
-                     coefficients: dict[str, np.ndarray], density: float) -> dict[str, np.ndarray]:
+                     coefficients: dict[str, np.ndarray], density: float,
+                     bending: float | None = None) -> dict[str, np.ndarray]:
     """Mass, K1, gram, cij, U0 and the gram form's linear term of a straight cable by
     quadrature (the closed forms come from the generated ``law_invariants_straight``): the
     axial part through ``law_algebra`` with b = ds/dx on the axis rule of order
     ``orders[0]``, the bending part EI K_kl, K = int s_k'' s_l'' dx, added to K1, and
-    ``gram_linear`` = EI mu K / 4 (mu = 1 on the diagonal, 2 off it); symgen/energies.py."""
+    ``gram_linear`` = EI mu K / 4 (mu = 1 on the diagonal, 2 off it); symgen/energies.py.
+    ``bending``: the modulus E of the pre-integrated (simple) bending, default the E11
+    coefficient on the axis; 0 for the exact curvature (bending by quadrature)."""
     points, weights = subdomain_rule(kind, geometry, (orders[0],) * kind.dim, "axis")
     shared = np.asarray(geometry, float)
     b = full_gradients(kind, shape_gradient_table(kind, family, geometry, points))
@@ -336,11 +339,12 @@ def cable_invariants(kind: ElementKind, family: KernelFamily, geometry, orders,
     stored = law_algebra(kind, "straight", parts, mass, density)
     second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
     area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
-    bending = float(coefficients["axis"][0]) * moment * np.einsum(
+    modulus = float(coefficients["axis"][0]) if bending is None else bending
+    stiffness = modulus * moment * np.einsum(
         "p,pk,pl->kl", weights / area, second, second)
     rows, cols = np.triu_indices(kind.n_shape)
-    stored["k1"] = stored["k1"] + bending[rows, cols]
-    stored["gram_linear"] = np.where(rows == cols, 1, 2) * bending[rows, cols] / 4
+    stored["k1"] = stored["k1"] + stiffness[rows, cols]
+    stored["gram_linear"] = np.where(rows == cols, 1, 2) * stiffness[rows, cols] / 4
     return stored
 
 
@@ -526,12 +530,16 @@ def closed_law_invariants(kind: ElementKind, geometry, coefficients: dict[str, n
 
 
 def straight_law_invariants(family: KernelFamily, geometry, coefficients: dict[str, np.ndarray],
-                            density: float) -> dict[str, np.ndarray]:
-    """Closed-form invariants of a law for the straight reference (``law_invariants_straight``)."""
+                            density: float, bending: float | None = None
+                            ) -> dict[str, np.ndarray]:
+    """Closed-form invariants of a law for the straight reference (``law_invariants_straight``);
+    ``bending``: a cable's modulus of the pre-integrated simple bending (Pa; 0 when its
+    bending is by quadrature, None for a continuum)."""
     # the kernel takes the exactly integrated domains (laws with reduced integration store
     # general invariants, so their coefficients there are zero)
     taken = {a["name"] for a in family.signatures["law_invariants_straight"]["arrays"]}
     inputs = {"geometry": np.asarray(geometry, float)[None, :], "density": np.array([density]),
               **{domain: np.asarray(value, float) for domain, value in coefficients.items()
-                 if domain in taken}}
+                 if domain in taken},
+              **({"bending": np.array([bending])} if bending is not None else {})}
     return {name: value[0] for name, value in family("law_invariants_straight", inputs).items()}

@@ -15,7 +15,10 @@ Families (one generated module each, so a scene compiles only what it uses):
 * ``quadrature_law``   - Gauss quadrature of any material law (symgen/laws.py) at every call,
                          with Kelvin-Voigt damping;
 * ``damping_<variant>``   - Kelvin-Voigt damping through the gram tensor Dm (its own family,
-                         so undamped models never compile it).
+                         so undamped models never compile it);
+* ``<method>_curvature``  - cable elements with the exact-curvature bending: the gram, cij,
+                         damping and quadrature kernels with the bending by quadrature
+                         along the axis (``curvature``).
 
 Each method family has ``force``, ``jacobian`` and ``energy`` kernels.  All translate the
 positions to the element's first node first; ``gram`` and ``quadrature`` work in the
@@ -73,6 +76,13 @@ def _curved(spec: ElementSpec) -> bool:
     return not energies.is_cable(spec)
 
 
+def _cable(spec: ElementSpec) -> bool:
+    """The exact-curvature families where the energy has bending models (cables)."""
+    from symgen import energies
+
+    return energies.is_cable(spec)
+
+
 def _small_general_map(spec: ElementSpec) -> bool:
     """The general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
     map of the whole general pattern); otherwise curved references take the law path."""
@@ -96,6 +106,11 @@ FAMILIES: tuple[Family, ...] = (
     Family("quadrature_law", "quadrature_law", "quadrature", builder="build_law"),
     Family("damping_straight", "damping", "damping", variant="straight"),
     Family("damping_general", "damping", "damping", variant="general", when=_curved),
+    Family("gram_curvature", "gram", "curvature", builder="build_gram", when=_cable),
+    Family("cij_curvature", "cij", "curvature", builder="build_cij", when=_cable),
+    Family("damping_curvature", "damping", "curvature", builder="build_damping", when=_cable),
+    Family("quadrature_curvature", "quadrature", "curvature", builder="build_quadrature",
+           when=_cable),
 )
 _BY_NAME = {family.name: family for family in FAMILIES}
 

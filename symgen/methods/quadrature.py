@@ -350,36 +350,58 @@ def cable_table_width(spec: ElementSpec) -> int:
     return 2 * spec.n_shape + 2
 
 
-def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
-    """Gauss quadrature of the cable energy (``symgen.energies``) along the axis at every
-    call, with Kelvin-Voigt damping.  Each table row is an axis point: ds/dx, d2s/dx2, and
-    the weights of the axial part (EA dx) and of the bending part (EI dx).  Per point the
-    energy and the dissipation potential over alpha come from ``energies.point_energy`` and
-    ``energies.point_dissipation``; force, Jacobians and damping are their exact
-    derivatives (F = -dU/de - alpha dPhi/de_dot)."""
-    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+def cable_quadrature_kernel(spec: ElementSpec, name: str, bending: str = "simple") -> Kernel:
+    """Gauss quadrature of the cable energy (``symgen.energies``) with the ``bending`` model
+    along the axis at every call, with Kelvin-Voigt damping.  Each table row is an axis
+    point: ds/dx, d2s/dx2, and the weights of the axial part (EA dx) and of the bending part
+    (EI dx) (``cable_point``)."""
     damped = name in DAMPING_KERNELS
-    width_ = cable_table_width(spec)
     arrays = [*coordinate_arrays(spec, True)]
-    table = Array("table", width_, "table", "per axis point: ds/dx, d2s/dx2, weights of the "
-                  "axial part (EA dx, N m) and of the bending part (EI dx, N m^3)")
     if damped:
         e_dot, tail = damping_arrays(spec, name)
-        arrays += [e_dot, table, *tail]
+        arrays += [e_dot, cable_table_array(spec), *tail]
     else:
-        arrays += [table, *[quantity_output(spec, quantity) for quantity in name.split("_")]]
+        arrays += [cable_table_array(spec),
+                   *[quantity_output(spec, quantity) for quantity in name.split("_")]]
     temps = Temporaries()
     body: list = []
-    q, q0, dq = translate(spec, body, temps, with_reference=True)
-    tab = refs("tab", width_)
-    s1, s2, w_axial, w_bending = tab[:n], tab[n:2 * n], tab[2 * n], tab[2 * n + 1]
+    _, q0, dq = translate(spec, body, temps, with_reference=True)
+    point = cable_point(spec, name, q0, dq, temps, bending, axial=True)
+    body.append(PointLoop("table", tuple(point), spec.quadrature[0]))
+    doc = KERNEL_DOCS[name]
+    model = "" if bending == "simple" else f" ({bending.replace('_', ' ')} bending)"
+    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of the cable energy{model} by Gauss "
+                  "quadrature along the axis at every call.", arrays, body)
+
+
+def cable_table_array(spec: ElementSpec) -> Array:
+    """The per-point table of the cable's quadrature loops (``cable_table_width``)."""
+    return Array("table", cable_table_width(spec), "table", "per axis point: ds/dx, d2s/dx2, "
+                 "weights of the axial part (EA dx, N m) and of the bending part (EI dx, "
+                 "N m^3)")
+
+
+def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Temporaries,
+                bending: str, axial: bool) -> list:
+    """The statements at one axis point (table row ``tab``) of the cable kernel ``name``
+    (``KERNELS`` or ``DAMPING_KERNELS`` names), accumulated into its outputs: the energy
+    and the dissipation potential over alpha of ``energies.point_energy`` and
+    ``energies.point_dissipation`` with the ``bending`` model (the bending part alone unless
+    ``axial``), and their exact derivatives (F = -dU/de - alpha dPhi/de_dot) at the
+    node-relative reference ``q0`` and displacements ``dq``."""
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    damped = name in DAMPING_KERNELS
+    tab = refs("tab", cable_table_width(spec))
+    s1, s2, w_bending = tab[:n], tab[n:2 * n], tab[2 * n + 1]
+    w_axial = tab[2 * n] if axial else 0
     shift = sp.symbols(f"dq0:{ndof}")
     rate = sp.symbols(f"qd0:{ndof}")
-    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending)
+    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending, bending)
     subs = dict(zip(shift, dq, strict=True))
     point: list = []
     if name == "energy":
         store(point, "energy", [energy.xreplace(subs)], accumulate=True)
+        return point
     force = [-sp.diff(energy, v) for v in shift]
     stiffness = [[sp.diff(f, v) for v in shift] for f in force]
     if damped:
@@ -387,7 +409,7 @@ def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
         # the dissipation in the current position q = q0 + dq, relative to the first node
         current = [a + b for a, b in zip(q0, shift, strict=True)]
         dissipation = alpha * energies.point_dissipation(s1, s2, current, rate, d, w_axial,
-                                                         w_bending)
+                                                         w_bending, bending)
         subs.update(zip(rate, relative_velocities(spec), strict=True))
         damping = [-sp.diff(dissipation, v) for v in rate]
         jacobian = [[sp.diff(f, v) for v in shift] for f in damping]
@@ -397,19 +419,16 @@ def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
             jacobian = [[a + b for a, b in zip(ra, rb, strict=True)]
                         for ra, rb in zip(stiffness, jacobian, strict=True)]
         outputs = {"force": damping, "jacobian": jacobian, "jacobian_dot": jacobian_dot}
-        wanted = [a.name for a in tail if a.role == "output"]
+        wanted = [a.name for a in damping_arrays(spec, name)[1] if a.role == "output"]
     else:
         outputs = {"force": force, "jacobian": stiffness}
-        wanted = [quantity for quantity in name.split("_") if quantity != "energy"]
+        wanted = name.split("_")
     for quantity in wanted:
         values = outputs[quantity]
         flat = values if quantity == "force" else [v for row in values for v in row]
         store(point, quantity, materialize(point, temps, [v.xreplace(subs) for v in flat]),
               accumulate=True)
-    body.append(PointLoop("table", tuple(point), spec.quadrature[0]))
-    doc = KERNEL_DOCS[name]
-    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of the cable energy by Gauss quadrature "
-                  "along the axis at every call.", arrays, body)
+    return point
 
 
 def build(spec: ElementSpec) -> list[Kernel]:
