@@ -89,9 +89,6 @@ _CABLE_REFUSES = ("law {name!r} does not apply to the cable energy: it corrects 
                   "and Poisson strains of a continuum, which a cable (axial strain and bending "
                   "of r, r_x) has not")
 
-_CONTINUUM_REFUSES = ("law {name!r} is a law of the cable energy (axial strain and bending of "
-                      "r, r_x), not of a continuum")
-
 
 def check(spec) -> None:
     """ValueError unless ``spec`` (an ``ElementSpec``) fits its declared energy."""
@@ -119,8 +116,7 @@ def offered_laws(spec) -> dict[str, laws.Law]:
 
 def not_applicable(spec) -> dict[str, str]:
     """{law: why it does not apply to ``spec``} over every known law name."""
-    out = {name: _CONTINUUM_REFUSES.format(name=name) for name in CABLE_LAWS
-           if not is_cable(spec) and name not in laws.LAWS}
+    out = {}
     for name, law in laws.LAWS.items():
         if is_cable(spec) and name not in CABLE_LAWS:
             out[name] = _CABLE_REFUSES.format(name=name)

@@ -133,7 +133,10 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
         raise SceneError(f"{path}.material: material {show(material)} is not defined; "
                          f"defined materials: {defined}")
     law = materials[material].law
-    if (why := meta.law_not_applicable(law)) is not None:
+    why = meta.law_not_applicable(law)
+    if why is None and law not in meta.laws:  # e.g. a cable law on a continuum kind
+        why = f"a law the {meta.energy.name} energy of {kind} has not"
+    if why is not None:
         raise SceneError(f"{path}.material: material {show(material)} has law = "
                          f"{show(law)}, which does not apply to {kind} elements ({why}); "
                          f"expected a material with one of the laws "

@@ -1,0 +1,92 @@
+"""The two bending models of the ANCF cable (``symgen/energies.py``: the simple
+``EI/2 int r_xx . r_xx dx`` of law ``svk`` and the exact curvature of law
+``svk_exact_curvature``) on the elastica of ``ancf bench precision`` (P L^2 / EI = 10, L / h =
+200): the tip error against the exact elastica by element count, and Exudyn's ANCFCable2D
+(exact curvature too) on the same meshes.
+
+``python -m runtime.studies.cable_bending [counts...]`` prints the markdown table of
+docs/laws.md.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from runtime import Body, Clamp, Displacement, Material, PointForce, Scene, Static, run_scene
+from runtime.studies import peers
+from runtime.studies.precision import elastica
+from runtime.studies.precision.plan import ELASTICA
+
+#: Young's modulus of the study (Pa); the tip displacement over L depends on P L^2 / EI and
+#: on the (tiny) axial strain P / EA only.
+YOUNG = 2.1e11
+#: Element counts of the table.
+COUNTS = (4, 8, 16, 32)
+#: Load steps of every static solve (the project's and Exudyn's).
+LOAD_STEPS = 20
+
+
+def tip_force() -> float:
+    """The tip force P (N) with P L^2 / EI = ELASTICA's alpha, EI = E w h^3 / 12."""
+    inertia = ELASTICA["width"] * ELASTICA["height"] ** 3 / 12.0
+    return ELASTICA["alpha"] * YOUNG * inertia / ELASTICA["length"] ** 2
+
+
+def cable_tip(law: str, elements: int, quadrature: int | None = None) -> tuple[float, float]:
+    """(x, y) tip displacement (m) of a clamped ``cable2d`` cantilever of ``elements`` elements
+    with material law ``law`` (Gauss order ``quadrature`` along the axis, default the kind's)
+    under the fixed tip force -P y, static in LOAD_STEPS increments."""
+    length, h, w = ELASTICA["length"], ELASTICA["height"], ELASTICA["width"]
+    material = Material("steel", YOUNG, 0.0, 7800.0, law=law)
+    orders = None if quadrature is None else (quadrature, 1)
+    scene = Scene(title="elastica", materials=[material],
+                  bodies=[Body("cable", "cable2d", "steel", h, w, elements, (0.0, 0.0),
+                               (length, 0.0), quadrature=orders)],
+                  constraints=[Clamp("cable:0")],
+                  loads=[PointForce("cable:-1", (0.0, -tip_force()))],
+                  sensors=[Displacement("tip_x", "cable:-1", "x"),
+                           Displacement("tip_y", "cable:-1", "y")],
+                  static=Static(load_steps=LOAD_STEPS))
+    result = run_scene(scene, progress=False)
+    if result.status != "ok":
+        raise RuntimeError(f"elastica with {elements} x cable2d ({law}): {result.status}")
+    values = result.summary["static"]["sensors"]
+    return values["tip_x"], values["tip_y"]
+
+
+def exudyn_tip(elements: int) -> tuple[float, float]:
+    """(x, y) tip displacement (m) of the same cantilever as Exudyn ANCFCable2D elements."""
+    run = peers.exudyn_elastica(elements, LOAD_STEPS, length=ELASTICA["length"],
+                                height=ELASTICA["height"], width=ELASTICA["width"],
+                                E=YOUNG, force=(0.0, -tip_force()))
+    return run.tip
+
+
+def error(tip: tuple[float, float]) -> float:
+    """max(|x - exact x|, |y - exact y|) / L against the exact elastica."""
+    u, w = elastica.by_quadrature(ELASTICA["alpha"])
+    length = ELASTICA["length"]
+    return max(abs(tip[0] + u * length), abs(tip[1] + w * length)) / length
+
+
+def table(counts=COUNTS) -> str:
+    """The markdown table: per element count the error of both bending models, of Exudyn's
+    ANCFCable2D (when installed) and the distance between the exact-curvature tip and
+    Exudyn's (over L)."""
+    peer = peers.exudyn_available()
+    head = "| elements | simple (svk) | exact curvature | " + (
+        "Exudyn ANCFCable2D | exact curvature - Exudyn |" if peer else "")
+    lines = [head, "|" + "---:|" * (head.count("|") - 1)]
+    for n in counts:
+        simple, exact = cable_tip("svk", n), cable_tip("svk_exact_curvature", n)
+        row = f"| {n} | {error(simple):.2e} | {error(exact):.2e} |"
+        if peer:
+            theirs = exudyn_tip(n)
+            gap = max(abs(a - b) for a, b in zip(exact, theirs, strict=True))
+            row += f" {error(theirs):.2e} | {gap / ELASTICA['length']:.2e} |"
+        lines.append(row)
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    print(table(tuple(int(a) for a in sys.argv[1:]) or COUNTS))

@@ -1,0 +1,309 @@
+"""The exact-curvature bending of the ANCF cables (law ``svk_exact_curvature``,
+symgen/energies.py) against what does not share its code: the 50-digit mpmath quadrature of
+the energy and its gradient (runtime/studies/highprecision.py), finite differences, Exudyn's
+explicit formula for the bending force of its ANCFCable2D (written out here in NumPy), the
+simple bending model where the two must agree, the other engine, and Exudyn itself on the
+elastica.  The generic law tests (tests/test_law.py: methods and backends agreeing, rigid
+motions, damping objectivity) and the cantilevers of tests/test_cable.py take the law too."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+from conftest import (
+    E_MODULUS,
+    HEIGHT,
+    LENGTH,
+    METHODS,
+    NU,
+    RHO,
+    WIDTH,
+    random_rotation,
+    rel_diff,
+    rigid_motion,
+)
+from scenes_small import body, compare_engines, scene
+
+from runtime import (
+    Clamp,
+    CosineRamp,
+    Displacement,
+    Dynamic,
+    Element,
+    Material,
+    PointForce,
+    SceneError,
+    load_scene,
+)
+from runtime.studies import cable_bending, highprecision, peers
+
+LAW = "svk_exact_curvature"
+CABLES = ["cable2d", "cable3d"]
+ALPHA = 0.01  # s
+all_cables = pytest.mark.parametrize("kind", CABLES)
+all_methods = pytest.mark.parametrize("method", METHODS)
+
+
+@functools.cache
+def cable(kind: str, method: str = "gram", backend: str = "c", law: str = LAW,
+          damping: float = ALPHA) -> Element:
+    """The conftest element as a cable of ``law`` with Kelvin-Voigt damping."""
+    return Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, method=method,
+                   backend=backend, law=law, damping=damping)
+
+
+def dim_of(kind: str) -> int:
+    return 2 if kind == "cable2d" else 3
+
+
+def bent(kind: str, rng: np.random.Generator, amplitude: float = 0.05) -> np.ndarray:
+    """A large rotation and translation of the reference plus ``amplitude`` noise (relative to
+    the element's size): bent, stretched and twisted."""
+    el = cable(kind)
+    d = dim_of(kind)
+    e = rigid_motion(kind, el.e0, random_rotation(d, rng), rng.normal(size=d))
+    return e + amplitude * np.abs(el.e0).max() * rng.standard_normal(el.ndof)
+
+
+def central_difference(function, x: np.ndarray, step: float) -> np.ndarray:
+    """Rows d function / d x_j: (ndof, out)."""
+    shifts = step * np.eye(x.size)
+    values = function(np.concatenate([x + shifts, x - shifts]))
+    return (values[: x.size] - values[x.size:]) / (2 * step)
+
+
+# --- an independent NumPy cable: Hermite shape functions, Exudyn's bending formula --------
+
+
+def hermite(x: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """(ds/dx, d2s/dx2) of the cubic Hermite shape functions [r(0), r_x(0), r(l), r_x(l)] at
+    the points x: (points, 4) each."""
+    xi = x / length
+    first = np.column_stack([(-6 * xi + 6 * xi**2) / length, 1 - 4 * xi + 3 * xi**2,
+                             (6 * xi - 6 * xi**2) / length, -2 * xi + 3 * xi**2])
+    second = np.column_stack([(-6 + 12 * xi) / length**2, (-4 + 6 * xi) / length,
+                              (6 - 12 * xi) / length**2, (-2 + 6 * xi) / length])
+    return first, second
+
+
+def gauss(order: int, length: float) -> tuple[np.ndarray, np.ndarray]:
+    t, w = np.polynomial.legendre.leggauss(order)
+    return (t + 1) * length / 2, w * length / 2
+
+
+def exudyn_style_force(e: np.ndarray, order: int = 5) -> np.ndarray:
+    """The planar cable's elastic force written out as Exudyn's ObjectANCFCable2D evaluates
+    its bending (main/src/Objects/CObjectANCFCable2D.cpp, read for its formulas): per Gauss
+    point kappa = f / g with f = r_x x r_xx, g = |r_x|^2, the force -EI kappa (df / g - 2 f
+    dg / g^2) with df_j = s'_j (r_xx x e_i) + s''_j (e_i x r_xx) and dg_j = r_x,i s'_j; plus
+    the axial force -EA eps s'_j r_x,i with the Green strain (this project's axial measure;
+    Exudyn's is |r_x| - 1)."""
+    x, w = gauss(order, LENGTH)
+    first, second = hermite(x, LENGTH)
+    q = e.reshape(4, 2)
+    EA, EI = E_MODULUS * HEIGHT * WIDTH, E_MODULUS * WIDTH * HEIGHT**3 / 12
+    force = np.zeros((4, 2))
+    for p in range(x.size):
+        rx, rxx = first[p] @ q, second[p] @ q
+        f, g = rx[0] * rxx[1] - rx[1] * rxx[0], rx @ rx
+        kappa, eps = f / g, (g - 1) / 2
+        for j in range(4):
+            df = np.array([first[p, j] * rxx[1] - second[p, j] * rx[1],
+                           -first[p, j] * rxx[0] + second[p, j] * rx[0]])
+            dg = rx * first[p, j]
+            force[j] -= w[p] * (EI * kappa * (df / g - 2 * f * dg / g**2)
+                                + EA * eps * first[p, j] * rx)
+    return force.ravel()
+
+
+def bending_dissipation(e: np.ndarray, e_dot: np.ndarray, step: float = 1e-7,
+                        order: int = 5) -> float:
+    """alpha EI/2 int kappa_dot^2 dx + alpha EA/2 int eps_dot^2 dx of the planar cable, the
+    rates by central differences in time along e_dot (kappa = r_x x r_xx / |r_x|^2)."""
+    x, w = gauss(order, LENGTH)
+    first, second = hermite(x, LENGTH)
+
+    def strains(coordinates):
+        q = coordinates.reshape(4, 2)
+        rx, rxx = first @ q, second @ q
+        norm2 = np.einsum("pa,pa->p", rx, rx)
+        return (rx[:, 0] * rxx[:, 1] - rx[:, 1] * rxx[:, 0]) / norm2, (norm2 - 1) / 2
+
+    (k1, e1), (k0, e0) = strains(e + step * e_dot), strains(e - step * e_dot)
+    kappa_dot, eps_dot = (k1 - k0) / (2 * step), (e1 - e0) / (2 * step)
+    EA, EI = E_MODULUS * HEIGHT * WIDTH, E_MODULUS * WIDTH * HEIGHT**3 / 12
+    return ALPHA / 2 * float(w @ (EI * kappa_dot**2 + EA * eps_dot**2))
+
+
+# --- element ------------------------------------------------------------------------------
+
+
+@all_cables
+@all_methods
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_matches_mpmath_reference(kind, method, backend):
+    """Energy and force of a large-rotation, moderately bent configuration against 50-digit
+    Gauss quadrature (the same 5 points along the axis) of the exact-curvature energy and its
+    gradient written out in mpmath."""
+    el = cable(kind, method, backend)
+    e = bent(kind, np.random.default_rng([CABLES.index(kind), 7]))
+    energy, force = highprecision.cable_energy_and_force(
+        kind, e, LENGTH, HEIGHT, WIDTH, E_MODULUS, bending="exact_curvature")
+    simple = highprecision.cable_energy_and_force(kind, e, LENGTH, HEIGHT, WIDTH, E_MODULUS)
+    assert rel_diff(force, simple[1]) > 1e-3  # the two models differ at this curvature
+    tolerance = 1e-10 if method == "cij" else 1e-12  # cij's K(e) e cancels large terms
+    assert rel_diff(el.elastic_force(e), force) <= tolerance
+    assert abs(el.strain_energy(e) - energy) <= tolerance * abs(energy)
+
+
+@all_methods
+def test_planar_force_is_exudyns_bending_formula(method, rng):
+    """The 2D force against Exudyn's explicit derivative of kappa (``exudyn_style_force``)."""
+    e = bent("cable2d", rng)
+    assert rel_diff(cable("cable2d", method).elastic_force(e), exudyn_style_force(e)) <= 1e-10
+
+
+@all_cables
+@all_methods
+def test_force_and_jacobian_are_derivatives(kind, method, rng):
+    el = cable(kind, method)
+    e = bent(kind, rng)
+    step = 1e-6 * np.abs(e).max()
+    assert rel_diff(el.elastic_force(e), -central_difference(el.strain_energy, e, step)) <= 1e-6
+    jacobian = el.elastic_jacobian(e)
+    assert rel_diff(jacobian, central_difference(el.elastic_force, e, step).T) <= 1e-6
+    assert np.abs(jacobian - jacobian.T).max() <= 1e-12 * np.abs(jacobian).max()
+
+
+@all_cables
+@all_methods
+def test_rotated_configuration_gives_the_rotated_force(kind, method, rng):
+    """Objectivity of a bent state: F(R e + t) = R F(e) (the exact curvature is rotation
+    invariant; the rigid motions of the reference, zero force: tests/test_law.py)."""
+    el = cable(kind, method)
+    d = dim_of(kind)
+    e = bent(kind, rng)
+    R, t = random_rotation(d, rng), rng.normal(size=d)
+    rotate = lambda f: rigid_motion(kind, f, R, np.zeros(d))  # noqa: E731
+    assert rel_diff(el.elastic_force(rigid_motion(kind, e, R, t)),
+                    rotate(el.elastic_force(e))) <= 1e-11
+
+
+@all_cables
+def test_small_deflections_bend_as_the_simple_model(kind):
+    """At the straight reference both models have the same transverse bending stiffness
+    (kappa = r_x x dr_xx with r_x = e_x); the exact curvature leaves the axial component of
+    r_xx free, which the simple model stiffens by EI int u''^2 dx (the only difference)."""
+    exact = cable(kind, "gram").elastic_jacobian(cable(kind).e0)
+    simple = cable(kind, "gram", law="svk").elastic_jacobian(cable(kind).e0)
+    d = dim_of(kind)
+    transverse = [i for i in range(exact.shape[0]) if i % d]
+    axial = [i for i in range(exact.shape[0]) if i % d == 0]
+    block = np.ix_(transverse, transverse)
+    assert rel_diff(exact[block], simple[block]) <= 1e-12
+    assert np.abs(exact[np.ix_(axial, transverse)]).max() <= 1e-12 * np.abs(exact).max()
+    el = cable(kind, law="svk")
+    moment = el.invariants["gram_linear"]  # the simple model's EI mu K / 4, upper pairs
+    rows, cols = np.triu_indices(el.kind.n_shape)
+    bending = np.zeros((el.kind.n_shape,) * 2)
+    bending[rows, cols] = bending[cols, rows] = moment * np.where(rows == cols, 4, 2)
+    difference = (simple - exact)[np.ix_(axial, axial)]
+    assert rel_diff(-difference, bending) <= 1e-9
+
+
+# --- damping -------------------------------------------------------------------------------
+
+
+@all_cables
+@all_methods
+def test_damping_jacobians_are_the_damping_force_derivatives(kind, method, rng):
+    el = cable(kind, method)
+    e, e_dot = bent(kind, rng), rng.standard_normal(el.ndof)
+    de, de_dot = el.damping_jacobians(e, e_dot)
+    step = 1e-6 * np.abs(e).max()
+    assert rel_diff(de, central_difference(lambda x: el.damping_force(x, e_dot), e, step).T) \
+        <= 1e-6
+    assert rel_diff(de_dot, central_difference(lambda v: el.damping_force(e, v), e_dot,
+                                               1e-3).T) <= 1e-9
+    force, total_de, total_de_dot = el.internal_force_and_jacobians(e, e_dot)
+    assert rel_diff(force, el.elastic_force(e) + el.damping_force(e, e_dot)) <= 1e-12
+    assert rel_diff(total_de, el.elastic_jacobian(e) + de) <= 1e-12
+    assert rel_diff(total_de_dot, de_dot) <= 1e-14
+
+
+@all_methods
+def test_planar_damping_dissipates_the_curvature_rate(method, rng):
+    """-F_d . e_dot = 2 Phi with Phi = alpha EI/2 int kappa_dot^2 + alpha EA/2 int
+    eps_dot^2 (the rates by finite differences in time of an independent kappa)."""
+    el = cable("cable2d", method)
+    e, e_dot = bent("cable2d", rng), rng.standard_normal(el.ndof)
+    power = -el.damping_force(e, e_dot) @ e_dot
+    assert power == pytest.approx(2 * bending_dissipation(e, e_dot), rel=1e-7)
+
+
+# --- engines, physics and the peer ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["cable2d"])
+def test_compiled_and_python_engines_agree(kind):
+    """A damped cantilever of exact-curvature cables swinging under a ramped tip load."""
+    steel = Material("m", E=2.1e11, nu=0.0, rho=7800.0, law=LAW, damping=1e-3)
+    scene_ = scene([body("beam", kind, 4, (0.0, 0.0), (1.0, 0.0), 0.02, 0.02)],
+                   [Clamp("beam:0")], [PointForce("beam:-1", (0.0, -400.0),
+                                                  time_law=CosineRamp(0.05))],
+                   [Displacement("tip_y", "beam:-1", "y")], steel,
+                   dynamic=Dynamic(t_end=0.05, step=1e-3))
+    compare_engines(scene_, sensor_rtol=1e-10)
+
+
+@functools.cache
+def elastica_errors() -> dict[int, float]:
+    """Tip error over L of the exact-curvature elastica by element count."""
+    return {n: cable_bending.error(cable_bending.cable_tip(LAW, n))
+            for n in cable_bending.COUNTS}
+
+
+def test_elastica_converges_to_the_exact_elastica():
+    """P L^2 / EI = 10, L / h = 200 (``runtime.studies.cable_bending``, docs/laws.md):
+    measured 1.3e-2, 2.2e-3, 1.7e-4, 1.2e-5 at 4, 8, 16, 32 elements."""
+    errors = elastica_errors()
+    assert errors[16] <= 2e-4 and errors[32] <= 2e-5
+    counts = sorted(errors)
+    assert all(errors[a] / errors[b] >= 5 for a, b in zip(counts, counts[1:], strict=False))
+
+
+@pytest.mark.skipif(not peers.exudyn_available(), reason="Exudyn is not installed")
+@pytest.mark.parametrize("elements, bound", [(4, 2e-7), (16, 1e-8)])
+def test_elastica_tip_agrees_with_exudyn(elements, bound):
+    """Exudyn's ANCFCable2D has the same bending (r_x x r_xx / |r_x|^2, 3 Gauss points):
+    with the same 3-point rule the tips agree to ``bound`` L (measured 7.3e-8 and 2.2e-9; the
+    rest is the axial strain, |r_x| - 1 there, the Green strain here); with our default 5
+    points the difference is the quadrature's (3e-5 at 4 elements)."""
+    ours = cable_bending.cable_tip(LAW, elements, quadrature=3)
+    theirs = cable_bending.exudyn_tip(elements)
+    gap = max(abs(a - b) for a, b in zip(ours, theirs, strict=True))
+    assert gap <= bound * cable_bending.ELASTICA["length"]
+
+
+def test_continuum_kind_refuses_the_cable_law(tmp_path):
+    path = tmp_path / "beam.toml"
+    path.write_text(f"""
+title = "beam"
+[material.steel]
+E = 2.1e11
+nu = 0.3
+rho = 7800.0
+law = "{LAW}"
+[[body]]
+name = "b"
+element = "beam2d"
+material = "steel"
+section = {{ height = 0.1, width = 0.1 }}
+elements = 2
+start = [0.0, 0.0]
+end = [1.0, 0.0]
+""")
+    with pytest.raises(SceneError, match="a law the continuum energy of beam2d has not"):
+        load_scene(path)
