@@ -9,6 +9,8 @@ motions, damping objectivity) and the cantilevers of tests/test_cable.py take th
 from __future__ import annotations
 
 import functools
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -285,6 +287,16 @@ def test_elastica_tip_agrees_with_exudyn(elements, bound):
     theirs = cable_bending.exudyn_tip(elements)
     gap = max(abs(a - b) for a, b in zip(ours, theirs, strict=True))
     assert gap <= bound * cable_bending.ELASTICA["length"]
+
+
+def test_bench_kernels_times_both_bending_models():
+    result = subprocess.run(
+        [sys.executable, "-m", "runtime.cli", "bench", "kernels", "--element", "cable2d",
+         "--batch", "50", "--backend", "numpy"],
+        capture_output=True, text=True, check=True, timeout=300)
+    assert result.stdout.count(f"| {LAW} | numpy |") == 6
+    assert result.stdout.count("| svk | numpy |") == 6
+    assert f"- {LAW}/svk time ratio, gram, numpy, batch 50: force" in result.stdout
 
 
 def test_continuum_kind_refuses_the_cable_law(tmp_path):
