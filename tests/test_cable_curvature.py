@@ -95,29 +95,76 @@ def gauss(order: int, length: float) -> tuple[np.ndarray, np.ndarray]:
     return (t + 1) * length / 2, w * length / 2
 
 
-def exudyn_style_force(e: np.ndarray, order: int = 5) -> np.ndarray:
-    """The planar cable's elastic force written out as Exudyn's ObjectANCFCable2D evaluates
-    its bending (main/src/Objects/CObjectANCFCable2D.cpp, read for its formulas): per Gauss
-    point kappa = f / g with f = r_x x r_xx, g = |r_x|^2, the force -EI kappa (df / g - 2 f
-    dg / g^2) with df_j = s'_j (r_xx x e_i) + s''_j (e_i x r_xx) and dg_j = r_x,i s'_j; plus
-    the axial force -EA eps s'_j r_x,i with the Green strain (this project's axial measure;
-    Exudyn's is |r_x| - 1)."""
-    x, w = gauss(order, LENGTH)
-    first, second = hermite(x, LENGTH)
-    q = e.reshape(4, 2)
-    EA, EI = E_MODULUS * HEIGHT * WIDTH, E_MODULUS * WIDTH * HEIGHT**3 / 12
+def planar_force(q: np.ndarray, length: float, EA: float, EI: float, axial: str = "green",
+                 bending_order: int = 5) -> np.ndarray:
+    """The planar cable's elastic force (8,) at the nodal vectors ``q`` (4, 2), its bending
+    written out as Exudyn's ObjectANCFCable2D evaluates it (main/src/Objects/
+    CObjectANCFCable2D.cpp, read for its formulas): per Gauss point of ``bending_order``
+    kappa = f / g with f = r_x x r_xx, g = |r_x|^2, the force -EI kappa (df / g - 2 f dg / g^2)
+    with df_j = s'_j (r_xx x e_i) + s''_j (e_i x r_xx) and dg_j = r_x,i s'_j; the axial force
+    at 5 points with the Green strain (``green``, this project's: -EA eps s'_j r_x) or
+    Exudyn's |r_x| - 1 (``biot``: -EA (|r_x| - 1) s'_j r_x / |r_x|)."""
     force = np.zeros((4, 2))
+    x, w = gauss(bending_order, length)
+    first, second = hermite(x, length)
     for p in range(x.size):
         rx, rxx = first[p] @ q, second[p] @ q
         f, g = rx[0] * rxx[1] - rx[1] * rxx[0], rx @ rx
-        kappa, eps = f / g, (g - 1) / 2
         for j in range(4):
             df = np.array([first[p, j] * rxx[1] - second[p, j] * rx[1],
                            -first[p, j] * rxx[0] + second[p, j] * rx[0]])
-            dg = rx * first[p, j]
-            force[j] -= w[p] * (EI * kappa * (df / g - 2 * f * dg / g**2)
-                                + EA * eps * first[p, j] * rx)
+            force[j] -= w[p] * EI * f / g * (df / g - 2 * f * rx * first[p, j] / g**2)
+    x, w = gauss(5, length)
+    first, _ = hermite(x, length)
+    for p in range(x.size):
+        rx = first[p] @ q
+        norm = np.sqrt(rx @ rx)
+        stress = (norm**2 - 1) / 2 if axial == "green" else (norm - 1) / norm
+        force -= w[p] * EA * stress * np.outer(first[p], rx)
     return force.ravel()
+
+
+def exudyn_style_force(e: np.ndarray) -> np.ndarray:
+    """``planar_force`` of the conftest element."""
+    return planar_force(e.reshape(4, 2), LENGTH, E_MODULUS * HEIGHT * WIDTH,
+                        E_MODULUS * WIDTH * HEIGHT**3 / 12)
+
+
+def planar_elastica_tip(elements: int, axial: str, start: np.ndarray | None = None):
+    """The elastica of ``runtime.studies.cable_bending`` (3 bending points) solved here: the
+    residual of ``planar_force`` assembled over the mesh, Newton with a central-difference
+    Jacobian over cable_bending.LOAD_STEPS load steps (or from the nodal vectors ``start``,
+    (elements + 1, 4), at the full load).  Returns the tip (x, y) displacement and the
+    nodal vectors."""
+    geometry = cable_bending.ELASTICA
+    length, h, w = geometry["length"], geometry["height"], geometry["width"]
+    EA, EI = cable_bending.YOUNG * w * h, cable_bending.YOUNG * w * h**3 / 12
+    load, size = cable_bending.tip_force(), length / elements
+
+    def residual(free: np.ndarray, scale: float) -> np.ndarray:
+        nodes = np.vstack([[0.0, 0.0, 1.0, 0.0], free.reshape(elements, 4)])
+        total = np.zeros_like(nodes)
+        for i in range(elements):
+            f = planar_force(nodes[i:i + 2].reshape(4, 2), size, EA, EI, axial, 3)
+            total[i:i + 2] += f.reshape(2, 4)
+        total[-1, 1] -= scale * load
+        return total[1:].ravel()
+
+    x = (np.column_stack([np.arange(1, elements + 1) * size, np.zeros((elements, 3))])
+         + [0.0, 0.0, 1.0, 0.0]).ravel() if start is None else start[1:].ravel().copy()
+    steps = cable_bending.LOAD_STEPS if start is None else 1
+    for step in range(1, steps + 1):
+        scale = step / steps
+        for _ in range(30):
+            r = residual(x, scale)
+            jacobian = central_difference(lambda y, s=scale: np.array([residual(v, s)
+                                                                       for v in y]), x, 1e-7).T
+            dx = np.linalg.solve(jacobian, -r)
+            x += dx
+            if np.abs(dx).max() <= 1e-13:
+                break
+    nodes = x.reshape(elements, 4)
+    return (nodes[-1, 0] - length, nodes[-1, 1]), nodes
 
 
 def bending_dissipation(e: np.ndarray, e_dot: np.ndarray, step: float = 1e-7,
@@ -297,6 +344,44 @@ def test_bench_kernels_times_both_bending_models():
     assert result.stdout.count(f"| {LAW} | numpy |") == 6
     assert result.stdout.count("| svk | numpy |") == 6
     assert f"- {LAW}/svk time ratio, gram, numpy, batch 50: force" in result.stdout
+
+
+def test_elastica_is_the_written_out_model():
+    """The whole static solution against an independent one: ``planar_elastica_tip`` (the
+    NumPy cable with Exudyn's bending formula and the Green axial strain, 3 bending points)
+    gives the scene's tip at 4 elements to round-off."""
+    ours = cable_bending.cable_tip(LAW, 4, quadrature=3)
+    theirs, _ = planar_elastica_tip(4, "green")
+    assert max(abs(a - b) for a, b in zip(ours, theirs, strict=True)) <= 1e-12
+
+
+@pytest.mark.skipif(not peers.exudyn_available(), reason="Exudyn is not installed")
+def test_exudyn_is_the_written_out_model_with_its_axial_strain():
+    """What is left between Exudyn and us is the axial strain measure: the NumPy cable with
+    Exudyn's |r_x| - 1 (``biot``), converged from Exudyn's elastica, moves its tip by no more
+    than Exudyn's Newton tolerance (measured 5.6e-10 L); with the Green strain it moves by
+    the whole gap (7.3e-8 L)."""
+    import exudyn as exu
+
+    geometry = cable_bending.ELASTICA
+    length, h, w = geometry["length"], geometry["height"], geometry["width"]
+    E, elements = cable_bending.YOUNG, 4
+    with peers._quiet():
+        _, mbs, nodes = peers._clamped_cable(elements, length, 1.0, E * w * h**3 / 12,
+                                            E * w * h, [0.0, -cable_bending.tip_force()], None)
+        mbs.Assemble()
+        settings = peers._settings(length)
+        settings.staticSolver.numberOfLoadSteps = cable_bending.LOAD_STEPS
+        mbs.SolveStatic(settings)
+        solution = np.array([mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates)
+                             for n in nodes])
+    solution += [[i * length / elements, 0.0, 1.0, 0.0] for i in range(elements + 1)]
+    exudyn_tip = (solution[-1, 0] - length, solution[-1, 1])
+    biot, _ = planar_elastica_tip(elements, "biot", solution)
+    green, _ = planar_elastica_tip(elements, "green", solution)
+    distance = lambda a: max(abs(u - v) for u, v in zip(a, exudyn_tip, strict=True))  # noqa: E731
+    assert distance(biot) <= 5e-9 * length
+    assert distance(green) >= 3e-8 * length
 
 
 def test_continuum_kind_refuses_the_cable_law(tmp_path):
