@@ -71,8 +71,8 @@ def family_name(method: str, law: str, variant: str, damped: bool = False,
     gram: ``gram_<variant>`` (damping ``damping_<variant>``); cij: ``cij`` (damping through
     the gram invariant, ``damping_<variant>``); quadrature: ``quadrature`` for the default
     law, ``quadrature_law`` for any other law and for damping.  The exact-curvature bending:
-    ``<method>_curvature`` (damping ``damping_curvature``, in ``quadrature_curvature`` for
-    quadrature).
+    ``gram_curvature_<variant>``, ``cij_curvature``, ``quadrature_curvature`` (damping
+    ``damping_curvature_<variant>``, in ``quadrature_curvature`` for quadrature).
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
@@ -82,8 +82,9 @@ def family_name(method: str, law: str, variant: str, damped: bool = False,
         raise ValueError(f"bending: expected one of {', '.join(BENDING_MODELS)}, got "
                          f"{bending!r}")
     if bending == "exact_curvature":
-        return "damping_curvature" if damped and method != "quadrature" else \
-            f"{method}_curvature"
+        if method == "quadrature" or (method == "cij" and not damped):
+            return f"{method}_curvature"
+        return f"{'damping' if damped else method}_curvature_{variant}"
     if method == "quadrature":
         return "quadrature" if law == DEFAULT_LAW and not damped else "quadrature_law"
     if damped:

@@ -19,8 +19,8 @@
   ``I = w h^3 / 12`` in 2D (h the height in the bending plane, w the thickness); a 3D cable
   has no section orientation, so it takes one bending stiffness, the mean of the two
   principal moments of the h x w rectangle, ``I = h w (h^2 + w^2) / 24`` (exact for square
-  sections).  The simple model is not rotation invariant for a curved reference, so cable
-  elements take straight references only (``CURVED_REFUSED``).
+  sections).  The simple model is not rotation invariant for a curved reference, so its law
+  takes straight references only (``curved_refused``).
 
 Kelvin-Voigt damping (stress = D (eps + alpha eps_dot)) applies to both parts: the axial one
 through the gram tensor as for any law, the bending one as ``-alpha EI K r_dot``.
@@ -33,7 +33,18 @@ The cable laws choose the bending model (``BENDING_MODELS``): ``svk`` the simple
 (a scalar in 2D), rational in the coordinates, so it is integrated by Gauss quadrature along
 the axis in the kernels (``symgen.methods.curvature``) while the axial part stays
 pre-integrated; its Kelvin-Voigt damping is ``alpha EI/2 int |kappa_dot|^2 dx`` (the
-curvature rate), objective for any motion.
+curvature rate: objective in 2D; in 3D the curvature vector turns with a rigid rotation of a
+bent cable).  The planar exact curvature is rotation invariant for any reference, so it takes
+curved ones: with a0 = |r0_x| the reference metric and s0 the reference arc length,
+
+    U = EA/2 int E11^2 a0 dx + EI/2 int (kappa - kappa0)^2 / a0 dx,
+    E11 = (r_x.r_x - r0_x.r0_x) / (2 a0^2),  kappa0 = r0_x x r0_xx / |r0_x|^2
+
+(the material curvature d theta / d s0 is kappa / a0; Exudyn's ANCFCable2D with
+``strainIsRelativeToReference``), the axial part a gram form of the general pattern with the
+weights 1 / a0^3, the bending weights EI / a0 and kappa0 in the quadrature table
+(``reference_curvature``).  The 3D exact curvature is a vector in the global frame, whose
+difference from a curved reference's is not rotation invariant: straight references only.
 """
 
 from __future__ import annotations
@@ -48,11 +59,16 @@ from symgen.domains import x
 #: The strain energies an element file may declare.
 ENERGIES = ("continuum", "cable")
 
-#: Why cable elements refuse curved references (element.json ``energy.curved``).
-CURVED_REFUSED = ("the cable energy's simple bending model EI/2 int r_xx . r_xx dx is not "
-                  "rotation invariant for a curved reference (it is only for straight ones), "
-                  "and its axial invariants are those of a straight reference (with either "
-                  "bending model)")
+#: Why a cable law refuses curved references, by bending model and dimension (element.json
+#: ``laws.<law>.curved``; ``energy.curved`` when some law of the kind does).
+_CURVED_REFUSED = {
+    "simple": ("the cable energy's simple bending model EI/2 int r_xx . r_xx dx is not "
+               "rotation invariant for a curved reference (it is only for straight ones); "
+               "the planar exact curvature (law svk_exact_curvature) takes curved ones"),
+    "exact_curvature": ("the 3D exact curvature r_x x r_xx / |r_x|^2 is a vector in the "
+                        "global frame, whose difference from a curved reference's is not "
+                        "rotation invariant (straight references only in 3D)"),
+}
 
 
 def _cable_svk(dim: int) -> tuple[laws.LawPart, ...]:
@@ -169,6 +185,26 @@ def bending_model(spec, law: laws.Law) -> str | None:
     return law.bending if is_cable(spec) else None
 
 
+def curved_refused(spec, law: laws.Law) -> str | None:
+    """Why ``law`` on ``spec`` refuses curved references (None when it takes them: every
+    continuum law, the planar exact curvature)."""
+    if not is_cable(spec) or (law.bending == "exact_curvature" and spec.dim == 2):
+        return None
+    return _CURVED_REFUSED[law.bending]
+
+
+def law_variants(spec, law: laws.Law) -> list[str]:
+    """The reference variants ``law`` takes on ``spec``: straight, and general (curved) unless
+    ``curved_refused``."""
+    return ["straight"] + (["general"] if curved_refused(spec, law) is None else [])
+
+
+def reference_curvature(spec, bending: str) -> bool:
+    """Whether the quadrature table of ``bending`` on ``spec`` carries the reference curvature
+    kappa0 (the planar exact curvature, which takes curved references)."""
+    return bending == "exact_curvature" and spec.dim == 2
+
+
 def _along(weights, vec, dim: int) -> list:
     """sum_k weights_k q_k of the node-major coordinates ``vec`` (a dim-vector)."""
     return [sum(w * vec[k * dim + c] for k, w in enumerate(weights)) for c in range(dim)]
@@ -200,13 +236,15 @@ def curvature_rate(rx, rxx, rdx, rdxx) -> list:
             for r, c in zip(rate, cross, strict=True)]
 
 
-def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending, bending: str = "simple"):
+def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending, bending: str = "simple",
+                 kappa0=0):
     """The cable energy density at one point times its weight: ``w_axial eps^2 / 2`` plus,
     with the ``bending`` model, ``w_bending r_xx.r_xx / 2`` (simple) or ``w_bending
-    |kappa|^2 / 2`` (exact curvature), with eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the
-    reference) from the shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the
-    node-major reference ``q0`` and displacements ``dq``.  ``w_axial = 0`` gives the bending
-    part alone."""
+    |kappa - kappa0|^2 / 2`` (exact curvature; ``kappa0`` the reference's, planar), with
+    eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the reference; the metric of a curved
+    reference is in the weights) from the shape derivatives ``s1`` (ds/dx) and ``s2``
+    (d2s/dx2) and the node-major reference ``q0`` and displacements ``dq``.  ``w_axial = 0``
+    gives the bending part alone."""
     r0x, drx = _along(s1, q0, dim), _along(s1, dq, dim)
     rxx = [a + b for a, b in zip(_along(s2, q0, dim), _along(s2, dq, dim), strict=True)]
     eps = _dot(r0x, drx) + _dot(drx, drx) / 2
@@ -214,6 +252,7 @@ def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending, bending: str = "s
         measure = _dot(rxx, rxx)
     else:
         kappa = curvature([a + b for a, b in zip(r0x, drx, strict=True)], rxx)
+        kappa[0] -= kappa0
         measure = _dot(kappa, kappa)
     return w_axial * eps**2 / 2 + w_bending * measure / 2
 
@@ -237,6 +276,7 @@ def metadata(spec) -> dict | None:
     element.json has no ``energy`` entry)."""
     if not is_cable(spec):
         return None
+    refused = [curved_refused(spec, law) for law in CABLE_LAWS.values()]
     return {"name": "cable", "variants": ["straight"],
-            "curved": CURVED_REFUSED,
+            "curved": next(reason for reason in refused if reason is not None),
             "second_moment": "w h^3 / 12" if spec.dim == 2 else "h w (h^2 + w^2) / 24"}

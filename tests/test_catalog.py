@@ -64,10 +64,10 @@ def test_registries_hold_the_catalog_names():
 def test_every_family_the_catalog_names_is_generated(kind):
     families = element_kind(kind).families
     for method in catalog.METHODS:
-        for law in element_kind(kind).laws:
-            for variant in element_kind(kind).energy.variants:  # cables: straight only
+        for law, info in element_kind(kind).laws.items():
+            for variant in info.variants:  # cables: straight only but the planar exact curvature
                 for damped in (False, True):
-                    assert family_name(method, law, variant, damped) in families
+                    assert family_name(method, law, variant, damped, info.bending) in families
 
 
 def test_family_name_rejects_unknown_names():

@@ -77,7 +77,7 @@ def states(kind: str, shape: str):
     """Three large-rotation configurations (rotated reference plus 1e-2 noise) and random
     velocities of 1 m/s size."""
     rng = np.random.default_rng([KINDS.index(kind), SHAPES.index(shape), 3])
-    e0 = law_element(kind, shape=shape).e0
+    e0 = arc_reference(kind) if shape == "curved" else law_element(kind).e0
     d = dim_of(kind)
     e = np.array([rigid_motion(kind, e0, random_rotation(d, rng), rng.normal(size=d))
                   + 1e-2 * rng.standard_normal(e0.size) for _ in range(3)])

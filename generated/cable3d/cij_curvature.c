@@ -15,7 +15,7 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
    k2_matrix (csr, 78): maps coordinate products p to the upper triangle of K2
    products (local, 78): p_st = e_s e_t, s <= t
    k2 (local, 78): upper triangle of K2(e)
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 12): elastic force -dU/de (N), per element
    Operations per element: 3757. */
 void cable3d_cij_curvature_force(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, long npoints, const double *table_in, double *force_out)
@@ -285,7 +285,7 @@ void cable3d_cij_curvature_force(long m, const double *e_in, long e_stride, cons
    k2 (local, 78): upper triangle of K2(e)
    jacobian_matrix (csr, 144): maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38
    second (local, 144): the double sum of eq. 38
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 21530. */
 void cable3d_cij_curvature_jacobian(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, const int *jacobian_matrix_indptr, const int *jacobian_matrix_indices, const double *jacobian_matrix_data, long npoints, const double *table_in, double *jacobian_out)
@@ -1295,7 +1295,7 @@ void cable3d_cij_curvature_jacobian(long m, const double *e_in, long e_stride, c
    k2_matrix (csr, 78): maps coordinate products p to the upper triangle of K2
    products (local, 78): p_st = e_s e_t, s <= t
    k2 (local, 78): upper triangle of K2(e)
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    energy (output, 1): strain energy U (J), per element
    Operations per element: 3106. */
 void cable3d_cij_curvature_energy(long m, const double *e_in, long e_stride, const double *k1, const double *u0, const int *k2_matrix_indptr, const int *k2_matrix_indices, const double *k2_matrix_data, long npoints, const double *table_in, double *energy_out)
@@ -1453,7 +1453,7 @@ void cable3d_cij_curvature_energy(long m, const double *e_in, long e_stride, con
    k2 (local, 78): upper triangle of K2(e)
    jacobian_matrix (csr, 144): maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38
    second (local, 144): the double sum of eq. 38
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 12): elastic force -dU/de (N), per element
    jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 23124. */

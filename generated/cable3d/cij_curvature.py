@@ -13,7 +13,7 @@ def force(e_in, k1, u0, k2_matrix, table_in):
     k2_matrix (csr, 78): maps coordinate products p to the upper triangle of K2
     products (local, 78): p_st = e_s e_t, s <= t
     k2 (local, 78): upper triangle of K2(e)
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 12): elastic force -dU/de (N), per element
     Operations per element: 3757.
     """
@@ -268,7 +268,7 @@ def jacobian(e_in, k1, u0, k2_matrix, jacobian_matrix, table_in):
     k2 (local, 78): upper triangle of K2(e)
     jacobian_matrix (csr, 144): maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38
     second (local, 144): the double sum of eq. 38
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 21530.
     """
@@ -1258,7 +1258,7 @@ def energy(e_in, k1, u0, k2_matrix, table_in):
     k2_matrix (csr, 78): maps coordinate products p to the upper triangle of K2
     products (local, 78): p_st = e_s e_t, s <= t
     k2 (local, 78): upper triangle of K2(e)
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     energy (output, 1): strain energy U (J), per element
     Operations per element: 3106.
     """
@@ -1401,7 +1401,7 @@ def force_jacobian(e_in, k1, u0, k2_matrix, jacobian_matrix, table_in):
     k2 (local, 78): upper triangle of K2(e)
     jacobian_matrix (csr, 144): maps p to sum_j sum_s e_s (C^ij + C^ij^T)_sk e_j of eq. 38
     second (local, 144): the double sum of eq. 38
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 12): elastic force -dU/de (N), per element
     jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 23124.

@@ -100,9 +100,11 @@ class Element:
         # a law with reduced integration stores general invariants, straight or not
         self.variant = ("straight" if self.straight
                         and self.kind.laws[self.law].storage == "straight" else "general")
-        if ("straight" if self.straight else "general") not in self.kind.energy.variants:
-            raise ValueError(f"e0: {self.kind.name} takes straight references only (rigid "
-                             f"placements of the straight element): {self.kind.energy.curved}")
+        law_info = self.kind.laws[self.law]
+        if ("straight" if self.straight else "general") not in law_info.variants:
+            raise ValueError(f"e0: {self.kind.name} with law {self.law!r} takes straight "
+                             "references only (rigid placements of the straight element): "
+                             f"{law_info.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
         #: kernel families loaded (compiled on first use with backend c), in load order
@@ -191,6 +193,11 @@ class Element:
                                                  self.rho)
             return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho,
                                                self._simple_bending_modulus(coefficients))
+        if self.kind.energy.structural:  # a curved cable (the planar exact curvature)
+            return inv.cable_invariants(self.kind, builders, self.geometry, self.quadrature,
+                                        coefficients, self.rho,
+                                        self._simple_bending_modulus(coefficients),
+                                        self.e0, self.variant)
         rules = self._law_rules(builders)
         return inv.numeric_law_invariants(self.kind, builders, self.variant, self.geometry,
                                           rules, coefficients, self.rho)
@@ -212,9 +219,10 @@ class Element:
         return inv.law_rules(self.kind, builders, self.geometry, self.e0, self.quadrature)
 
     def _law_table(self, builders) -> np.ndarray:
-        if self.kind.energy.structural:
+        if self.kind.energy.structural:  # the law that takes curved references has kappa0
             return inv.cable_table(self.kind, builders, self.geometry, self.quadrature[0],
-                                   self.law_coefficients())
+                                   self.law_coefficients(), self.e0,
+                                   "general" in self.kind.laws[self.law].variants)
         return inv.law_table(self.kind, self._law_rules(builders), self.law_coefficients())
 
     def _damping_kernels(self) -> dict:

@@ -96,6 +96,10 @@ class LawInfo:
     #: the bending model of a cable law (``symgen.energies.BENDING_MODELS``), None for a
     #: continuum law
     bending: str | None = None
+    #: the reference variants the law takes (a cable law may refuse curved ones) and, when
+    #: it refuses curved references, why
+    variants: tuple[str, ...] = VARIANTS
+    curved: str | None = None
 
 
 @dataclass(frozen=True)
@@ -166,7 +170,8 @@ class ElementKind:
                                    a["scale"]) for a in d["axes"]),
                         d["subdomains"], d["thickness"])
         laws = {name: LawInfo(name, tuple(law["corrections"]), law["description"],
-                              tuple(law["parts"]), law["storage"], law.get("bending"))
+                              tuple(law["parts"]), law["storage"], law.get("bending"),
+                              tuple(law.get("variants", VARIANTS)), law.get("curved"))
                 for name, law in meta["laws"].items()}
         return cls(meta["name"], meta["description"], meta["dim"], meta["n_shape"],
                    meta["ndof"], tuple(meta["position_vectors"]), tuple(meta["quadrature"]),

@@ -3,12 +3,14 @@
 is rational in the coordinates, so it is integrated by Gauss quadrature along the axis at
 every call, while the axial part keeps its method:
 
-* ``gram_curvature``       - the gram kernels of the axial part (no linear term) plus the
-                             bending quadrature loop;
-* ``cij_curvature``        - the cij kernels of the axial part (K1 without bending) plus the
-                             bending loop;
-* ``damping_curvature``    - the gram damping kernels of the axial part plus the bending
-                             loop with its Kelvin-Voigt damping (the curvature rate);
+* ``gram_curvature_<variant>``    - the gram kernels of the axial part (no linear term; the
+                                   storage pattern of ``variant``) plus the bending
+                                   quadrature loop;
+* ``cij_curvature``               - the cij kernels of the axial part (K1 without bending)
+                                   plus the bending loop;
+* ``damping_curvature_<variant>`` - the gram damping kernels of the axial part plus the
+                                   bending loop with its Kelvin-Voigt damping (the
+                                   curvature rate);
 * ``quadrature_curvature`` - both parts by quadrature, elastic and damping kernels (as
                              ``quadrature_law``).
 
@@ -35,7 +37,7 @@ def with_bending_loop(spec: ElementSpec, kernel: Kernel) -> Kernel:
     """``kernel`` (of the axial part) with the table input and, after its statements, the
     bending part accumulated over the axis points into its outputs."""
     first_output = next(i for i, a in enumerate(kernel.arrays) if a.role == "output")
-    kernel.arrays.insert(first_output, cable_table_array(spec))
+    kernel.arrays.insert(first_output, cable_table_array(spec, BENDING))
     temps = Temporaries("b")  # the kernel's own temporaries are t...
     q, _, _ = translate(spec, kernel.body, temps, with_reference=False)
     zero = [0] * spec.ndof
@@ -45,9 +47,9 @@ def with_bending_loop(spec: ElementSpec, kernel: Kernel) -> Kernel:
     return kernel
 
 
-def build_gram(spec: ElementSpec) -> list[Kernel]:
-    """The kernels of ``gram_curvature``."""
-    return [with_bending_loop(spec, gram_kernel(spec, quantities, "straight", BENDING))
+def build_gram(spec: ElementSpec, variant: str) -> list[Kernel]:
+    """The kernels of ``gram_curvature_<variant>``."""
+    return [with_bending_loop(spec, gram_kernel(spec, quantities, variant, BENDING))
             for quantities in KERNELS]
 
 
@@ -57,9 +59,9 @@ def build_cij(spec: ElementSpec) -> list[Kernel]:
             for quantities in KERNELS]
 
 
-def build_damping(spec: ElementSpec) -> list[Kernel]:
-    """The kernels of ``damping_curvature``."""
-    return [with_bending_loop(spec, gram_damping_kernel(spec, name, "straight", BENDING))
+def build_damping(spec: ElementSpec, variant: str) -> list[Kernel]:
+    """The kernels of ``damping_curvature_<variant>``."""
+    return [with_bending_loop(spec, gram_damping_kernel(spec, name, variant, BENDING))
             for name in DAMPING_KERNELS]
 
 

@@ -345,9 +345,11 @@ def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn,
     point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
 
 
-def cable_table_width(spec: ElementSpec) -> int:
-    """Doubles per point of a cable's quadrature table: ds/dx, d2s/dx2, two weights."""
-    return 2 * spec.n_shape + 2
+def cable_table_width(spec: ElementSpec, bending: str = "simple") -> int:
+    """Doubles per point of a cable's quadrature table: ds/dx, d2s/dx2, two weights and,
+    for a bending model with one (``energies.reference_curvature``), the reference
+    curvature."""
+    return 2 * spec.n_shape + 2 + int(energies.reference_curvature(spec, bending))
 
 
 def cable_quadrature_kernel(spec: ElementSpec, name: str, bending: str = "simple") -> Kernel:
@@ -359,9 +361,9 @@ def cable_quadrature_kernel(spec: ElementSpec, name: str, bending: str = "simple
     arrays = [*coordinate_arrays(spec, True)]
     if damped:
         e_dot, tail = damping_arrays(spec, name)
-        arrays += [e_dot, cable_table_array(spec), *tail]
+        arrays += [e_dot, cable_table_array(spec, bending), *tail]
     else:
-        arrays += [cable_table_array(spec),
+        arrays += [cable_table_array(spec, bending),
                    *[quantity_output(spec, quantity) for quantity in name.split("_")]]
     temps = Temporaries()
     body: list = []
@@ -374,11 +376,13 @@ def cable_quadrature_kernel(spec: ElementSpec, name: str, bending: str = "simple
                   "quadrature along the axis at every call.", arrays, body)
 
 
-def cable_table_array(spec: ElementSpec) -> Array:
+def cable_table_array(spec: ElementSpec, bending: str = "simple") -> Array:
     """The per-point table of the cable's quadrature loops (``cable_table_width``)."""
-    return Array("table", cable_table_width(spec), "table", "per axis point: ds/dx, d2s/dx2, "
-                 "weights of the axial part (EA dx, N m) and of the bending part (EI dx, "
-                 "N m^3)")
+    kappa0 = (", reference curvature r0_x x r0_xx / |r0_x|^2 (1/m)"
+              if energies.reference_curvature(spec, bending) else "")
+    return Array("table", cable_table_width(spec, bending), "table", "per axis point: ds/dx, "
+                 "d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending "
+                 f"part (EI dx / |r0_x|, N m^3){kappa0}")
 
 
 def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Temporaries,
@@ -391,12 +395,13 @@ def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Tempora
     node-relative reference ``q0`` and displacements ``dq``."""
     d, n, ndof = spec.dim, spec.n_shape, spec.ndof
     damped = name in DAMPING_KERNELS
-    tab = refs("tab", cable_table_width(spec))
+    tab = refs("tab", cable_table_width(spec, bending))
     s1, s2, w_bending = tab[:n], tab[n:2 * n], tab[2 * n + 1]
     w_axial = tab[2 * n] if axial else 0
+    kappa0 = tab[2 * n + 2] if energies.reference_curvature(spec, bending) else 0
     shift = sp.symbols(f"dq0:{ndof}")
     rate = sp.symbols(f"qd0:{ndof}")
-    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending, bending)
+    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending, bending, kappa0)
     subs = dict(zip(shift, dq, strict=True))
     point: list = []
     if name == "energy":
