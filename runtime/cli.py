@@ -54,11 +54,14 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
 
 def _generate_element(name: str, backends: list[str], families: list[str] | None,
                       out: Path) -> list[Path]:
-    from symgen import emit
+    from symgen import emit, methods
     from symgen.elements import get
 
+    spec = get(name)
+    if families is not None:  # the method's families this element has (not every one has all)
+        families = [f for f in families if f in methods.families(spec)]
     with progress.phase(f"generating {name} (SymPy derivations and rendering)"):
-        return emit.generate(get(name), out, backends=backends, families=families)
+        return emit.generate(spec, out, backends=backends, families=families)
 
 
 def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:

@@ -96,14 +96,14 @@ class Element:
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
         self.law, self.damping = self._law(law), self._damping(damping)
         #: the law's bending model on a cable (``runtime.catalog.BENDING_MODELS``), else None
-        self.bending = self.kind.laws[self.law].bending
-        # a law with reduced integration stores general invariants, straight or not
-        self.variant = ("straight" if self.straight
-                        and self.kind.laws[self.law].storage == "straight" else "general")
         law_info = self.kind.laws[self.law]
+        self.bending = law_info.bending
+        # a law with reduced integration stores general invariants, straight or not
+        self.variant = ("straight" if self.straight and law_info.storage == "straight"
+                        else "general")
         if ("straight" if self.straight else "general") not in law_info.variants:
-            raise ValueError(f"e0: {self.kind.name} with law {self.law!r} takes straight "
-                             "references only (rigid placements of the straight element): "
+            raise ValueError(f"e0: {self.kind.name} takes straight references only with law "
+                             f"{self.law!r} (rigid placements of the straight element): "
                              f"{law_info.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
@@ -238,8 +238,8 @@ class Element:
                 fixed = {"table": table, "alpha": alpha}
             else:
                 fixed = {**self._gram_inputs(), "alpha": alpha}
-                if self.bending == "exact_curvature":
-                    fixed["table"] = self._law_table(self._family("invariants"))
+                if self.bending == "exact_curvature":  # the bending loop's table
+                    fixed["table"] = self._inputs["table"]
             self.timing["preprocess_s"] += time.perf_counter() - start
             kernels = self._family(family)
             self._damping_family = kernels
