@@ -301,13 +301,18 @@ def test_planar_damping_dissipates_the_curvature_rate(method, rng):
 # --- engines, physics and the peer ---------------------------------------------------------
 
 
-@pytest.mark.parametrize("kind", ["cable2d"])
-def test_compiled_and_python_engines_agree(kind):
-    """A damped cantilever of exact-curvature cables swinging under a ramped tip load."""
+@pytest.mark.parametrize("kind, placement", [("cable2d", "line"), ("cable3d", "line"),
+                                             ("cable2d", "arc")])
+def test_compiled_and_python_engines_agree(kind, placement):
+    """A damped cantilever of exact-curvature cables (straight, or a quarter circle) swinging
+    under a ramped tip load."""
     steel = Material("m", E=2.1e11, nu=0.0, rho=7800.0, law=LAW, damping=1e-3)
-    scene_ = scene([body("beam", kind, 4, (0.0, 0.0), (1.0, 0.0), 0.02, 0.02)],
-                   [Clamp("beam:0")], [PointForce("beam:-1", (0.0, -400.0),
-                                                  time_law=CosineRamp(0.05))],
+    zero = [0.0] * (dim_of(kind) - 2)
+    beam = (Body("beam", kind, "m", 0.02, 0.02, 4, arc=Arc((0.0, 0.0), 1.0, 0.0, 90.0))
+            if placement == "arc" else body("beam", kind, 4, (0.0, 0.0, *zero), (1.0, 0.0, *zero),
+                                0.02, 0.02))
+    scene_ = scene([beam], [Clamp("beam:0")],
+                   [PointForce("beam:-1", (0.0, -400.0, *zero), time_law=CosineRamp(0.05))],
                    [Displacement("tip_y", "beam:-1", "y")], steel,
                    dynamic=Dynamic(t_end=0.05, step=1e-3))
     compare_engines(scene_, sensor_rtol=1e-10)
