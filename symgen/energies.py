@@ -210,7 +210,7 @@ def _along(weights, vec, dim: int) -> list:
     return [sum(w * vec[k * dim + c] for k, w in enumerate(weights)) for c in range(dim)]
 
 
-def _cross(a, b) -> list:
+def cross(a, b) -> list:
     """a x b: one entry in 2D (the scalar cross product), three in 3D."""
     if len(a) == 2:
         return [a[0] * b[1] - a[1] * b[0]]
@@ -221,54 +221,26 @@ def _dot(a, b):
     return sum(x * y for x, y in zip(a, b, strict=True))
 
 
-def curvature(rx, rxx) -> list:
-    """The exact curvature kappa = r_x x r_xx / |r_x|^2 (1/m; one entry in 2D, three in 3D)."""
-    norm2 = _dot(rx, rx)
-    return [c / norm2 for c in _cross(rx, rxx)]
-
-
-def curvature_rate(rx, rxx, rdx, rdxx) -> list:
-    """d kappa / dt from r_x, r_xx and their rates (1/(m s))."""
-    norm2 = _dot(rx, rx)
-    cross = _cross(rx, rxx)
-    rate = [a + b for a, b in zip(_cross(rdx, rxx), _cross(rx, rdxx), strict=True)]
-    return [(r * norm2 - 2 * _dot(rx, rdx) * c) / norm2**2
-            for r, c in zip(rate, cross, strict=True)]
-
-
-def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending, bending: str = "simple",
-                 kappa0=0):
-    """The cable energy density at one point times its weight: ``w_axial eps^2 / 2`` plus,
-    with the ``bending`` model, ``w_bending r_xx.r_xx / 2`` (simple) or ``w_bending
-    |kappa - kappa0|^2 / 2`` (exact curvature; ``kappa0`` the reference's, planar), with
-    eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the reference; the metric of a curved
-    reference is in the weights) from the shape derivatives ``s1`` (ds/dx) and ``s2``
-    (d2s/dx2) and the node-major reference ``q0`` and displacements ``dq``.  ``w_axial = 0``
-    gives the bending part alone."""
+def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending):
+    """The polynomial cable energy density at one point times its weight: ``w_axial eps^2 / 2
+    + w_bending r_xx.r_xx / 2`` (the simple bending; ``w_bending = 0``: the axial part alone,
+    which the exact curvature's kernels add to their closed-form bending,
+    ``symgen.methods.quadrature._exact_bending``), with eps = r0_x.dr_x + dr_x.dr_x / 2
+    (exact at the reference; the metric of a curved reference is in the weights) from the
+    shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the node-major reference
+    ``q0`` and displacements ``dq``."""
     r0x, drx = _along(s1, q0, dim), _along(s1, dq, dim)
     rxx = [a + b for a, b in zip(_along(s2, q0, dim), _along(s2, dq, dim), strict=True)]
     eps = _dot(r0x, drx) + _dot(drx, drx) / 2
-    if bending == "simple":
-        measure = _dot(rxx, rxx)
-    else:
-        kappa = curvature([a + b for a, b in zip(r0x, drx, strict=True)], rxx)
-        kappa[0] -= kappa0
-        measure = _dot(kappa, kappa)
-    return w_axial * eps**2 / 2 + w_bending * measure / 2
+    return w_axial * eps**2 / 2 + w_bending * _dot(rxx, rxx) / 2
 
 
-def point_dissipation(s1, s2, q, qd, dim: int, w_axial, w_bending, bending: str = "simple"):
-    """The Kelvin-Voigt dissipation potential at one point over alpha: ``w_axial eps_dot^2 / 2
-    + w_bending rd_xx.rd_xx / 2`` (simple bending) or ``+ w_bending |kappa_dot|^2 / 2`` (exact
-    curvature), with eps_dot = r_x . rd_x; ``w_axial = 0`` gives the bending part alone."""
+def point_dissipation(s1, s2, q, qd, dim: int, w_axial, w_bending):
+    """The Kelvin-Voigt dissipation potential of ``point_energy`` at one point over alpha:
+    ``w_axial eps_dot^2 / 2 + w_bending rd_xx.rd_xx / 2`` with eps_dot = r_x . rd_x."""
     rx, rdx, rdxx = _along(s1, q, dim), _along(s1, qd, dim), _along(s2, qd, dim)
     eps_dot = _dot(rx, rdx)
-    if bending == "simple":
-        measure = _dot(rdxx, rdxx)
-    else:
-        rate = curvature_rate(rx, _along(s2, q, dim), rdx, rdxx)
-        measure = _dot(rate, rate)
-    return w_axial * eps_dot**2 / 2 + w_bending * measure / 2
+    return w_axial * eps_dot**2 / 2 + w_bending * _dot(rdxx, rdxx) / 2
 
 
 def metadata(spec) -> dict | None:
