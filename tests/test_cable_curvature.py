@@ -469,6 +469,14 @@ def test_simple_bending_refuses_an_arc():
                 e0=np.column_stack([planar, np.zeros(4)]).ravel())
 
 
+def test_study_tables():
+    """The two tables of docs/laws.md (``runtime.studies.cable_bending``), on a small run."""
+    costs = cable_bending.kernel_costs(("cable2d",), batch=20, repeats=1)
+    assert [line.split(" | ")[1] for line in costs.splitlines()[2:]] == list(METHODS)
+    elastica = cable_bending.table((4,))
+    assert elastica.splitlines()[2].startswith("| 4 | 1.31e-02 | 1.31e-02 | 1.31e-02 |")
+
+
 def test_continuum_kind_refuses_the_cable_law(tmp_path):
     path = tmp_path / "beam.toml"
     path.write_text(f"""

@@ -4,16 +4,33 @@
 200): the tip error against the exact elastica by element count, and Exudyn's ANCFCable2D
 (exact curvature too) on the same meshes.
 
-``python -m runtime.studies.cable_bending [counts...]`` prints the markdown table of
-docs/laws.md.
+``python -m runtime.studies.cable_bending elastica [counts...]`` prints the elastica table of
+docs/laws.md, ``... costs`` the kernel costs of both models (``kernel_costs``).
 """
 
 from __future__ import annotations
 
+import functools
 import sys
+import time
 
-from runtime import Body, Clamp, Displacement, Material, PointForce, Scene, Static, run_scene
+import numpy as np
+
+from runtime import (
+    Body,
+    Clamp,
+    Displacement,
+    Element,
+    Material,
+    PointForce,
+    Scene,
+    Static,
+    run_scene,
+)
+from runtime.catalog import METHODS
+from runtime.kernels.kind import element_kind
 from runtime.studies import peers
+from runtime.studies.bench_kernels import configurations
 from runtime.studies.precision import elastica
 from runtime.studies.precision.plan import ELASTICA
 
@@ -90,5 +107,41 @@ def table(counts=COUNTS) -> str:
     return "\n".join(lines) + "\n"
 
 
+def kernel_costs(kinds=("cable2d", "cable3d"), batch: int = 10_000, repeats: int = 15) -> str:
+    """Markdown table of the force + Jacobian cost (us per element, C backend, ``batch``
+    large-rotation configurations) of every method with the simple bending and with the
+    exact curvature at 5 and 3 Gauss points: the min over ``repeats`` rounds that run every
+    case once each (interleaved, so a load of the machine hits all cases alike)."""
+    lines = ["| kind | method | svk (simple) | svk_exact_curvature, 5 points | 3 points |",
+             "|---|---|---:|---:|---:|"]
+    for kind in kinds:
+        cases, ones = {}, (1,) * (element_kind(kind).dim - 1)
+        for method in METHODS:
+            for law, order in (("svk", 5), ("svk_exact_curvature", 5),
+                               ("svk_exact_curvature", 3)):
+                element = Element(kind, 1.0, 0.1, 0.1, 2.1e11, 0.3, 7800.0, method=method,
+                                  law=law, quadrature=(order, *ones))
+                e = configurations(element, batch)
+                force, jacobian = (np.empty_like(x)
+                                   for x in element.elastic_force_and_jacobian(e))
+                cases[(method, law, order)] = functools.partial(
+                    element.elastic_force_and_jacobian, e, out_force=force,
+                    out_jacobian=jacobian)
+        best = dict.fromkeys(cases, float("inf"))
+        for _ in range(repeats):
+            for key, run in cases.items():
+                start = time.perf_counter()
+                run()
+                best[key] = min(best[key], time.perf_counter() - start)
+        for method in METHODS:
+            us = [best[(method, law, order)] / batch * 1e6 for law, order in
+                  (("svk", 5), ("svk_exact_curvature", 5), ("svk_exact_curvature", 3))]
+            lines.append(f"| {kind} | {method} | " + " | ".join(f"{u:.2g}" for u in us) + " |")
+    return "\n".join(lines) + "\n"
+
+
 if __name__ == "__main__":
-    print(table(tuple(int(a) for a in sys.argv[1:]) or COUNTS))
+    if sys.argv[1:2] == ["costs"]:
+        print(kernel_costs())
+    else:
+        print(table(tuple(int(a) for a in sys.argv[2:]) or COUNTS))
