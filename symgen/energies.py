@@ -89,6 +89,11 @@ class CableLaw(laws.Law):
 
     bending: str = "simple"
 
+    def __post_init__(self) -> None:
+        if self.bending not in BENDING_MODELS:
+            raise ValueError(f"law {self.name!r}: bending must be one of {BENDING_MODELS}, got "
+                             f"{self.bending!r}")
+
 
 #: The laws of the cable energy: the 1D St. Venant-Kirchhoff law (E on E11 along the axis)
 #: with either bending model.

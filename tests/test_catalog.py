@@ -20,6 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 LISTS = {"METHODS": catalog.METHODS, "BACKENDS": catalog.BACKENDS,
          "VARIANTS": catalog.VARIANTS, "INTEGRATORS": catalog.INTEGRATORS,
          "ENGINES": catalog.ENGINES, "NEWTON_MODES": catalog.NEWTON_MODES,
+         "BENDING_MODELS": catalog.BENDING_MODELS,
          "material_laws()": catalog.material_laws(),
          "generated_kinds()": tuple(catalog.generated_kinds())}
 
@@ -52,6 +53,13 @@ def test_the_check_finds_a_spelled_list(tmp_path):
     probe.write_text('METHODS = ("gram", "cij", "quadrature")\nfor law in ["svk", "ecm"]:\n'
                      '    pass\nONE = ("gram", "other")\n')
     assert len(_spelled_lists(probe, tmp_path)) == 2
+
+
+def test_bending_models_are_the_generators():
+    from symgen import energies
+
+    assert catalog.BENDING_MODELS == energies.BENDING_MODELS
+    assert {law.bending for law in energies.CABLE_LAWS.values()} == set(catalog.BENDING_MODELS)
 
 
 def test_registries_hold_the_catalog_names():

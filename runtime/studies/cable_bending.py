@@ -27,7 +27,7 @@ from runtime import (
     Static,
     run_scene,
 )
-from runtime.catalog import METHODS
+from runtime.catalog import METHODS, generated_kinds
 from runtime.kernels.kind import element_kind
 from runtime.studies import peers
 from runtime.studies.bench_kernels import configurations
@@ -107,14 +107,16 @@ def table(counts=COUNTS) -> str:
     return "\n".join(lines) + "\n"
 
 
-def kernel_costs(kinds=("cable2d", "cable3d"), batch: int = 10_000, repeats: int = 15) -> str:
+def kernel_costs(kinds=None, batch: int = 10_000, repeats: int = 15) -> str:
     """Markdown table of the force + Jacobian cost (us per element, C backend, ``batch``
     large-rotation configurations) of every method with the simple bending and with the
-    exact curvature at 5 and 3 Gauss points: the min over ``repeats`` rounds that run every
-    case once each (interleaved, so a load of the machine hits all cases alike)."""
+    exact curvature at 5 and 3 Gauss points, for ``kinds`` (default every cable kind): the
+    min over ``repeats`` rounds that run every case once each (interleaved, so a load of the
+    machine hits all cases alike)."""
     lines = ["| kind | method | svk (simple) | svk_exact_curvature, 5 points | 3 points |",
              "|---|---|---:|---:|---:|"]
-    for kind in kinds:
+    cables = [k for k in generated_kinds() if element_kind(k).energy.structural]
+    for kind in kinds or cables:
         cases, ones = {}, (1,) * (element_kind(kind).dim - 1)
         for method in METHODS:
             for law, order in (("svk", 5), ("svk_exact_curvature", 5),
