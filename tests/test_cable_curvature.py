@@ -23,6 +23,7 @@ from conftest import (
     NU,
     RHO,
     WIDTH,
+    dim_of,
     random_rotation,
     rel_diff,
     rigid_motion,
@@ -63,10 +64,6 @@ def cable(kind: str, method: str = "gram", backend: str = "c", law: str = LAW,
     """The conftest element as a cable of ``law`` with Kelvin-Voigt damping."""
     return Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, method=method,
                    backend=backend, law=law, damping=damping)
-
-
-def dim_of(kind: str) -> int:
-    return 2 if kind == "cable2d" else 3
 
 
 def bent(kind: str, rng: np.random.Generator, amplitude: float = 0.05) -> np.ndarray:
