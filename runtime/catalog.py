@@ -34,6 +34,10 @@ NEWTON_MODES = ("full", "modified", "auto")
 #: Linear solvers of the Newton iterations (registry: ``runtime.solve.linear.LINEAR_SOLVERS``;
 #: chosen per model when a scene names none).
 LINEAR_SOLVERS = ("banded", "sparse")
+#: Bending models of the cable energy (``symgen.energies.BENDING_MODELS``; element.json
+#: ``laws.<law>.bending``): Berzeri and Shabana's pre-integrated simple model, and the exact
+#: curvature by Gauss quadrature along the axis.
+BENDING_MODELS = ("simple", "exact_curvature")
 #: The material law of a material that names none.
 DEFAULT_LAW = "svk"
 
@@ -57,19 +61,30 @@ def material_laws() -> tuple[str, ...]:
     return tuple(sorted(laws, key=lambda law: (law != DEFAULT_LAW, law)))
 
 
-def family_name(method: str, law: str, variant: str, damped: bool = False) -> str:
+def family_name(method: str, law: str, variant: str, damped: bool = False,
+                bending: str | None = None) -> str:
     """The kernel family that evaluates ``method`` for material law ``law`` on elements of
     reference ``variant`` (``VARIANTS``): the elastic kernels, or with ``damped`` the
-    Kelvin-Voigt damping kernels.
+    Kelvin-Voigt damping kernels; ``bending`` is the law's bending model on a cable
+    (``BENDING_MODELS``, None for a continuum).
 
     gram: ``gram_<variant>`` (damping ``damping_<variant>``); cij: ``cij`` (damping through
     the gram invariant, ``damping_<variant>``); quadrature: ``quadrature`` for the default
-    law, ``quadrature_law`` for any other law and for damping.
+    law, ``quadrature_law`` for any other law and for damping.  The exact-curvature bending:
+    ``gram_curvature_<variant>``, ``cij_curvature``, ``quadrature_curvature`` (damping
+    ``damping_curvature_<variant>``, in ``quadrature_curvature`` for quadrature).
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
     if variant not in VARIANTS:
         raise ValueError(f"variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
+    if bending not in (None, *BENDING_MODELS):
+        raise ValueError(f"bending: expected one of {', '.join(BENDING_MODELS)}, got "
+                         f"{bending!r}")
+    if bending == "exact_curvature":
+        if method == "quadrature" or (method == "cij" and not damped):
+            return f"{method}_curvature"
+        return f"{'damping' if damped else method}_curvature_{variant}"
     if method == "quadrature":
         return "quadrature" if law == DEFAULT_LAW and not damped else "quadrature_law"
     if damped:

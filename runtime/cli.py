@@ -18,7 +18,14 @@ from pathlib import Path
 from typing import NoReturn
 
 from runtime import progress
-from runtime.catalog import BACKENDS, ENGINES, LINEAR_SOLVERS, METHODS, NEWTON_MODES
+from runtime.catalog import (
+    BACKENDS,
+    DEFAULT_LAW,
+    ENGINES,
+    LINEAR_SOLVERS,
+    METHODS,
+    NEWTON_MODES,
+)
 from runtime.kernels.errors import JitEnvironmentError
 from runtime.studies.options import add_list_option, announce, default_out
 
@@ -47,11 +54,14 @@ def _generate_into(elements: list[str], backends: list[str], methods: list[str] 
 
 def _generate_element(name: str, backends: list[str], families: list[str] | None,
                       out: Path) -> list[Path]:
-    from symgen import emit
+    from symgen import emit, methods
     from symgen.elements import get
 
+    spec = get(name)
+    if families is not None:  # the method's families this element has (not every one has all)
+        families = [f for f in families if f in methods.families(spec)]
     with progress.phase(f"generating {name} (SymPy derivations and rendering)"):
-        return emit.generate(get(name), out, backends=backends, families=families)
+        return emit.generate(spec, out, backends=backends, families=families)
 
 
 def generation_diff(elements: list[str] | None = None, folder: Path | None = None) -> str:
@@ -141,7 +151,7 @@ def cmd_invariants(args) -> int:
     from runtime.studies.invariant_comparison import compare, report
 
     orders = tuple(args.quadrature) if args.quadrature else None
-    print(report(compare(args.element, args.reference, orders, args.backend)))
+    print(report(compare(args.element, args.reference, orders, args.backend, args.law)))
     return 0
 
 
@@ -332,6 +342,8 @@ def parser() -> argparse.ArgumentParser:
     add_list_option(invariants, "--quadrature", "Gauss orders per direction, e.g. 5 3 3",
                     convert=int, metavar="N")
     invariants.add_argument("--backend", choices=list(BACKENDS), default="numpy")
+    invariants.add_argument("--law", default=DEFAULT_LAW,
+                            help="material law of the element kind (docs/laws.md)")
     invariants.set_defaults(run=cmd_invariants)
 
     run = sub.add_parser("run", help="run a scene: static, modal and dynamic analyses")

@@ -310,7 +310,11 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                                  for part in law.parts(spec.dim)],
                        "corrections": (laws.correction_names(spec.dim)
                                        if law.default_corrections is not None else []),
-                       "storage": derive.law_storage(spec, law)}
+                       "storage": derive.law_storage(spec, law),
+                       **({"bending": energies.bending_model(spec, law),
+                           "variants": energies.law_variants(spec, law),
+                           "curved": energies.curved_refused(spec, law)}
+                          if energies.is_cable(spec) else {})}
             for law in derive.applicable_laws(spec).values()
         },
         "laws_not_applicable": energies.not_applicable(spec),

@@ -14,18 +14,42 @@
   ``EI/2 sum_kl K_kl G_kl`` with the constant shape-level matrix ``K_kl = int s_k'' s_l'' dx``,
   so it adds ``EI K`` to K1 (cij) and a linear term to the gram kernels (``gram_linear``).
   Its modulus is the law's axial one: the E11 coefficient on the axis (E for ``svk``, the
-  1D St. Venant-Kirchhoff law, which is exactly EA eps^2 / 2 with the Green strain).
+  1D St. Venant-Kirchhoff law, which is exactly EA eps^2 / 2 with the Green strain), an input
+  of the straight invariants (``bending``: 0 for the exact curvature).
   ``I = w h^3 / 12`` in 2D (h the height in the bending plane, w the thickness); a 3D cable
   has no section orientation, so it takes one bending stiffness, the mean of the two
   principal moments of the h x w rectangle, ``I = h w (h^2 + w^2) / 24`` (exact for square
-  sections).  The simple model is not rotation invariant for a curved reference, so cable
-  elements take straight references only (``CURVED_REFUSED``).
+  sections).  The simple model is not rotation invariant for a curved reference, so its law
+  takes straight references only (``curved_refused``).
 
 Kelvin-Voigt damping (stress = D (eps + alpha eps_dot)) applies to both parts: the axial one
 through the gram tensor as for any law, the bending one as ``-alpha EI K r_dot``.
+
+The cable laws choose the bending model (``BENDING_MODELS``): ``svk`` the simple one above,
+``svk_exact_curvature`` the exact curvature of Gerstmayr and Irschik (Exudyn's ANCFCable2D),
+
+    U_bending = EI/2 int |kappa|^2 dx,    kappa = r_x x r_xx / |r_x|^2
+
+(a scalar in 2D), rational in the coordinates, so it is integrated by Gauss quadrature along
+the axis in the kernels (``symgen.methods.curvature``) while the axial part stays
+pre-integrated; its Kelvin-Voigt damping is ``alpha EI/2 int |kappa_dot|^2 dx`` (the
+curvature rate: objective in 2D; in 3D the curvature vector turns with a rigid rotation of a
+bent cable).  The planar exact curvature is rotation invariant for any reference, so it takes
+curved ones: with a0 = |r0_x| the reference metric and s0 the reference arc length,
+
+    U = EA/2 int E11^2 a0 dx + EI/2 int (kappa - kappa0)^2 / a0 dx,
+    E11 = (r_x.r_x - r0_x.r0_x) / (2 a0^2),  kappa0 = r0_x x r0_xx / |r0_x|^2
+
+(the material curvature d theta / d s0 is kappa / a0; Exudyn's ANCFCable2D with
+``strainIsRelativeToReference``), the axial part a gram form of the general pattern with the
+weights 1 / a0^3, the bending weights EI / a0 and kappa0 in the quadrature table
+(``reference_curvature``).  The 3D exact curvature is a vector in the global frame, whose
+difference from a curved reference's is not rotation invariant: straight references only.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import sympy as sp
 
@@ -35,9 +59,16 @@ from symgen.domains import x
 #: The strain energies an element file may declare.
 ENERGIES = ("continuum", "cable")
 
-#: Why cable elements refuse curved references (element.json ``energy.curved``).
-CURVED_REFUSED = ("the cable energy's simple bending model EI/2 int r_xx . r_xx dx is not "
-                  "rotation invariant for a curved reference (it is only for straight ones)")
+#: Why a cable law refuses curved references, by bending model and dimension (element.json
+#: ``laws.<law>.curved``; ``energy.curved`` when some law of the kind does).
+_CURVED_REFUSED = {
+    "simple": ("the cable energy's simple bending model EI/2 int r_xx . r_xx dx is not "
+               "rotation invariant for a curved reference (it is only for straight ones); "
+               "the planar exact curvature (law svk_exact_curvature) takes curved ones"),
+    "exact_curvature": ("the 3D exact curvature r_x x r_xx / |r_x|^2 is a vector in the "
+                        "global frame, whose difference from a curved reference's is not "
+                        "rotation invariant (straight references only in 3D)"),
+}
 
 
 def _cable_svk(dim: int) -> tuple[laws.LawPart, ...]:
@@ -46,10 +77,33 @@ def _cable_svk(dim: int) -> tuple[laws.LawPart, ...]:
     return (laws.LawPart("axial", "axis", voigt),)
 
 
-#: The laws of the cable energy: the 1D St. Venant-Kirchhoff law (E on E11 along the axis).
-CABLE_LAWS: dict[str, laws.Law] = {
-    "svk": laws.Law("svk", "1D St. Venant-Kirchhoff: EA eps^2/2 on the axis with the Green "
+#: Bending models of the cable energy: Berzeri and Shabana's pre-integrated r_xx . r_xx, and
+#: the exact curvature by quadrature (module docstring).
+BENDING_MODELS = ("simple", "exact_curvature")
+
+
+@dataclass(frozen=True)
+class CableLaw(laws.Law):
+    """A law of the cable energy: the axial law parts and the ``bending`` model
+    (``BENDING_MODELS``)."""
+
+    bending: str = "simple"
+
+    def __post_init__(self) -> None:
+        if self.bending not in BENDING_MODELS:
+            raise ValueError(f"law {self.name!r}: bending must be one of {BENDING_MODELS}, got "
+                             f"{self.bending!r}")
+
+
+#: The laws of the cable energy: the 1D St. Venant-Kirchhoff law (E on E11 along the axis)
+#: with either bending model.
+CABLE_LAWS: dict[str, CableLaw] = {
+    "svk": CableLaw("svk", "1D St. Venant-Kirchhoff: EA eps^2/2 on the axis with the Green "
                     "strain eps = (r_x.r_x - 1)/2, bending EI/2 r_xx.r_xx", _cable_svk),
+    "svk_exact_curvature": CableLaw(
+        "svk_exact_curvature", "1D St. Venant-Kirchhoff axial part as svk, bending EI/2 "
+        "|kappa|^2 with the exact curvature kappa = r_x x r_xx / |r_x|^2 by Gauss quadrature",
+        _cable_svk, bending="exact_curvature"),
 }
 
 _CABLE_REFUSES = ("law {name!r} does not apply to the cable energy: it corrects the shear "
@@ -131,9 +185,29 @@ def bending_terms(spec, pairs, modulus) -> dict[str, list]:
                             for k, m in pairs]}
 
 
-def bending_modulus(coefficients: dict):
-    """The modulus of the bending part: the law's E11 coefficient on the axis."""
-    return coefficients["axis"][0]
+def bending_model(spec, law: laws.Law) -> str | None:
+    """The bending model of ``law`` on ``spec`` (None for a continuum)."""
+    return law.bending if is_cable(spec) else None
+
+
+def curved_refused(spec, law: laws.Law) -> str | None:
+    """Why ``law`` on ``spec`` refuses curved references (None when it takes them: every
+    continuum law, the planar exact curvature)."""
+    if not is_cable(spec) or (law.bending == "exact_curvature" and spec.dim == 2):
+        return None
+    return _CURVED_REFUSED[law.bending]
+
+
+def law_variants(spec, law: laws.Law) -> list[str]:
+    """The reference variants ``law`` takes on ``spec``: straight, and general (curved) unless
+    ``curved_refused``."""
+    return ["straight"] + (["general"] if curved_refused(spec, law) is None else [])
+
+
+def reference_curvature(spec, bending: str) -> bool:
+    """Whether the quadrature table of ``bending`` on ``spec`` carries the reference curvature
+    kappa0 (the planar exact curvature, which takes curved references)."""
+    return bending == "exact_curvature" and spec.dim == 2
 
 
 def _along(weights, vec, dim: int) -> list:
@@ -141,23 +215,37 @@ def _along(weights, vec, dim: int) -> list:
     return [sum(w * vec[k * dim + c] for k, w in enumerate(weights)) for c in range(dim)]
 
 
+def cross(a, b) -> list:
+    """a x b: one entry in 2D (the scalar cross product), three in 3D."""
+    if len(a) == 2:
+        return [a[0] * b[1] - a[1] * b[0]]
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
 def point_energy(s1, s2, q0, dq, dim: int, w_axial, w_bending):
-    """The cable energy density at one point times its weight: ``w_axial eps^2 / 2 +
-    w_bending r_xx.r_xx / 2``, with eps = r0_x.dr_x + dr_x.dr_x / 2 (exact at the reference)
-    from the shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the node-major
-    reference ``q0`` and displacements ``dq``."""
+    """The polynomial cable energy density at one point times its weight: ``w_axial eps^2 / 2
+    + w_bending r_xx.r_xx / 2`` (the simple bending; ``w_bending = 0``: the axial part alone,
+    which the exact curvature's kernels add to their closed-form bending,
+    ``symgen.methods.quadrature._exact_bending``), with eps = r0_x.dr_x + dr_x.dr_x / 2
+    (exact at the reference; the metric of a curved reference is in the weights) from the
+    shape derivatives ``s1`` (ds/dx) and ``s2`` (d2s/dx2) and the node-major reference
+    ``q0`` and displacements ``dq``."""
     r0x, drx = _along(s1, q0, dim), _along(s1, dq, dim)
     rxx = [a + b for a, b in zip(_along(s2, q0, dim), _along(s2, dq, dim), strict=True)]
-    eps = sum(a * b for a, b in zip(r0x, drx, strict=True)) + sum(b * b for b in drx) / 2
-    return w_axial * eps**2 / 2 + w_bending * sum(c * c for c in rxx) / 2
+    eps = _dot(r0x, drx) + _dot(drx, drx) / 2
+    return w_axial * eps**2 / 2 + w_bending * _dot(rxx, rxx) / 2
 
 
 def point_dissipation(s1, s2, q, qd, dim: int, w_axial, w_bending):
-    """The Kelvin-Voigt dissipation potential at one point over alpha: ``w_axial eps_dot^2 / 2
-    + w_bending rd_xx.rd_xx / 2`` with eps_dot = r_x . rd_x."""
+    """The Kelvin-Voigt dissipation potential of ``point_energy`` at one point over alpha:
+    ``w_axial eps_dot^2 / 2 + w_bending rd_xx.rd_xx / 2`` with eps_dot = r_x . rd_x."""
     rx, rdx, rdxx = _along(s1, q, dim), _along(s1, qd, dim), _along(s2, qd, dim)
-    eps_dot = sum(a * b for a, b in zip(rx, rdx, strict=True))
-    return w_axial * eps_dot**2 / 2 + w_bending * sum(c * c for c in rdxx) / 2
+    eps_dot = _dot(rx, rdx)
+    return w_axial * eps_dot**2 / 2 + w_bending * _dot(rdxx, rdxx) / 2
 
 
 def metadata(spec) -> dict | None:
@@ -165,6 +253,7 @@ def metadata(spec) -> dict | None:
     element.json has no ``energy`` entry)."""
     if not is_cable(spec):
         return None
-    return {"name": "cable", "bending": "simple", "variants": ["straight"],
-            "curved": CURVED_REFUSED,
+    refused = [curved_refused(spec, law) for law in CABLE_LAWS.values()]
+    return {"name": "cable", "variants": ["straight"],
+            "curved": next(reason for reason in refused if reason is not None),
             "second_moment": "w h^3 / 12" if spec.dim == 2 else "h w (h^2 + w^2) / 24"}

@@ -202,9 +202,12 @@ def rng(request) -> np.random.Generator:
 
 
 
-def curved_refused(kind: str) -> str | None:
-    """Why ``kind``'s energy refuses curved references (element.json ``energy.curved``: the
-    cable's simple bending model is not rotation invariant for them), or None."""
+def curved_refused(kind: str, law: str | None = None) -> str | None:
+    """Why ``kind`` with material law ``law`` refuses curved references (element.json
+    ``laws.<law>.curved``: the cable's simple bending model is not rotation invariant for
+    them), or None; without a law, why some law of the kind does (``energy.curved``)."""
+    if law is not None and law in element_kind(kind).laws:
+        return element_kind(kind).laws[law].curved
     return element_kind(kind).energy.curved
 
 
@@ -212,15 +215,16 @@ def curved_refused(kind: str) -> str | None:
 def _curved_only_where_the_energy_takes_it(request):
     """The one place the generic tests learn which references an energy takes: a case with a
     kind and a curved reference (parameter ``shape`` = "curved" or ``curved`` = True) is
-    skipped, with the reason, for a kind whose energy refuses curved references; so is a
-    test marked ``curved`` (it builds curved references itself)."""
+    skipped, with the reason, for a kind whose energy (or, with a parameter ``law``, whose
+    law) refuses curved references; so is a test marked ``curved`` (it builds curved
+    references itself)."""
     callspec = getattr(request.node, "callspec", None)
     params = callspec.params if callspec is not None else {}
     kind = params.get("kind")
     curved = (params.get("shape") == "curved" or params.get("curved") is True
               or request.node.get_closest_marker("curved") is not None)
     if kind in KINDS and curved:
-        reason = curved_refused(kind)
+        reason = curved_refused(kind, params.get("law"))
         if reason is not None:
             pytest.skip(f"{kind} takes straight references only: {reason}")
 

@@ -13,10 +13,14 @@ import pytest
 from scipy.integrate import solve_bvp
 
 from runtime import load_scene, run_scene
+from runtime.kernels.kind import element_kind
 
 E, RHO = 132e9, 8245.2
 LENGTH = 5.0
 CABLES = {"cable2d": 2, "cable3d": 3}
+#: the cable laws (both bending models: simple and exact curvature, symgen/energies.py)
+LAWS = list(element_kind("cable2d").laws)
+all_laws = pytest.mark.parametrize("law", LAWS)
 
 
 def second_moment(kind: str, height: float, width: float) -> float:
@@ -28,9 +32,9 @@ def second_moment(kind: str, height: float, width: float) -> float:
 
 
 def cantilever(tmp_path, kind: str, elements: int, force: float, height: float = 0.1,
-               steps: int = 1, modal: bool = False):
-    """run_scene of a cantilever of ``elements`` cables clamped at x = 0 with a tip force
-    -force along y (N), static (and modal)."""
+               steps: int = 1, modal: bool = False, law: str = "svk"):
+    """run_scene of a cantilever of ``elements`` cables of material law ``law`` clamped at
+    x = 0 with a tip force -force along y (N), static (and modal)."""
     dim = CABLES[kind]
     zero = ", 0.0" * (dim - 1)
     load = [0.0] * dim
@@ -41,6 +45,7 @@ title = "cable cantilever"
 E = {E}
 nu = 0.0
 rho = {RHO}
+law = "{law}"
 [[body]]
 name = "c"
 element = "{kind}"
@@ -79,13 +84,16 @@ max_iterations = 50
     return result
 
 
+@all_laws
 @pytest.mark.parametrize("elements", [2, 4])
 @pytest.mark.parametrize("kind", CABLES)
-def test_tip_deflection_is_euler_bernoulli(tmp_path, kind, elements):
-    """P L^3 / 3EI within 1e-3 (a small load: geometric nonlinearity ~ (w/L)^2 ~ 1e-5)."""
+def test_tip_deflection_is_euler_bernoulli(tmp_path, kind, elements, law):
+    """P L^3 / 3EI within 1e-3 (a small load: geometric nonlinearity ~ (w/L)^2 ~ 1e-5), with
+    either bending model (they agree for small deflections)."""
     force = 300.0
     exact = force * LENGTH**3 / (3 * E * second_moment(kind, 0.1, 0.1))
-    tip = -cantilever(tmp_path, kind, elements, force).summary["static"]["sensors"]["tip_y"]
+    tip = -cantilever(tmp_path, kind, elements, force,
+                      law=law).summary["static"]["sensors"]["tip_y"]
     assert abs(tip - exact) <= 1e-3 * exact
 
 
@@ -129,17 +137,19 @@ def test_exact_elastica_matches_mattiasson():
     assert v == pytest.approx(0.81061, abs=1e-5)
 
 
+@all_laws
 @pytest.mark.parametrize("kind", CABLES)
 @pytest.mark.parametrize("slenderness, elements", [(50, 8), (500, 16)])
-def test_elastica(tmp_path, kind, slenderness, elements):
+def test_elastica(tmp_path, kind, slenderness, elements, law):
     """A cantilever with P L^2 / EI = 10, static in load steps: tip displacements within 1e-3
-    of the exact (inextensible) elastica.  L / h = 50 with 8 elements (axial strain P / EA ~
-    3e-4 lengthens the cable; measured 6.8e-4 and 5.2e-4 for u and v); L / h = 500 (strain
-    3e-7) needs 16: the simple model locks in membrane (8 elements: 2.9e-3, 3.3e-3)."""
+    of the exact (inextensible) elastica, with either bending model.  L / h = 50 with 8
+    elements (axial strain P / EA ~ 3e-4 lengthens the cable; measured 6.8e-4 and 5.2e-4 for
+    u and v with the simple model, 9.7e-4 and 5.7e-4 with the exact curvature); L / h = 500
+    (strain 3e-7) needs 16: both models lock in membrane (8 elements: 2.9e-3, 3.3e-3)."""
     height = LENGTH / slenderness
     force = 10.0 * E * second_moment(kind, height, height) / LENGTH**2
-    sensors = cantilever(tmp_path, kind, elements, force, height,
-                         steps=10).summary["static"]["sensors"]
+    sensors = cantilever(tmp_path, kind, elements, force, height, steps=10,
+                         law=law).summary["static"]["sensors"]
     u, v = elastica(10.0)
     assert abs(-sensors["tip_x"] / LENGTH - u) <= 1e-3 * u
     assert abs(-sensors["tip_y"] / LENGTH - v) <= 1e-3 * v

@@ -20,6 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 LISTS = {"METHODS": catalog.METHODS, "BACKENDS": catalog.BACKENDS,
          "VARIANTS": catalog.VARIANTS, "INTEGRATORS": catalog.INTEGRATORS,
          "ENGINES": catalog.ENGINES, "NEWTON_MODES": catalog.NEWTON_MODES,
+         "BENDING_MODELS": catalog.BENDING_MODELS,
          "material_laws()": catalog.material_laws(),
          "generated_kinds()": tuple(catalog.generated_kinds())}
 
@@ -54,6 +55,13 @@ def test_the_check_finds_a_spelled_list(tmp_path):
     assert len(_spelled_lists(probe, tmp_path)) == 2
 
 
+def test_bending_models_are_the_generators():
+    from symgen import energies
+
+    assert catalog.BENDING_MODELS == energies.BENDING_MODELS
+    assert {law.bending for law in energies.CABLE_LAWS.values()} == set(catalog.BENDING_MODELS)
+
+
 def test_registries_hold_the_catalog_names():
     assert tuple(ENGINES) == catalog.ENGINES
     assert tuple(INTEGRATORS) == catalog.INTEGRATORS
@@ -64,10 +72,10 @@ def test_registries_hold_the_catalog_names():
 def test_every_family_the_catalog_names_is_generated(kind):
     families = element_kind(kind).families
     for method in catalog.METHODS:
-        for law in element_kind(kind).laws:
-            for variant in element_kind(kind).energy.variants:  # cables: straight only
+        for law, info in element_kind(kind).laws.items():
+            for variant in info.variants:  # cables: straight only but the planar exact curvature
                 for damped in (False, True):
-                    assert family_name(method, law, variant, damped) in families
+                    assert family_name(method, law, variant, damped, info.bending) in families
 
 
 def test_family_name_rejects_unknown_names():

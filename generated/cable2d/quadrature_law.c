@@ -11,7 +11,7 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
 /* Elastic force of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 8): elastic force -dU/de (N), per element
    Operations per element: 619. */
 void cable2d_quadrature_law_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *force_out)
@@ -108,7 +108,7 @@ void cable2d_quadrature_law_force(long m, const double *e_in, long e_stride, con
 /* Elastic Jacobian of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    jacobian (output, 64): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 1489. */
 void cable2d_quadrature_law_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *jacobian_out)
@@ -354,7 +354,7 @@ void cable2d_quadrature_law_jacobian(long m, const double *e_in, long e_stride, 
 /* Strain energy of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    energy (output, 1): strain energy U (J), per element
    Operations per element: 389. */
 void cable2d_quadrature_law_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *energy_out)
@@ -421,7 +421,7 @@ void cable2d_quadrature_law_energy(long m, const double *e_in, long e_stride, co
 /* Elastic force and Jacobian of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 8): elastic force -dU/de (N), per element
    jacobian (output, 64): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 2074. */
@@ -703,7 +703,7 @@ void cable2d_quadrature_law_force_jacobian(long m, const double *e_in, long e_st
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
    e_dot (batch, 8): element velocities de/dt, node-major
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
    force (output, 8): damping force -alpha int (deps/de)^T D eps_dot dV0 (N)
    Operations per element: 484. */
@@ -806,7 +806,7 @@ void cable2d_quadrature_law_damping_force(long m, const double *e_in, long e_str
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
    e_dot (batch, 8): element velocities de/dt, node-major
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
    jacobian (output, 64): d(damping force)/de (N/m), row-major ndof x ndof
    jacobian_dot (output, 64): d(damping force)/d(e_dot) (N s/m), row-major ndof x ndof
@@ -1158,7 +1158,7 @@ void cable2d_quadrature_law_damping_jacobians(long m, const double *e_in, long e
    e (batch, 8): element coordinates e, node-major
    e0 (batch, 8): reference coordinates e0
    e_dot (batch, 8): element velocities de/dt, node-major
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
    force (output, 8): elastic plus damping force (N)
    jacobian (output, 64): d(elastic plus damping force)/de (N/m), row-major ndof x ndof

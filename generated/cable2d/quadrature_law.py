@@ -9,7 +9,7 @@ def force(e_in, e0_in, table_in):
 
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 8): elastic force -dU/de (N), per element
     Operations per element: 619.
     """
@@ -93,7 +93,7 @@ def jacobian(e_in, e0_in, table_in):
 
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     jacobian (output, 64): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 1489.
     """
@@ -326,7 +326,7 @@ def energy(e_in, e0_in, table_in):
 
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     energy (output, 1): strain energy U (J), per element
     Operations per element: 389.
     """
@@ -380,7 +380,7 @@ def force_jacobian(e_in, e0_in, table_in):
 
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 8): elastic force -dU/de (N), per element
     jacobian (output, 64): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 2074.
@@ -647,7 +647,7 @@ def damping_force(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
     e_dot (batch, 8): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     force (output, 8): damping force -alpha int (deps/de)^T D eps_dot dV0 (N)
     Operations per element: 484.
@@ -734,7 +734,7 @@ def damping_jacobians(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
     e_dot (batch, 8): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     jacobian (output, 64): d(damping force)/de (N/m), row-major ndof x ndof
     jacobian_dot (output, 64): d(damping force)/d(e_dot) (N s/m), row-major ndof x ndof
@@ -1068,7 +1068,7 @@ def damped_force_jacobians(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 8): element coordinates e, node-major
     e0 (batch, 8): reference coordinates e0
     e_dot (batch, 8): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     force (output, 8): elastic plus damping force (N)
     jacobian (output, 64): d(elastic plus damping force)/de (N/m), row-major ndof x ndof

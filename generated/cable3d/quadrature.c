@@ -11,7 +11,7 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
 /* Elastic force of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 12): element coordinates e, node-major
    e0 (batch, 12): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 12): elastic force -dU/de (N), per element
    Operations per element: 906. */
 void cable3d_quadrature_force(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *force_out)
@@ -136,7 +136,7 @@ void cable3d_quadrature_force(long m, const double *e_in, long e_stride, const d
 /* Elastic Jacobian of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 12): element coordinates e, node-major
    e0 (batch, 12): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 2601. */
 void cable3d_quadrature_jacobian(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *jacobian_out)
@@ -577,7 +577,7 @@ void cable3d_quadrature_jacobian(long m, const double *e_in, long e_stride, cons
 /* Strain energy of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 12): element coordinates e, node-major
    e0 (batch, 12): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    energy (output, 1): strain energy U (J), per element
    Operations per element: 571. */
 void cable3d_quadrature_energy(long m, const double *e_in, long e_stride, const double *e0_in, long e0_stride, long npoints, const double *table_in, double *energy_out)
@@ -661,7 +661,7 @@ void cable3d_quadrature_energy(long m, const double *e_in, long e_stride, const 
 /* Elastic force and Jacobian of the cable energy by Gauss quadrature along the axis at every call.
    e (batch, 12): element coordinates e, node-major
    e0 (batch, 12): reference coordinates e0
-   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+   table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
    force (output, 12): elastic force -dU/de (N), per element
    jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
    Operations per element: 3456. */

@@ -9,7 +9,7 @@ def force(e_in, e0_in, table_in):
 
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 12): elastic force -dU/de (N), per element
     Operations per element: 906.
     """
@@ -121,7 +121,7 @@ def jacobian(e_in, e0_in, table_in):
 
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 2601.
     """
@@ -549,7 +549,7 @@ def energy(e_in, e0_in, table_in):
 
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     energy (output, 1): strain energy U (J), per element
     Operations per element: 571.
     """
@@ -620,7 +620,7 @@ def force_jacobian(e_in, e0_in, table_in):
 
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     force (output, 12): elastic force -dU/de (N), per element
     jacobian (output, 144): d(force)/de (N/m), row-major ndof x ndof, per element
     Operations per element: 3456.
@@ -1093,7 +1093,7 @@ def damping_force(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
     e_dot (batch, 12): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     force (output, 12): damping force -alpha int (deps/de)^T D eps_dot dV0 (N)
     Operations per element: 706.
@@ -1208,7 +1208,7 @@ def damping_jacobians(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
     e_dot (batch, 12): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     jacobian (output, 144): d(damping force)/de (N/m), row-major ndof x ndof
     jacobian_dot (output, 144): d(damping force)/d(e_dot) (N s/m), row-major ndof x ndof
@@ -1851,7 +1851,7 @@ def damped_force_jacobians(e_in, e0_in, e_dot_in, table_in, alpha):
     e (batch, 12): element coordinates e, node-major
     e0 (batch, 12): reference coordinates e0
     e_dot (batch, 12): element velocities de/dt, node-major
-    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx, N m) and of the bending part (EI dx, N m^3)
+    table (table, 10): per axis point: ds/dx, d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending part (EI dx / |r0_x|, N m^3)
     alpha (shared, 1): Kelvin-Voigt damping coefficient alpha (s)
     force (output, 12): elastic plus damping force (N)
     jacobian (output, 144): d(elastic plus damping force)/de (N/m), row-major ndof x ndof

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from runtime.catalog import BACKENDS, METHODS
+from runtime.catalog import BACKENDS, METHODS, family_name
 from runtime.element import invariants as inv
 from runtime.kernels.boundary import output_array, real_array
 from runtime.kernels.kind import element_kind
@@ -57,7 +57,9 @@ class Element:
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
     Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
-    of slender 2-node beams in large rotations; general invariants, straight or not);
+    of slender 2-node beams in large rotations; general invariants, straight or not); for
+    cables ``svk`` (simple bending) | ``svk_exact_curvature`` (exact curvature bending by
+    Gauss quadrature of order ``quadrature[0]`` along the axis);
     shear_correction: the ECM shear-correction factors, one number for every
     transverse shear or a tuple (k1 on 2E13, k2 on 2E12 in 3D; k on 2E12 in 2D), default
     10 (1 + nu) / (12 + 11 nu); damping: Kelvin-Voigt alpha in s (stress = D (eps + alpha
@@ -93,12 +95,16 @@ class Element:
                    else self._coordinates(e0, "e0", batch=False))
         self.straight = inv.is_straight(self.kind, self.e0, self.geometry)
         self.law, self.damping = self._law(law), self._damping(damping)
+        #: the law's bending model on a cable (``runtime.catalog.BENDING_MODELS``), else None
+        law_info = self.kind.laws[self.law]
+        self.bending = law_info.bending
         # a law with reduced integration stores general invariants, straight or not
-        self.variant = ("straight" if self.straight
-                        and self.kind.laws[self.law].storage == "straight" else "general")
-        if ("straight" if self.straight else "general") not in self.kind.energy.variants:
-            raise ValueError(f"e0: {self.kind.name} takes straight references only (rigid "
-                             f"placements of the straight element): {self.kind.energy.curved}")
+        self.variant = ("straight" if self.straight and law_info.storage == "straight"
+                        else "general")
+        if ("straight" if self.straight else "general") not in law_info.variants:
+            raise ValueError(f"e0: {self.kind.name} takes straight references only with law "
+                             f"{self.law!r} (rigid placements of the straight element): "
+                             f"{law_info.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
         #: kernel families loaded (compiled on first use with backend c), in load order
@@ -117,9 +123,7 @@ class Element:
         self._inputs = self._method_inputs(builders)
         self._check_finite(e0 is not None)
         self.timing["preprocess_s"] += time.perf_counter() - start
-        family = {"gram": f"gram_{self.variant}"}.get(method, method)
-        if method == "quadrature" and self.law != "svk":
-            family = "quadrature_law"
+        family = family_name(self.method, self.law, self.variant, bending=self.bending)
         kernels = self._family(family)
         self.family = family
         self._method_kernels = kernels
@@ -187,10 +191,23 @@ class Element:
             if inv.has_closed_tables(self.kind):  # exact tables (closed.json), any law
                 return inv.closed_law_invariants(self.kind, self.geometry, coefficients,
                                                  self.rho)
-            return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho)
+            return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho,
+                                               self._simple_bending_modulus(coefficients))
+        if self.kind.energy.structural:  # a curved cable (the planar exact curvature)
+            return inv.cable_invariants(self.kind, builders, self.geometry, self.quadrature,
+                                        coefficients, self.rho,
+                                        self._simple_bending_modulus(coefficients),
+                                        self.e0, self.variant)
         rules = self._law_rules(builders)
         return inv.numeric_law_invariants(self.kind, builders, self.variant, self.geometry,
                                           rules, coefficients, self.rho)
+
+    def _simple_bending_modulus(self, coefficients: dict) -> float | None:
+        """The modulus of a cable's pre-integrated bending: the E11 coefficient on the axis
+        for the simple model, 0 when the bending is by quadrature (None for a continuum)."""
+        if self.bending is None:
+            return None
+        return float(coefficients["axis"][0]) if self.bending == "simple" else 0.0
 
     def law_coefficients(self) -> dict[str, np.ndarray]:
         """The law's coefficients (Pa) per domain (``volume``, ``axis``): the upper triangle
@@ -202,9 +219,10 @@ class Element:
         return inv.law_rules(self.kind, builders, self.geometry, self.e0, self.quadrature)
 
     def _law_table(self, builders) -> np.ndarray:
-        if self.kind.energy.structural:
+        if self.kind.energy.structural:  # the law that takes curved references has kappa0
             return inv.cable_table(self.kind, builders, self.geometry, self.quadrature[0],
-                                   self.law_coefficients())
+                                   self.law_coefficients(), self.e0,
+                                   "general" in self.kind.laws[self.law].variants)
         return inv.law_table(self.kind, self._law_rules(builders), self.law_coefficients())
 
     def _damping_kernels(self) -> dict:
@@ -213,14 +231,15 @@ class Element:
         if self._damping_bound is None:
             start = time.perf_counter()
             alpha = np.array([self.damping])
+            family = self.damping_family
             if self.method == "quadrature":
-                family = "quadrature_law"
                 table = (self._inputs["table"] if self.law != "svk" or self.kind.energy.structural
                          else self._law_table(self._family("invariants")))
                 fixed = {"table": table, "alpha": alpha}
             else:
-                family = f"damping_{self.variant}"
                 fixed = {**self._gram_inputs(), "alpha": alpha}
+                if self.bending == "exact_curvature":  # the bending loop's table
+                    fixed["table"] = self._inputs["table"]
             self.timing["preprocess_s"] += time.perf_counter() - start
             kernels = self._family(family)
             self._damping_family = kernels
@@ -290,7 +309,8 @@ class Element:
     @property
     def damping_family(self) -> str:
         """Name of the kernel family of this element's damping kernels."""
-        return "quadrature_law" if self.method == "quadrature" else f"damping_{self.variant}"
+        return family_name(self.method, self.law, self.variant, damped=True,
+                           bending=self.bending)
 
     @property
     def damping_kernel_family(self):
@@ -336,22 +356,27 @@ class Element:
         return tuple(int(o) for o in orders)
 
     def _gram_inputs(self) -> dict:
-        """The gram tensor and, for energies with one, the linear term (cable bending)."""
-        return {name: self.invariants[name] for name in ("gram", "gram_linear")
-                if name in self.invariants}
+        """The gram tensor and, for the cable's simple bending, the linear term."""
+        linear = ("gram_linear",) if self.bending == "simple" else ()
+        return {name: self.invariants[name] for name in ("gram", *linear)}
 
     def _method_inputs(self, builders) -> dict:
         stored = self.invariants
+        # the exact curvature's bending loop reads the cable's quadrature table
+        table = ({"table": self._law_table(builders)} if self.bending == "exact_curvature"
+                 else {})
         if self.method == "gram":
-            return self._gram_inputs()
+            return {**self._gram_inputs(), **table}
         if self.method == "cij":
             k2, jacobian = inv.cij_operators(self.kind, self.variant, stored["cij"])
             return {"k1": stored["k1"], "u0": stored["u0"], "k2_matrix": k2,
-                    "jacobian_matrix": jacobian}
-        if self.kind.energy.structural:  # the cable's quadrature family: its table only
-            return {"table": self._law_table(builders)}
-        if self.law != "svk":  # quadrature_law also holds the damping kernels (alpha)
-            return {"table": self._law_table(builders), "alpha": np.array([self.damping])}
+                    "jacobian_matrix": jacobian, **table}
+        # a non-default law's quadrature family also holds the damping kernels (alpha)
+        alpha = {"alpha": np.array([self.damping])} if self.law != "svk" else {}
+        if self.kind.energy.structural:  # the cable's quadrature families: their table
+            return {"table": self._law_table(builders), **alpha}
+        if self.law != "svk":
+            return {"table": self._law_table(builders), **alpha}
         return {"material": np.array([self.lam, self.shear]),
                 "table": inv.quadrature_table(self.kind, builders, self.geometry,
                                               self.quadrature)}

@@ -298,49 +298,85 @@ def law_rules(kind: ElementKind, family: KernelFamily, geometry, e0: np.ndarray,
     return rules
 
 
+def _cable_metric(kind: ElementKind, first: np.ndarray, e0: np.ndarray | None) -> np.ndarray:
+    """|r0_x| at the points of the shape-gradient table ``first`` (p, n) of a cable (ones for
+    the default reference, parameterised by arc length); ValueError where it vanishes."""
+    if e0 is None:
+        return np.ones(first.shape[0])
+    metric = np.linalg.norm(first @ e0.reshape(kind.n_shape, kind.dim), axis=1)
+    if not (metric > 1e-12 * np.abs(e0).max()).all():
+        raise ValueError("e0: the reference tangent r0_x vanishes at a Gauss point; expected "
+                         "a cable reference with a nonzero tangent everywhere")
+    return metric
+
+
 def cable_table(kind: ElementKind, family: KernelFamily, geometry, order: int,
-                coefficients: dict[str, np.ndarray]) -> np.ndarray:
-    """Per-point table of a cable's quadrature kernels (straight references): at the Gauss
-    points of order ``order`` on the axis, ds/dx, d2s/dx2, and the weights of the axial part
-    (E11 coefficient on the axis times the weight, which holds the area: EA dx, N m) and of
-    the bending part (the same modulus times I dx, N m^3); symgen/energies.py."""
+                coefficients: dict[str, np.ndarray], e0: np.ndarray | None = None,
+                curvature: bool = False) -> np.ndarray:
+    """Per-point table of a cable's quadrature kernels: at the Gauss points of order ``order``
+    on the axis, ds/dx, d2s/dx2, and the weights of the axial part (E11 coefficient on the
+    axis times the weight, which holds the area, over a0^3: EA dx / a0^3, N m) and of the
+    bending part (the same modulus times I dx / a0, N m^3), a0 = |r0_x| of the reference
+    ``e0`` (1 for the default straight one); with ``curvature`` (the planar exact curvature,
+    the cable law that takes curved references) the reference curvature r0_x x r0_xx /
+    |r0_x|^2 (1/m); symgen/energies.py."""
     points, weights = subdomain_rule(kind, geometry, (order,) * kind.dim, "axis")
     shared = np.asarray(geometry, float)
     first = shape_gradient_table(kind, family, geometry, points)
     second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
     area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
     modulus = float(coefficients["axis"][0])
-    return np.ascontiguousarray(np.column_stack([first, second, weights * modulus,
-                                                 weights * modulus * moment / area]))
+    metric = _cable_metric(kind, first, e0)
+    columns = [first, second, weights * modulus / metric**3,
+               weights * modulus * moment / area / metric]
+    if curvature:
+        q0 = (kind.straight_reference(*geometry) if e0 is None else e0).reshape(kind.n_shape,
+                                                                                 kind.dim)
+        r0x, r0xx = first @ q0, second @ q0
+        columns.append((r0x[:, 0] * r0xx[:, 1] - r0x[:, 1] * r0xx[:, 0]) / metric**2)
+    return np.ascontiguousarray(np.column_stack(columns))
 
 
 def cable_invariants(kind: ElementKind, family: KernelFamily, geometry, orders,
-                     coefficients: dict[str, np.ndarray], density: float) -> dict[str, np.ndarray]:
-    """Mass, K1, gram, cij, U0 and the gram form's linear term of a straight cable by
-    quadrature (the closed forms come from the generated ``law_invariants_straight``): the
-    axial part through ``law_algebra`` with b = ds/dx on the axis rule of order
-    ``orders[0]``, the bending part EI K_kl, K = int s_k'' s_l'' dx, added to K1, and
-    ``gram_linear`` = EI mu K / 4 (mu = 1 on the diagonal, 2 off it); symgen/energies.py."""
+                     coefficients: dict[str, np.ndarray], density: float,
+                     bending: float | None = None, e0: np.ndarray | None = None,
+                     variant: str = "straight") -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij, U0 and the gram form's linear term of a cable by quadrature (the
+    straight closed forms come from the generated ``law_invariants_straight``): the axial
+    part through ``law_algebra`` of storage ``variant`` with b = (ds/dx) / a0 on the axis
+    rule of order ``orders[0]`` and the weights times a0 (a0 = |r0_x| of the reference
+    ``e0``, 1 for the default straight one: the strain E11 = (r_x.r_x - r0_x.r0_x) /
+    (2 a0^2) per reference arc length), the mass int rho s s a0 dV, the bending part
+    EI K_kl, K = int s_k'' s_l'' dx, added to K1, and ``gram_linear`` = EI mu K / 4 (mu = 1
+    on the diagonal, 2 off it); symgen/energies.py.  ``bending``: the modulus E of the
+    pre-integrated (simple) bending, default the E11 coefficient on the axis; 0 for the exact
+    curvature (bending by quadrature)."""
     points, weights = subdomain_rule(kind, geometry, (orders[0],) * kind.dim, "axis")
     shared = np.asarray(geometry, float)
     b = full_gradients(kind, shape_gradient_table(kind, family, geometry, points))
+    metric = _cable_metric(kind, b[:, :, 0], e0)
+    b, measure = b / metric[:, None, None], weights * metric
     p_dir = np.einsum("pka,pla->pakl", b, b)
     none = {domain: np.zeros_like(value) for domain, value in coefficients.items()}
     parts = [(coefficients["axis"] if domain == "axis" else none[domain],
-              lambda: np.einsum("p,pakl,pbmn->abklmn", weights, p_dir, p_dir, optimize=True),
-              np.einsum("p,pakl->akl", weights, p_dir), weights.sum())
+              lambda: np.einsum("p,pakl,pbmn->abklmn", measure, p_dir, p_dir, optimize=True),
+              np.einsum("p,pakl->akl", measure, p_dir), measure.sum())
              for domain in kind.law_domains]
     volume, volume_weights = domain_rule(kind, geometry, orders)
+    volume_weights = volume_weights * _cable_metric(
+        kind, full_gradients(kind, shape_gradient_table(kind, family, geometry, volume))[:, :, 0],
+        e0)
     values = family("shape_values", {"point": volume, "geometry": shared})["values"]
     mass = np.einsum("p,pk,pl->kl", volume_weights, values, values)
-    stored = law_algebra(kind, "straight", parts, mass, density)
+    stored = law_algebra(kind, variant, parts, mass, density)
     second = family("shape_curvatures", {"point": points, "geometry": shared})["curvatures"]
     area, moment = family("section", {"geometry": shared[None, :]})["section"][0]
-    bending = float(coefficients["axis"][0]) * moment * np.einsum(
+    modulus = float(coefficients["axis"][0]) if bending is None else bending
+    stiffness = modulus * moment * np.einsum(
         "p,pk,pl->kl", weights / area, second, second)
     rows, cols = np.triu_indices(kind.n_shape)
-    stored["k1"] = stored["k1"] + bending[rows, cols]
-    stored["gram_linear"] = np.where(rows == cols, 1, 2) * bending[rows, cols] / 4
+    stored["k1"] = stored["k1"] + stiffness[rows, cols]
+    stored["gram_linear"] = np.where(rows == cols, 1, 2) * stiffness[rows, cols] / 4
     return stored
 
 
@@ -526,12 +562,16 @@ def closed_law_invariants(kind: ElementKind, geometry, coefficients: dict[str, n
 
 
 def straight_law_invariants(family: KernelFamily, geometry, coefficients: dict[str, np.ndarray],
-                            density: float) -> dict[str, np.ndarray]:
-    """Closed-form invariants of a law for the straight reference (``law_invariants_straight``)."""
+                            density: float, bending: float | None = None
+                            ) -> dict[str, np.ndarray]:
+    """Closed-form invariants of a law for the straight reference (``law_invariants_straight``);
+    ``bending``: a cable's modulus of the pre-integrated simple bending (Pa; 0 when its
+    bending is by quadrature, None for a continuum)."""
     # the kernel takes the exactly integrated domains (laws with reduced integration store
     # general invariants, so their coefficients there are zero)
     taken = {a["name"] for a in family.signatures["law_invariants_straight"]["arrays"]}
     inputs = {"geometry": np.asarray(geometry, float)[None, :], "density": np.array([density]),
               **{domain: np.asarray(value, float) for domain, value in coefficients.items()
-                 if domain in taken}}
+                 if domain in taken},
+              **({"bending": np.array([bending])} if bending is not None else {})}
     return {name: value[0] for name, value in family("law_invariants_straight", inputs).items()}

@@ -106,18 +106,24 @@ class LawInfo:
     description: str
     parts: tuple[dict[str, str], ...]
     storage: str = "straight"
+    #: the bending model of a cable law (``symgen.energies.BENDING_MODELS``), None for a
+    #: continuum law
+    bending: str | None = None
+    #: the reference variants the law takes (a cable law may refuse curved ones) and, when
+    #: it refuses curved references, why
+    variants: tuple[str, ...] = VARIANTS
+    curved: str | None = None
 
 
 @dataclass(frozen=True)
 class Energy:
     """The strain energy of a kind (``symgen/energies.py``): ``name`` ``continuum`` (the
     Green-Lagrange strain of the full deformation gradient with a material law) or ``cable``
-    (axial strain and bending of r, r_x); its ``bending`` model (None for a continuum), the
+    (axial strain and bending of r, r_x; the bending model is the law's, ``LawInfo``), the
     reference ``variants`` it takes and, when it refuses curved references, why
     (``curved``)."""
 
     name: str
-    bending: str | None
     variants: tuple[str, ...]
     curved: str | None
 
@@ -125,8 +131,8 @@ class Energy:
     def from_document(cls, meta: dict | None) -> Energy:
         """The energy entry of element.json (absent: the continuum, every variant)."""
         if meta is None:
-            return cls("continuum", None, VARIANTS, None)
-        return cls(meta["name"], meta["bending"], tuple(meta["variants"]), meta["curved"])
+            return cls("continuum", VARIANTS, None)
+        return cls(meta["name"], tuple(meta["variants"]), meta["curved"])
 
     @property
     def structural(self) -> bool:
@@ -177,7 +183,8 @@ class ElementKind:
                                    a["scale"]) for a in d["axes"]),
                         d["subdomains"], d["thickness"])
         laws = {name: LawInfo(name, tuple(law["corrections"]), law["description"],
-                              tuple(law["parts"]), law["storage"])
+                              tuple(law["parts"]), law["storage"], law.get("bending"),
+                              tuple(law.get("variants", VARIANTS)), law.get("curved"))
                 for name, law in meta["laws"].items()}
         return cls(meta["name"], meta["description"], meta["dim"], meta["n_shape"],
                    meta["ndof"], tuple(meta["position_vectors"]), tuple(meta["quadrature"]),

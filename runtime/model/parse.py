@@ -133,7 +133,10 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
         raise SceneError(f"{path}.material: material {show(material)} is not defined; "
                          f"defined materials: {defined}")
     law = materials[material].law
-    if (why := meta.law_not_applicable(law)) is not None:
+    why = meta.law_not_applicable(law)
+    if why is None and law not in meta.laws:  # e.g. a cable law on a continuum kind
+        why = f"a law the {meta.energy.name} energy of {kind} has not"
+    if why is not None:
         raise SceneError(f"{path}.material: material {show(material)} has law = "
                          f"{show(law)}, which does not apply to {kind} elements ({why}); "
                          f"expected a material with one of the laws "
@@ -148,6 +151,10 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                              f"{HINTS['section']}")
     height, width, thickness, elements, start, end, arc, rectangle, box = shape(
         data, path, kind, dim)
+    if arc is not None and "general" not in meta.laws[law].variants:
+        raise SceneError(f"{path}.arc: {kind} with law = {show(law)} takes straight references "
+                         f"only: {meta.laws[law].curved}; expected start and end (a straight "
+                         "body)")
 
     quadrature = None
     if "quadrature" in data:
@@ -219,10 +226,6 @@ def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
         line = Line.parse(data, path, dim, why)
         return height, width, None, elements, line.start, line.end, None, None, None
     if "arc" in data:
-        energy = element_kind(kind).energy
-        if "general" not in energy.variants:
-            raise SceneError(f"{path}.arc: {kind} takes straight references only: "
-                             f"{energy.curved}; expected start and end (a straight body)")
         arc = Arc.parse(data["arc"], f"{path}.arc", dim, why)
         return height, width, None, elements, None, None, arc, None, None
     raise SceneError(f"{path}: expected start and end (straight) or arc, got neither")

@@ -1,4 +1,6 @@
-"""``ancf bench kernels``: per-element cost of every method x backend, with operation counts."""
+"""``ancf bench kernels``: per-element cost of every method x backend, with operation counts;
+for cable kinds, of each bending model (every law of the kind: the simple model of ``svk`` and
+the exact curvature by quadrature of ``svk_exact_curvature``)."""
 
 from __future__ import annotations
 
@@ -48,27 +50,37 @@ def configurations(element: Element, batch: int, seed: int = 0) -> np.ndarray:
     return out
 
 
+def benched_laws(kind: str) -> list[str]:
+    """The laws benchmarked for ``kind``: each bending model of a cable (its laws), the
+    default law of a continuum."""
+    meta = element_kind(kind)
+    return list(meta.laws) if meta.energy.structural else [DEFAULT_LAW]
+
+
 def measure(kind: str, batches=(1, 10_000), methods=METHODS, backends=BACKENDS,
             budget_s: float = 0.2) -> list[dict]:
-    """Rows {method, backend, batch, force_us, jacobian_us, energy_us} in microseconds/element."""
+    """Rows {method, law, backend, batch, force_us, jacobian_us, energy_us} in
+    microseconds/element."""
     rows = []
-    runs = [(backend, method) for backend in backends for method in methods]
+    runs = [(backend, method, law) for backend in backends for method in methods
+            for law in benched_laws(kind)]
     with Bar(f"bench kernels {kind}", len(runs), "cases") as bar:
-        for backend, method in runs:
-            rows += _measure_one(kind, method, backend, batches, budget_s)
-            bar.advance(f"{method} {backend}")
+        for backend, method, law in runs:
+            rows += _measure_one(kind, method, backend, batches, budget_s, law)
+            bar.advance(f"{method} {backend} {law}")
     return rows
 
 
-def _measure_one(kind: str, method: str, backend: str, batches, budget_s: float) -> list[dict]:
-    """The rows of ``measure`` of one method and backend."""
+def _measure_one(kind: str, method: str, backend: str, batches, budget_s: float,
+                 law: str = DEFAULT_LAW) -> list[dict]:
+    """The rows of ``measure`` of one method, backend and law."""
     rows = []
     element = Element(kind, 1.0, 0.1, 0.1, 2.1e11, 0.3, 7800.0, method=method,
-                      backend=backend)
+                      backend=backend, law=law)
     for batch in batches:
         e = configurations(element, batch)
         argument = e[0] if batch == 1 else e
-        row = {"method": method, "backend": backend, "batch": batch}
+        row = {"method": method, "law": law, "backend": backend, "batch": batch}
         for quantity, name in QUANTITIES.items():
             method_ = getattr(element, name)
             if quantity == "force_jacobian":
@@ -83,28 +95,36 @@ def _measure_one(kind: str, method: str, backend: str, batches, budget_s: float)
     return rows
 
 
-def family_of(method: str) -> str:
-    """Kernel family of a method for straight elements of the default law."""
-    return family_name(method, DEFAULT_LAW, "straight")
+def family_of(method: str, kind: str | None = None, law: str = DEFAULT_LAW) -> str:
+    """Kernel family of a method for straight elements of ``law`` (the default law, or a law
+    of ``kind``, whose bending model it reads)."""
+    bending = element_kind(kind).laws[law].bending if kind is not None else None
+    return family_name(method, law, "straight", bending=bending)
 
 
 def table(kind: str, rows: list[dict]) -> str:
     """Markdown table of ``rows`` for one kind, with operation counts and ratios."""
     meta = element_kind(kind)
+    laws = len({row.get("law", DEFAULT_LAW) for row in rows}) > 1
     lines = [f"### {kind} (straight, {meta.ndof} coordinates)", "",
-             "| method | backend | batch | force us/el | jacobian us/el | energy us/el | "
-             "force+jacobian us/el | force ops/el | jacobian ops/el | energy ops/el | "
-             "force+jacobian ops/el |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             f"| method |{' law |' if laws else ''} backend | batch | force us/el | "
+             "jacobian us/el | energy us/el | force+jacobian us/el | force ops/el | "
+             "jacobian ops/el | energy ops/el | force+jacobian ops/el |",
+             f"|---|{'---|' if laws else ''}---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    rows = [row for row in rows if row.get("law", DEFAULT_LAW) == DEFAULT_LAW] + [
+        row for row in rows if row.get("law", DEFAULT_LAW) != DEFAULT_LAW]
     for row in rows:
-        family = family_of(row["method"])
+        law = row.get("law", DEFAULT_LAW)
+        family = family_of(row["method"], kind, law)
         ops = [meta.operations(family, q) for q in QUANTITIES]
         lines.append(
-            f"| {row['method']} | {row['backend']} | {row['batch']} | {row['force_us']:.4g} | "
+            f"| {row['method']} |{f' {law} |' if laws else ''} {row['backend']} | "
+            f"{row['batch']} | {row['force_us']:.4g} | "
             f"{row['jacobian_us']:.4g} | {row['energy_us']:.4g} | "
             f"{row['force_jacobian_us']:.4g} | {' | '.join(map(str, ops))} |")
     lines.append("")
-    by_key = {(r["method"], r["backend"], r["batch"]): r for r in rows}
+    by_key = {(r["method"], r["backend"], r["batch"]): r for r in rows
+              if r.get("law", DEFAULT_LAW) == DEFAULT_LAW}
     for backend in sorted({r["backend"] for r in rows}):
         for batch in sorted({r["batch"] for r in rows}):
             gram, quad = by_key.get(("gram", backend, batch)), by_key.get(
@@ -118,6 +138,16 @@ def table(kind: str, rows: list[dict]) -> str:
         if slow and fast:
             lines.append(f"- numpy/C time ratio for gram force, batch {batch}: "
                          f"{slow['force_us'] / fast['force_us']:.1f}x")
+    for law in dict.fromkeys(r["law"] for r in rows if r.get("law", DEFAULT_LAW) != DEFAULT_LAW):
+        other = {(r["method"], r["backend"], r["batch"]): r for r in rows
+                 if r.get("law") == law}
+        for (method, backend, batch), row in other.items():
+            base = by_key.get((method, backend, batch))
+            if base:
+                lines.append(f"- {law}/{DEFAULT_LAW} time ratio, {method}, {backend}, batch "
+                             f"{batch}: "
+                             + ", ".join(f"{q} {row[f'{q}_us'] / base[f'{q}_us']:.1f}x"
+                                         for q in ("force", "force_jacobian")))
     lines.append(f"- operations per element force: paper with invariants "
                  f"{PAPER_OPERATIONS['cij']:.3g}, without {PAPER_OPERATIONS['quadrature']:.3g}; "
                  f"here cij {meta.operations(family_of('cij'), 'force')}, gram "

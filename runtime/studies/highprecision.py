@@ -258,11 +258,21 @@ def _cable_functions(kind: str, source: str | None):
             sp.lambdify((X, L), s.diff(X, 2), modules="mpmath"))
 
 
-def cable_energy_and_force(kind, e, length, height, width, E, orders=None, source=None):
+def _cross(a, b) -> list:
+    """a x b of mpmath vectors: one entry in 2D, three in 3D."""
+    if len(a) == 2:
+        return [a[0] * b[1] - a[1] * b[0]]
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def cable_energy_and_force(kind, e, length, height, width, E, orders=None, source=None,
+                           bending="simple"):
     """(U, force) of a cable (a straight reference parameterised by arc length) by 50-digit
-    Gauss quadrature along its length: the structural energy of Berzeri and Shabana,
-    U = EA/2 int ((r_x.r_x - 1)/2)^2 dx + EI/2 int r_xx.r_xx dx, with A = h w and
-    I = w h^3 / 12 in 2D, h w (h^2 + w^2) / 24 in 3D (the mean of the principal moments)."""
+    Gauss quadrature along its length: the structural energy
+    U = EA/2 int ((r_x.r_x - 1)/2)^2 dx + EI/2 int b dx, with A = h w and I = w h^3 / 12 in
+    2D, h w (h^2 + w^2) / 24 in 3D (the mean of the principal moments), and ``bending``
+    b = r_xx.r_xx (``simple``, Berzeri and Shabana) or |r_x x r_xx|^2 / |r_x|^4
+    (``exact_curvature``, Gerstmayr and Irschik)."""
     info = element_kind(kind)
     dim = info.dim
     order = (orders or info.exact_orders)[0]
@@ -275,13 +285,31 @@ def cable_energy_and_force(kind, e, length, height, width, E, orders=None, sourc
     q = mp.matrix([[mp.mpf(float(e[k * dim + c])) for c in range(dim)] for k in range(n)])
     nodes, weights = _gauss(order)
     energy, grad = mp.mpf(0), mp.matrix(n, dim)
+    unit = [[mp.mpf(int(i == c)) for c in range(dim)] for i in range(dim)]
     for t, w in zip(nodes, weights, strict=True):
         x, weight = (t + 1) * length / 2, w * length / 2
         s1, s2 = mp.matrix(first(x, length)), mp.matrix(second(x, length))
         r_x, r_xx = q.T * s1, q.T * s2
         eps = (sum(c**2 for c in r_x) - 1) / 2
-        energy += weight * (E * area * eps**2 + E * moment * sum(c**2 for c in r_xx)) / 2
-        grad += weight * (E * area * eps * s1 * r_x.T + E * moment * s2 * r_xx.T)
+        energy += weight * E * area * eps**2 / 2
+        grad += weight * E * area * eps * s1 * r_x.T
+        if bending == "simple":
+            energy += weight * E * moment * sum(c**2 for c in r_xx) / 2
+            grad += weight * E * moment * s2 * r_xx.T
+            continue
+        rx, rxx = list(r_x), list(r_xx)
+        norm2 = sum(c**2 for c in rx)
+        cross = _cross(rx, rxx)
+        squared = sum(c**2 for c in cross)
+        energy += weight * E * moment * squared / norm2**2 / 2
+        for k in range(n):
+            for i in range(dim):
+                d_cross = [s1[k] * a + s2[k] * b for a, b in
+                           zip(_cross(unit[i], rxx), _cross(rx, unit[i]), strict=True)]
+                d_squared = 2 * sum(a * b for a, b in zip(cross, d_cross, strict=True))
+                d_norm2 = 2 * s1[k] * rx[i]
+                grad[k, i] += weight * E * moment * (d_squared / norm2**2
+                                                     - 2 * squared * d_norm2 / norm2**3) / 2
     force = np.array([-float(grad[k, c]) for k in range(n) for c in range(dim)])
     return float(energy), force
 

@@ -15,7 +15,11 @@ Families (one generated module each, so a scene compiles only what it uses):
 * ``quadrature_law``   - Gauss quadrature of any material law (symgen/laws.py) at every call,
                          with Kelvin-Voigt damping;
 * ``damping_<variant>``   - Kelvin-Voigt damping through the gram tensor Dm (its own family,
-                         so undamped models never compile it).
+                         so undamped models never compile it);
+* ``<method>_curvature[_<variant>]`` - cable elements with the exact-curvature bending:
+                         the gram, cij, damping and quadrature kernels with the bending by
+                         quadrature along the axis (``curvature``); the general (curved)
+                         variants where the exact curvature takes curved references.
 
 Each method family has ``force``, ``jacobian`` and ``energy`` kernels.  All translate the
 positions to the element's first node first; ``gram`` and ``quadrature`` work in the
@@ -73,6 +77,22 @@ def _curved(spec: ElementSpec) -> bool:
     return not energies.is_cable(spec)
 
 
+def _cable(spec: ElementSpec) -> bool:
+    """The exact-curvature families where the energy has bending models (cables)."""
+    from symgen import energies
+
+    return energies.is_cable(spec)
+
+
+def _curved_cable(spec: ElementSpec) -> bool:
+    """The general exact-curvature families where that law takes curved references."""
+    from symgen import energies
+
+    return energies.is_cable(spec) and any(
+        "general" in energies.law_variants(spec, law) for law in energies.CABLE_LAWS.values()
+        if law.bending == "exact_curvature")
+
+
 def _small_general_map(spec: ElementSpec) -> bool:
     """The general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
     map of the whole general pattern); otherwise curved references take the law path."""
@@ -96,6 +116,17 @@ FAMILIES: tuple[Family, ...] = (
     Family("quadrature_law", "quadrature_law", "quadrature", builder="build_law"),
     Family("damping_straight", "damping", "damping", variant="straight"),
     Family("damping_general", "damping", "damping", variant="general", when=_curved),
+    Family("gram_curvature_straight", "gram", "curvature", builder="build_gram",
+           variant="straight", when=_cable),
+    Family("gram_curvature_general", "gram", "curvature", builder="build_gram",
+           variant="general", when=_curved_cable),
+    Family("cij_curvature", "cij", "curvature", builder="build_cij", when=_cable),
+    Family("damping_curvature_straight", "damping", "curvature", builder="build_damping",
+           variant="straight", when=_cable),
+    Family("damping_curvature_general", "damping", "curvature", builder="build_damping",
+           variant="general", when=_curved_cable),
+    Family("quadrature_curvature", "quadrature", "curvature", builder="build_quadrature",
+           when=_cable),
 )
 _BY_NAME = {family.name: family for family in FAMILIES}
 

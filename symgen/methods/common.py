@@ -244,18 +244,20 @@ def invariant_outputs(spec: ElementSpec, pattern: derive.Patterns, k1_doc: str,
             Array("u0", 1, "output", u0_doc), *gram_linear_arrays(spec, "output")]
 
 
-def gram_linear_arrays(spec: ElementSpec, role: str) -> list[Array]:
-    """The linear term of the gram form (the cable's bending, ``symgen.energies``) as an
-    array of ``role``, or none for energies without one."""
-    if not energies.is_cable(spec):
+def gram_linear_arrays(spec: ElementSpec, role: str, bending: str = "simple") -> list[Array]:
+    """The linear term of the gram form (the cable's pre-integrated simple bending,
+    ``symgen.energies``) as an array of ``role``, or none for energies without one and for
+    the exact-curvature bending (by quadrature instead)."""
+    if not energies.is_cable(spec) or bending != "simple":
         return []
     return [Array("gram_linear", len(derive.pairs(spec.n_shape)), role,
                   "linear term of U in DeltaG (N m, bending), upper-pair order")]
 
 
-def gram_linear(spec: ElementSpec) -> list:
-    """The entries of the gram form's linear term (zeros for energies without one)."""
+def gram_linear(spec: ElementSpec, bending: str = "simple") -> list:
+    """The entries of the gram form's linear term (zeros where ``gram_linear_arrays`` has
+    none)."""
     npairs = len(derive.pairs(spec.n_shape))
-    if not energies.is_cable(spec):
+    if not gram_linear_arrays(spec, "shared", bending):
         return [0] * npairs
     return refs("gram_linear", npairs)

@@ -41,7 +41,8 @@ def damping_arrays(spec: ElementSpec, name: str) -> tuple[Array, list[Array]]:
     return e_dot, [alpha, *outputs]
 
 
-def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
+def gram_damping_kernel(spec: ElementSpec, name: str, variant: str,
+                        bending: str = "simple") -> Kernel:
     """Kelvin-Voigt damping through the gram invariant: the dissipation is alpha gd^T Dm gd
     with gd = dG/dt = Qdot Q^T + Q Qdot^T (upper), so with hd = Dm (alpha gd) the damping
     force is -T'(hd) Q, d/de_dot = -2 alpha Gamma^T Dm Gamma and d/de = -(2 alpha Gamma^T Dm
@@ -55,7 +56,7 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
     e_dot, tail = damping_arrays(spec, name)
     arrays = [*coordinate_arrays(spec, True), e_dot,
               Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
-              *gram_linear_arrays(spec, "shared"), *tail]
+              *gram_linear_arrays(spec, "shared", bending), *tail]
     temps = Temporaries()
     body: list = []
     q, q0, dq = translate(spec, body, temps, with_reference=True)
@@ -80,7 +81,7 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
     dm = {}
     for v, (a, b) in enumerate(pattern.gram):
         dm[(a, b)] = dm[(b, a)] = ref("gram", v)
-    linear = gram_linear(spec)
+    linear = gram_linear(spec, bending)
     hvec = materialize(body, temps, [
         sum(dm[(a, b)] * strain[b] for b in range(len(pairs)) if (a, b) in dm)
         + (linear[a] if combined else 0) for a in range(len(pairs))])

@@ -24,7 +24,8 @@ from symgen.methods.common import (
 )
 
 
-def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
+def gram_kernel(spec: ElementSpec, quantities, variant: str,
+                bending: str = "simple") -> Kernel:
     """Gram form: g = DeltaG = Q0 dQ^T + dQ Q^T (upper), h = Dm g + c, U = g.(h + c),
     F = -T' Q, with c the linear term of energies that have one (the cable's bending,
     ``symgen.energies``; zero otherwise).
@@ -36,7 +37,7 @@ def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     pattern = derive.patterns(spec, variant)
     arrays = [*coordinate_arrays(spec, True),
               Array("gram", len(pattern.gram), "shared", "gram matrix Dm, gram-pattern order"),
-              *gram_linear_arrays(spec, "shared"),
+              *gram_linear_arrays(spec, "shared", bending),
               *[quantity_output(spec, quantity) for quantity in quantities]]
     doc = {"energy": "strain energy U = g^T Dm g", "force": "elastic force F = -T' Q",
            "jacobian": "elastic Jacobian -(2 Gamma^T Dm Gamma + T' kron I)"}
@@ -53,7 +54,7 @@ def gram_kernel(spec: ElementSpec, quantities, variant: str) -> Kernel:
     dm = {}
     for v, (a, b) in enumerate(pattern.gram):
         dm[(a, b)] = dm[(b, a)] = ref("gram", v)
-    linear = gram_linear(spec)
+    linear = gram_linear(spec, bending)
     hvec = materialize(body, temps, [
         sum(dm[(a, b)] * g[b] for b in range(len(pairs)) if (a, b) in dm) + linear[a]
         for a in range(len(pairs))])

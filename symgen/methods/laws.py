@@ -74,10 +74,8 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
     density = ref("density", 0)
     values = derive.law_invariant_values(spec, pattern, parts,
                                          derive.straight_integrals(spec).mass, density)
-    if energies.is_cable(spec):
-        modulus = energies.bending_modulus({domain: refs(domain, size)
-                                            for domain in derive.law_domains(spec)})
-        bending = energies.bending_terms(spec, derive.pairs(spec.n_shape), modulus)
+    if energies.is_cable(spec):  # the simple bending's modulus, 0 for the exact curvature
+        bending = energies.bending_terms(spec, derive.pairs(spec.n_shape), ref("bending", 0))
         values["k1"] = [a + b for a, b in zip(values["k1"], bending["k1"], strict=True)]
         values["gram_linear"] = bending["gram_linear"]
     subs = geometry_subs(spec, "geometry")
@@ -86,6 +84,9 @@ def _law_invariants_straight_kernel(spec: ElementSpec) -> Kernel:
               *[Array(domain, size, "shared", f"law coefficients ({names}) on the {domain} "
                       "(Pa)") for domain in derive.straight_law_domains(spec)],
               Array("density", 1, "shared", "density rho (kg/m^3)"),
+              *([Array("bending", 1, "shared", "modulus of the pre-integrated (simple) "
+                       "bending part (Pa): the E11 coefficient on the axis, 0 for a law "
+                       "whose bending is by quadrature")] if energies.is_cable(spec) else []),
               *invariant_outputs(spec, pattern, "shape-level K1 (N/m), upper triangle",
                                  "energy of e = 0 (J)")]
     outputs = [(f"{name}[{i}]", sp.sympify(v).subs(subs), False)

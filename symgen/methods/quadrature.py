@@ -345,44 +345,98 @@ def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn,
     point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
 
 
-def cable_table_width(spec: ElementSpec) -> int:
-    """Doubles per point of a cable's quadrature table: ds/dx, d2s/dx2, two weights."""
-    return 2 * spec.n_shape + 2
+def cable_table_width(spec: ElementSpec, bending: str = "simple") -> int:
+    """Doubles per point of a cable's quadrature table: ds/dx, d2s/dx2, two weights and,
+    for a bending model with one (``energies.reference_curvature``), the reference
+    curvature."""
+    return 2 * spec.n_shape + 2 + int(energies.reference_curvature(spec, bending))
 
 
-def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
-    """Gauss quadrature of the cable energy (``symgen.energies``) along the axis at every
-    call, with Kelvin-Voigt damping.  Each table row is an axis point: ds/dx, d2s/dx2, and
-    the weights of the axial part (EA dx) and of the bending part (EI dx).  Per point the
-    energy and the dissipation potential over alpha come from ``energies.point_energy`` and
-    ``energies.point_dissipation``; force, Jacobians and damping are their exact
-    derivatives (F = -dU/de - alpha dPhi/de_dot)."""
-    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+def cable_quadrature_kernel(spec: ElementSpec, name: str, bending: str = "simple") -> Kernel:
+    """Gauss quadrature of the cable energy (``symgen.energies``) with the ``bending`` model
+    along the axis at every call, with Kelvin-Voigt damping.  Each table row is an axis
+    point: ds/dx, d2s/dx2, and the weights of the axial part (EA dx) and of the bending part
+    (EI dx) (``cable_point``)."""
     damped = name in DAMPING_KERNELS
-    width_ = cable_table_width(spec)
     arrays = [*coordinate_arrays(spec, True)]
-    table = Array("table", width_, "table", "per axis point: ds/dx, d2s/dx2, weights of the "
-                  "axial part (EA dx, N m) and of the bending part (EI dx, N m^3)")
     if damped:
         e_dot, tail = damping_arrays(spec, name)
-        arrays += [e_dot, table, *tail]
+        arrays += [e_dot, cable_table_array(spec, bending), *tail]
     else:
-        arrays += [table, *[quantity_output(spec, quantity) for quantity in name.split("_")]]
+        arrays += [cable_table_array(spec, bending),
+                   *[quantity_output(spec, quantity) for quantity in name.split("_")]]
     temps = Temporaries()
     body: list = []
-    q, q0, dq = translate(spec, body, temps, with_reference=True)
-    tab = refs("tab", width_)
-    s1, s2, w_axial, w_bending = tab[:n], tab[n:2 * n], tab[2 * n], tab[2 * n + 1]
+    _, q0, dq = translate(spec, body, temps, with_reference=True)
+    point = cable_point(spec, name, q0, dq, temps, bending, axial=True)
+    body.append(PointLoop("table", tuple(point), spec.quadrature[0]))
+    doc = KERNEL_DOCS[name]
+    model = "" if bending == "simple" else f" ({bending.replace('_', ' ')} bending)"
+    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of the cable energy{model} by Gauss "
+                  "quadrature along the axis at every call.", arrays, body)
+
+
+def cable_table_array(spec: ElementSpec, bending: str = "simple") -> Array:
+    """The per-point table of the cable's quadrature loops (``cable_table_width``)."""
+    kappa0 = (", reference curvature r0_x x r0_xx / |r0_x|^2 (1/m)"
+              if energies.reference_curvature(spec, bending) else "")
+    return Array("table", cable_table_width(spec, bending), "table", "per axis point: ds/dx, "
+                 "d2s/dx2, weights of the axial part (EA dx / |r0_x|^3, N m) and of the bending "
+                 f"part (EI dx / |r0_x|, N m^3){kappa0}")
+
+
+def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Temporaries,
+                bending: str, axial: bool) -> list:
+    """The statements at one axis point (table row ``tab``) of the cable kernel ``name``
+    (``KERNELS`` or ``DAMPING_KERNELS`` names), accumulated into its outputs: the energy
+    and the dissipation potential over alpha of ``energies.point_energy`` and
+    ``energies.point_dissipation`` with the ``bending`` model (the bending part alone unless
+    ``axial``), and their exact derivatives (F = -dU/de - alpha dPhi/de_dot) at the
+    node-relative reference ``q0`` and displacements ``dq``: by SymPy for the polynomial
+    parts, in closed form for the exact curvature (``_exact_bending``)."""
+    n = spec.n_shape
+    tab = refs("tab", cable_table_width(spec, bending))
+    s1, s2, w_bending = tab[:n], tab[n:2 * n], tab[2 * n + 1]
+    w_axial = tab[2 * n] if axial else 0
+    if name in DAMPING_KERNELS:
+        wanted = [a.name for a in damping_arrays(spec, name)[1] if a.role == "output"]
+    else:
+        wanted = name.split("_")
+    point: list = []
+    if bending == "simple":
+        outputs = _derived(spec, name, wanted, s1, s2, q0, dq, w_axial, w_bending)
+    else:
+        kappa0 = tab[2 * n + 2] if energies.reference_curvature(spec, bending) else 0
+        current = [a + b for a, b in zip(q0, dq, strict=True)]
+        outputs = _exact_bending(spec, name, wanted, point, temps, s1, s2, current, w_bending,
+                                 kappa0)
+        if axial:
+            extra = _derived(spec, name, wanted, s1, s2, q0, dq, w_axial, 0)
+            outputs = {q: [a + b for a, b in zip(v, extra[q], strict=True)]
+                       for q, v in outputs.items()}
+    if name == "energy":
+        store(point, "energy", outputs["energy"], accumulate=True)
+        return point
+    for quantity in wanted:
+        store(point, quantity, materialize(point, temps, outputs[quantity]), accumulate=True)
+    return point
+
+
+def _derived(spec: ElementSpec, name: str, wanted: list, s1, s2, q0: list, dq: list, w_axial,
+             w_bending) -> dict[str, list]:
+    """The ``wanted`` outputs (flat, row-major) of the cable kernel ``name`` at one point for
+    the polynomial energy of ``energies.point_energy`` (simple bending, or the axial part
+    alone with ``w_bending = 0``): its SymPy derivatives at the reference ``q0`` plus ``dq``."""
+    d, ndof = spec.dim, spec.ndof
     shift = sp.symbols(f"dq0:{ndof}")
     rate = sp.symbols(f"qd0:{ndof}")
     energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending)
     subs = dict(zip(shift, dq, strict=True))
-    point: list = []
     if name == "energy":
-        store(point, "energy", [energy.xreplace(subs)], accumulate=True)
+        return {"energy": [energy.xreplace(subs)]}
     force = [-sp.diff(energy, v) for v in shift]
     stiffness = [[sp.diff(f, v) for v in shift] for f in force]
-    if damped:
+    if name in DAMPING_KERNELS:
         alpha = ref("alpha", 0)
         # the dissipation in the current position q = q0 + dq, relative to the first node
         current = [a + b for a, b in zip(q0, shift, strict=True)]
@@ -397,19 +451,85 @@ def cable_quadrature_kernel(spec: ElementSpec, name: str) -> Kernel:
             jacobian = [[a + b for a, b in zip(ra, rb, strict=True)]
                         for ra, rb in zip(stiffness, jacobian, strict=True)]
         outputs = {"force": damping, "jacobian": jacobian, "jacobian_dot": jacobian_dot}
-        wanted = [a.name for a in tail if a.role == "output"]
     else:
         outputs = {"force": force, "jacobian": stiffness}
-        wanted = [quantity for quantity in name.split("_") if quantity != "energy"]
-    for quantity in wanted:
-        values = outputs[quantity]
-        flat = values if quantity == "force" else [v for row in values for v in row]
-        store(point, quantity, materialize(point, temps, [v.xreplace(subs) for v in flat]),
-              accumulate=True)
-    body.append(PointLoop("table", tuple(point), spec.quadrature[0]))
-    doc = KERNEL_DOCS[name]
-    return Kernel(name, f"{doc[0].upper()}{doc[1:]} of the cable energy by Gauss quadrature "
-                  "along the axis at every call.", arrays, body)
+    flat = {q: v if q == "force" else [x for row in v for x in row] for q, v in outputs.items()}
+    return {q: [v.xreplace(subs) for v in flat[q]] for q in wanted}
+
+
+def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
+                   temps: Temporaries, s1, s2, q: list, weight, kappa0) -> dict[str, list]:
+    """The ``wanted`` outputs (flat, row-major) of the exact-curvature bending at one point,
+    U = w/2 |kappa - kappa0|^2 with kappa = c / g, c = r_x x r_xx, g = |r_x|^2, in closed
+    form at the current node-relative coordinates ``q`` (intermediates materialised into
+    ``point``).  Per component of kappa, with dg and dc the (constant-shape) gradients of g
+    and c and m = kappa - kappa0:
+
+      dk = (dc - kappa dg) / g,   H = d2 kappa = (d2c - dk dg^T - dg dk^T - kappa d2g) / g,
+      F = -w sum m dk,   K = -w sum (dk dk^T + m H),
+
+    d2c_(ka)(lb) = (s'_k s''_l - s'_l s''_k) (e_a x e_b), d2g_(ka)(lb) = 2 s'_k s'_l d_ab.
+    Damping (kappa_dot = dk . q_dot): F_d = -alpha w sum kappa_dot dk, d/de_dot = -alpha w
+    sum dk dk^T, d/de = -alpha w sum (dk (H q_dot)^T + kappa_dot H)."""
+    d, n, ndof = spec.dim, spec.n_shape, spec.ndof
+    unit = [[int(a == b) for b in range(d)] for a in range(d)]
+    dofs = [(k, a) for k in range(n) for a in range(d)]
+
+    def along(weights, vec):
+        return [sum(w * vec[k * d + c] for k, w in enumerate(weights)) for c in range(d)]
+
+    rx, rxx = (materialize(point, temps, along(w, q)) for w in (s1, s2))
+    g, inv_g = materialize(point, temps, [sum(x * x for x in rx), 1 / sum(x * x for x in rx)])
+    cross = materialize(point, temps, energies.cross(rx, rxx))
+    kappa = materialize(point, temps, [c * inv_g for c in cross])
+    measure = materialize(point, temps, [kappa[0] - kappa0, *kappa[1:]])
+    if name == "energy":
+        return {"energy": [weight * sum(m * m for m in measure) / 2]}
+    dg = materialize(point, temps, [2 * s1[k] * rx[a] for k, a in dofs])
+    dc = [[s1[k] * x + s2[k] * y for k, a in dofs for x, y in
+           [(energies.cross(unit[a], rxx)[v], energies.cross(rx, unit[a])[v])]]
+          for v in range(len(cross))]
+    dk = [materialize(point, temps, [(c - kv * g_) * inv_g for c, g_ in zip(row, dg, strict=True)])
+          for row, kv in zip(dc, kappa, strict=True)]
+
+    def hessian(v: int, i: int, j: int):
+        (k, a), (m, b) = dofs[i], dofs[j]
+        d2c = (s1[k] * s2[m] - s1[m] * s2[k]) * energies.cross(unit[a], unit[b])[v]
+        d2g = 2 * s1[k] * s1[m] if a == b else 0
+        return (d2c - dk[v][i] * dg[j] - dg[i] * dk[v][j] - kappa[v] * d2g) * inv_g
+
+    components = range(len(cross))
+    force = [-weight * sum(measure[v] * dk[v][i] for v in components) for i in range(ndof)]
+    stiffness = [[-weight * sum(dk[v][i] * dk[v][j] + measure[v] * hessian(v, i, j)
+                                for v in components) for j in range(ndof)]
+                 for i in range(ndof)]
+    if name not in DAMPING_KERNELS:
+        flat = {"force": force, "jacobian": [x for row in stiffness for x in row]}
+        return {q: flat[q] for q in wanted}
+    alpha = ref("alpha", 0)
+    qd = relative_velocities(spec)
+    rdx, rdxx = along(s1, qd), along(s2, qd)
+    rate = materialize(point, temps, [sum(x * y for x, y in zip(row, qd, strict=True))
+                                      for row in dk])
+    scale = -alpha * weight
+    # H q_dot per component: (d2c q_dot - dk (dg . q_dot) - dg kappa_dot - kappa d2g q_dot) / g
+    dg_rate = 2 * sum(x * y for x, y in zip(rx, rdx, strict=True))
+    h_rate = [materialize(point, temps, [
+        (s1[k] * energies.cross(unit[a], rdxx)[v] - s2[k] * energies.cross(unit[a], rdx)[v]
+         - dk[v][i] * dg_rate - dg[i] * rate[v] - kappa[v] * 2 * s1[k] * rdx[a]) * inv_g
+        for i, (k, a) in enumerate(dofs)]) for v in components]
+    damping = [scale * sum(rate[v] * dk[v][i] for v in components) for i in range(ndof)]
+    jacobian = [[scale * sum(dk[v][i] * h_rate[v][j] + rate[v] * hessian(v, i, j)
+                             for v in components) for j in range(ndof)] for i in range(ndof)]
+    jacobian_dot = [[scale * sum(dk[v][i] * dk[v][j] for v in components)
+                     for j in range(ndof)] for i in range(ndof)]
+    if name == "damped_force_jacobians":
+        damping = [a + b for a, b in zip(force, damping, strict=True)]
+        jacobian = [[a + b for a, b in zip(ra, rb, strict=True)]
+                    for ra, rb in zip(stiffness, jacobian, strict=True)]
+    flat = {"force": damping, "jacobian": [x for row in jacobian for x in row],
+            "jacobian_dot": [x for row in jacobian_dot for x in row]}
+    return {q: flat[q] for q in wanted}
 
 
 def build(spec: ElementSpec) -> list[Kernel]:

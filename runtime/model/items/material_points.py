@@ -247,18 +247,30 @@ def _axial_modulus(tables: _Tables) -> float:
     return float(tables.coefficients["axis"][0])
 
 
+def _cable_metric(tables: _Tables, elements: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """|r0_x| (m, p) of the reference of a curved cable's ``elements`` at ``points`` (ones
+    for straight references, parameterised by arc length)."""
+    if tables.element.straight:
+        return np.ones((elements.size, points.shape[0]))
+    reference = _relative(tables.kind, tables.body.element_e0[elements])
+    return np.linalg.norm(np.einsum("mna,pn->mpa", reference,
+                                    tables.gradients(points)[:, :, 0]), axis=-1)
+
+
 def _cable_fields(tables: _Tables, elements: np.ndarray, points: np.ndarray,
                   q: np.ndarray) -> Fields:
-    """A cable's axial strain and stresses on its axis (the other components zero)."""
+    """A cable's axial strain and stresses on its axis (the other components zero): E11 =
+    (|r_x|^2 - a0^2) / (2 a0^2) per reference arc length (a0 = |r0_x|, 1 when straight)."""
     dim = tables.kind.dim
     tangent = np.einsum("kmna,pn->kmpa", tables.nodal(q, elements),
                         tables.gradients(points)[:, :, 0])
     stretch = np.linalg.norm(tangent, axis=-1)
-    axial = (stretch ** 2 - 1) / 2
+    metric = _cable_metric(tables, elements, points)
+    axial = (stretch ** 2 - metric ** 2) / (2 * metric ** 2)
     strain, pk2, cauchy = (np.zeros((*axial.shape, dim, dim)) for _ in range(3))
     strain[..., 0, 0] = axial
     pk2[..., 0, 0] = _axial_modulus(tables) * axial
-    cauchy[..., 0, 0] = stretch * pk2[..., 0, 0]
+    cauchy[..., 0, 0] = stretch / metric * pk2[..., 0, 0]
     frame = np.zeros_like(strain)
     frame[..., 0] = tangent / stretch[..., None]
     if dim == 2:
@@ -334,7 +346,9 @@ def section_forces(body: BodyView, element: int, x: float, q: np.ndarray) -> Sec
 
 
 def _cable_section(tables: _Tables, elements: np.ndarray, x: float, q: np.ndarray) -> Section:
-    """N = |r_x| E A E11 along the axis, m = E I r_x x r_xx / |r_x|^3."""
+    """N = (|r_x| / a0) E A E11 along the axis (``_cable_fields``); the bending moment
+    m = E I r_x x r_xx / |r_x|^3 of the simple bending, and the law's own E I (kappa - kappa0)
+    / a0 of the exact curvature, kappa = r_x x r_xx / |r_x|^2 and kappa0 the reference's."""
     point = np.zeros((1, tables.kind.dim))
     point[0, 0] = x
     nodal = tables.nodal(q, elements)[:, 0]
@@ -343,8 +357,18 @@ def _cable_section(tables: _Tables, elements: np.ndarray, x: float, q: np.ndarra
     area, inertia = tables.section()
     modulus = _axial_modulus(tables)
     stretch = np.linalg.norm(tangent, axis=1)
+    metric = _cable_metric(tables, elements, point)[0, 0]
     unit = tangent / stretch[:, None]
-    force = (stretch * modulus * area * (stretch ** 2 - 1) / 2)[:, None] * unit
-    moment = modulus * inertia * _cross(tangent, second) / stretch[:, None] ** 3
+    axial = (stretch ** 2 - metric ** 2) / (2 * metric ** 2)
+    force = (stretch / metric * modulus * area * axial)[:, None] * unit
+    if tables.element.bending == "exact_curvature":
+        reference = _relative(tables.kind, tables.body.element_e0[elements])[0]
+        r0x = reference.T @ tables.gradients(point)[0, :, 0]
+        r0xx = reference.T @ tables.curvatures(point)[0]
+        kappa0 = _cross(r0x[None], r0xx[None]) / metric ** 2
+        kappa = _cross(tangent, second) / stretch[:, None] ** 2
+        moment = modulus * inertia * (kappa - kappa0) / metric
+    else:
+        moment = modulus * inertia * _cross(tangent, second) / stretch[:, None] ** 3
     frame = _cable_fields(tables, elements, point, q).frame[:, 0, 0]
     return Section(force, moment, frame)
