@@ -35,6 +35,7 @@ from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
+from runtime.model.items.rigid import RIGID_BODIES, RigidItem
 from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
 from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
@@ -391,6 +392,21 @@ def _output(data: Any) -> Output:
         (f.name for f in dataclasses.fields(Output)), boolean)))
 
 
+def _rigid_bodies(tables: list[tuple[int, dict]], bodies: list[Body],
+                  context: Context) -> tuple[RigidItem, ...]:
+    """The rigid items (rigid bodies, point masses) of the ``[[body]]`` tables with a
+    ``type`` (``tables``: (index in [[body]], table)), their names unique among all bodies."""
+    items: list[RigidItem] = []
+    names = {b.name for b in bodies}
+    for i, raw in tables:
+        item = parse_record(RIGID_BODIES, "body", raw, f"body[{i}]", context)
+        if item.name in names:
+            raise SceneError(f"body[{i}].name: duplicate body name {show(item.name)}")
+        names.add(item.name)
+        items.append(item)
+    return tuple(items)
+
+
 def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     """The validated fields of the ``Scene`` of the parsed TOML ``data`` (``source`` names
     it: a file path).
@@ -418,7 +434,11 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     if not raw_bodies:
         raise SceneError("body: a scene needs at least one [[body]], got none")
     bodies: list[Body] = []
+    rigid_tables = [(i, raw) for i, raw in enumerate(raw_bodies)
+                    if isinstance(raw, dict) and "type" in raw]
     for i, raw in enumerate(raw_bodies):
+        if isinstance(raw, dict) and "type" in raw:
+            continue
         body = _body(i, raw, materials)
         if any(b.name == body.name for b in bodies):
             raise SceneError(f"body[{i}].name: duplicate body name {show(body.name)}")
@@ -430,8 +450,10 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     for i, body in enumerate(bodies):   # element sizes once the counts are known to fit
         body.placement.check_counts(body.counts, f"body[{i}]")
         _check_initial_motion(body, f"body[{i}]", materials[body.material].rho)
-    context = Context(bodies[0].dim, Nodes(tuple(bodies)),
+    context = Context(bodies[0].dim if bodies else 3, Nodes(tuple(bodies)),
                       None if source == "<scene>" else str(Path(source).resolve().parent))
+    rigid_bodies = _rigid_bodies(rigid_tables, bodies, context)
+    context = dataclasses.replace(context, rigid={r.name: r for r in rigid_bodies})
 
     constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)
                         for i, c in enumerate(_array_of_tables(data, "constraint")))
@@ -463,7 +485,9 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
         check_frequency(dynamic, sensors)
     solver = _solver(data.get("solver", {}))
     output = _output(data.get("output", {}))
-    check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic)
+    check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic,
+                sum(r.coordinates for r in rigid_bodies))
     return dict(title=title, materials=materials, bodies=tuple(bodies),
+                rigid_bodies=rigid_bodies,
                 constraints=constraints, loads=loads, sensors=tuple(sensors), static=static,
                 modal=modal, dynamic=dynamic, solver=solver, output=output, source=source)

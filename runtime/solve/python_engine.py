@@ -195,8 +195,14 @@ def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
             raise Divergence(t, str(error)) from None
     solver = solver or linear_solver(dae)
     mass = linear.pattern_values(dae.mass_ff, dae.model.pattern)
-    a, lam = SchurSolver(solver.factor(mass), dae.joints_free).solve(
-        force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
+    if dae.nonlinear:       # Phi_q a = -(Phi_q,p a_p + v^T H v)
+        v_full = dae.full_velocities(v, vp)
+        a, lam = SchurSolver(solver.factor(mass), dae.constraint_matrix(q_full)).solve(
+            force - dae.mass_fp @ ap, -dae.acceleration_violation(
+                q_full, v_full, dae.full_accelerations(np.zeros_like(v), ap)))
+    else:
+        a, lam = SchurSolver(solver.factor(mass), dae.joints_free).solve(
+            force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
 
@@ -230,11 +236,19 @@ class OutputDynamics:
                 force[row] += dae.state_loads.evaluate(q_full[row], factors[row], False,
                                                        v_full[row], float(times[row]))[0]
         rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
+        accelerations = np.zeros_like(force)
+        accelerations[:, dae.prescribed] = ap
+        if dae.nonlinear:     # the constraint rows at each state
+            lam = np.zeros((len(times), dae.constraint_rows))
+            for row in range(len(times)):
+                accelerations[row, dae.free], lam[row] = SchurSolver(
+                    dae.mass_band, dae.constraint_matrix(q_full[row])).solve(
+                    rhs[row], -dae.acceleration_violation(q_full[row], v_full[row],
+                                                          accelerations[row]))
+            return accelerations, lam, force
         a, lam = self.solver.solve(rhs.T, -(dae.joints_prescribed @ ap.T) if dae.joints
                                    else None)
-        accelerations = np.zeros_like(force)
         accelerations[:, dae.free] = a.T
-        accelerations[:, dae.prescribed] = ap
         return accelerations, np.asarray(lam).T.reshape(len(times), dae.joints), force
 
 
@@ -292,43 +306,54 @@ class Integrator:
         return total, (data, data_dot)
 
     def residual(self, a: np.ndarray, force: np.ndarray, ap: np.ndarray,
-                 multipliers: np.ndarray) -> np.ndarray:
-        """M_ff a + M_fp a_p + A^T lambda - F: the equations of motion of the free part."""
+                 multipliers: np.ndarray, q_full: np.ndarray) -> np.ndarray:
+        """M_ff a + M_fp a_p + A^T lambda (+ Phi_q(q)^T lambda) - F: the equations of motion
+        of the free part at the coordinates q_full."""
         dae = self.dae
         residual = dae.mass_ff @ a - force
         if ap.size:
             residual += dae.mass_fp @ ap
-        if dae.joints:
+        if dae.nonlinear:
+            residual += dae.constraint_forces(q_full, multipliers)
+        elif dae.joints:
             residual += dae.joints_free.T @ multipliers
         return residual
 
     def linear_step(self, q: np.ndarray, v: np.ndarray, t: float, prescribed,
                     loads: np.ndarray, coefficients: tuple[float, float, float], residual_of,
-                    constraint):
+                    constraint, multipliers: np.ndarray):
         """One Newton iteration at (q, v): forces (and the Jacobians, when they are rebuilt),
-        the residual ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy]
-        = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) = ``coefficients``.
+        the residual ``residual_of(force, q_full)``, and the solution of [[S, A^T], [A, 0]]
+        [dx; dy] = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) =
+        ``coefficients`` (with quadratic constraint rows, A holds their Phi_q at q and S
+        their geometric stiffness -c_q (Phi_q^T lambda)_q at the ``multipliers``).
         Returns (dx, dy)."""
         rebuild = self._full_step or self._refresh or self._solver is None
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
+        q_full = self.dae.full_coordinates(q, prescribed[0])
         self.counters.newton_iterations += 1
         if rebuild:
             mass_coef, jacobian_coef, damping_coef = coefficients
             values = jacobian_coef * data + mass_coef * self._mass
             if data_dot is not None:
                 values += damping_coef * data_dot
+            rows = self.dae.joints_free
+            if self.dae.nonlinear:
+                values = values - jacobian_coef * self.dae.geometric_stiffness(multipliers)
+                rows = self.dae.constraint_matrix(q_full)
             start = time.perf_counter()
             try:
-                self._solver = SchurSolver(self.linear.factor(values), self.dae.joints_free)
+                self._solver = SchurSolver(self.linear.factor(values), rows)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
                 self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
+        violation = constraint(q_full)
         start = time.perf_counter()
-        solution = self._solver.solve(-residual_of(force), None if constraint is None
-                                      else -constraint)
+        solution = self._solver.solve(-residual_of(force, q_full), None if violation is None
+                                      else -violation)
         self.timing["solve_s"] += time.perf_counter() - start
         return solution
 
@@ -441,14 +466,20 @@ class Trapezoidal(Integrator):
         base_v = state.v + h / 2 * state.a
         k = h * h / 4
 
+        def constraint(q_full: np.ndarray) -> np.ndarray | None:
+            if dae.nonlinear:     # Phi_q a + v^T H v at the iterate
+                return dae.acceleration_violation(
+                    q_full, dae.full_velocities(base_v + h / 2 * a, vp),
+                    dae.full_accelerations(a, ap))
+            return dae.joints_free @ a + dae.joints_prescribed @ ap if dae.joints else None
+
         def iterate() -> np.ndarray:
             nonlocal a, lam
-            constraint = (dae.joints_free @ a + dae.joints_prescribed @ ap
-                          if dae.joints else None)
             da, dlam = self.linear_step(base_q + k * a, base_v + h / 2 * a, t, prescribed,
                                         loads, (1.0, -k, -h / 2),
-                                        lambda force: self.residual(a, force, ap, lam),
-                                        constraint)
+                                        lambda force, q_full: self.residual(a, force, ap, lam,
+                                                                            q_full),
+                                        constraint, lam)
             a = a + da
             lam = lam + dlam
             return k * da
@@ -456,7 +487,9 @@ class Trapezoidal(Integrator):
         self.newton_loop(t, iterate)
         q = base_q + k * a
         v = state.v + h / 2 * (state.a + a)
-        if dae.joints:
+        if dae.nonlinear:
+            q, v = self.project_onto_manifold(t, q, v, qp, vp)
+        elif dae.joints:
             q, v = self.project(q, v, qp, vp)
         return State(t, q, v, a, lam, self.dissipation(state, q, v, prescribed, h))
 
@@ -469,6 +502,35 @@ class Trapezoidal(Integrator):
             q = q - dae.projector @ violation
         v = v - dae.projector @ (dae.joints_free @ v + dae.joints_prescribed @ vp)
         return q, v
+
+    def project_onto_manifold(self, t: float, q: np.ndarray, v: np.ndarray, qp: np.ndarray,
+                              vp: np.ndarray):
+        """Mass-orthogonal projection onto the joints and the quadratic rows, Phi(q) = 0
+        and Phi_q v = 0: q -= M^-1 C^T (C M^-1 C^T)^-1 Phi(q) with C = Phi_q at the current q,
+        iterated until the correction is within the Newton tolerance (Divergence if not in
+        ``max_iterations``), then the velocities with C at the projected q."""
+        dae = self.dae
+        mass = self._mass_factor()
+        for _ in range(self.settings.max_iterations):
+            q_full = dae.full_coordinates(q, qp)
+            projector = SchurSolver(mass, dae.constraint_matrix(q_full))
+            correction = projector.solve(np.zeros_like(q), dae.violation(q_full))[0]
+            q = q - correction
+            if self.converged(correction):
+                break
+        else:
+            raise Divergence(t, "the projection onto the constraints did not converge")
+        q_full = dae.full_coordinates(q, qp)
+        projector = SchurSolver(mass, dae.constraint_matrix(q_full))
+        v = v - projector.solve(np.zeros_like(v), dae.velocity_violation(
+            q_full, dae.full_velocities(v, vp)))[0]
+        return q, v
+
+    def _mass_factor(self):
+        """The factorisation of M_ff (kept)."""
+        if getattr(self, "_mass_factorised", None) is None:
+            self._mass_factorised = self.linear.factor(self._mass)
+        return self._mass_factorised
 
 
 class GeneralizedAlpha(Integrator):
@@ -499,13 +561,18 @@ class GeneralizedAlpha(Integrator):
         gamma_prime = gamma / (h * beta)
         fixed_part = dae.joints_prescribed @ qp + dae.joint_fixed_part
 
+        def constraint(q_full: np.ndarray) -> np.ndarray | None:
+            if dae.nonlinear:
+                return dae.violation(q_full)
+            return dae.joints_free @ q + fixed_part if dae.joints else None
+
         def iterate() -> np.ndarray:
             nonlocal q, v, a, lam
-            constraint = dae.joints_free @ q + fixed_part if dae.joints else None
             dq, dlam = self.linear_step(q, v, t, prescribed, loads,
                                         (beta_prime, -1.0, -gamma_prime),
-                                        lambda force: self.residual(a, force, ap, lam),
-                                        constraint)
+                                        lambda force, q_full: self.residual(a, force, ap, lam,
+                                                                            q_full),
+                                        constraint, lam)
             q = q + dq
             v = v + gamma_prime * dq
             a = a + beta_prime * dq

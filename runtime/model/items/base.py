@@ -44,9 +44,16 @@ class ModelView(Protocol):
     free: np.ndarray
     mass: scipy.sparse.csr_matrix
     joints: scipy.sparse.csr_matrix
+    #: the quadratic constraint rows Phi(q) = 0 (``runtime.model.holonomic``)
+    holonomic: Any
     bodies: dict[str, BodyView]
     scene: Any
     dissipated_energy: float
+    #: the rigid bodies and point masses (``RigidCoordinates``: ``item``, ``dofs``) by name
+    rigid: dict[str, Any]
+
+    def rigid_point(self, name: str, point: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """(coordinates (k,), map (3, k)) of the position of a rigid item's body point."""
 
     def node_index(self, ref: NodeRef) -> int:
         """Global node index of a scene node reference."""

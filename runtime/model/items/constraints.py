@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.model.errors import SceneError, show
+from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
@@ -45,12 +46,14 @@ class Built:
 
     fixed: (size,) bool, coordinates held at their initial values; hubs: (node, angle law,
     axis (3,)) of the nodes that follow a prescribed rigid rotation; rows: joint rows
-    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}.
+    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}; blocks: quadratic
+    constraint rows ``Phi(q) = 0`` (``runtime.model.holonomic``: rigid bodies, 3D joints).
     """
 
     fixed: np.ndarray
     hubs: list[tuple[int, Law, np.ndarray]] = field(default_factory=list)
     rows: list[dict[int, float]] = field(default_factory=list)
+    blocks: list[QuadraticBlock] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -240,4 +243,8 @@ class Weld(Joint):
                 built.rows.append(row)
 
 
-CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld)
+# the joints of rigid bodies build on the classes above
+from runtime.model.items.body_joints import BodyRevolute, BodySpherical  # noqa: E402
+
+CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
+                                                    BodySpherical, BodyRevolute)

@@ -22,6 +22,7 @@ from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
 from runtime.model.items.python_loads import PythonForce, PythonFunction
+from runtime.model.items.rigid import rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -40,7 +41,7 @@ from runtime.model.schema import (
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "DistributedForce", "Gravity", "LineForce", "LineMoment", "Load",
+__all__ = ["LOADS", "BodyForce", "DistributedForce", "Gravity", "LineForce", "LineMoment", "Load",
            "NodeLoad", "PointForce", "PointMoment", "Pressure", "PythonLoad"]
 
 StateForce = Callable[[np.ndarray, bool], Patches]
@@ -246,6 +247,30 @@ class Gravity(Load):
 
     def nominal(self, model: ModelView) -> np.ndarray:
         return model.mass @ model.rigid_field(translation=self.acceleration)
+
+
+def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, 3, "a point in body coordinates, m")
+
+
+@dataclass(frozen=True)
+class BodyForce(Load):
+    """A force ``force`` (3,) in N, fixed in direction, at the point ``point`` (body
+    coordinates, m) of the rigid body or point mass ``body``: the generalised force N^T f
+    of the point's map (``runtime.model.items.rigid.natural_map``)."""
+
+    type: ClassVar[str] = "body_force"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    force: tuple[float, ...] = key(_vector_key)
+    point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        dofs, point = model.rigid_point(self.body, self.point)
+        out = np.zeros(model.size)
+        out[dofs] += point.T @ np.asarray(self.force)
+        return out
 
 
 @dataclass(frozen=True)
@@ -468,4 +493,4 @@ class PythonLoad(Load):
 
 
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
-                                        Pressure, DistributedForce, PythonLoad)
+                                        Pressure, DistributedForce, PythonLoad, BodyForce)

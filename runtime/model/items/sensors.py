@@ -22,6 +22,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Joint
+from runtime.model.items.rigid import rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -195,6 +196,43 @@ class Velocity(Sensor):
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         velocity = samples.v[:, model.node_dofs(model.node_index(self.node), "r")]
         return _component(velocity, self.component)
+
+
+def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, 3, "a point in body coordinates, m")
+
+
+@dataclass(frozen=True)
+class BodyPosition(Sensor):
+    """Position (m) of the point ``point`` (body coordinates) of the rigid body or point mass
+    ``body``: one ``component`` (x | y | z | norm) in global axes."""
+
+    type: ClassVar[str] = "body_position"
+    unit: ClassVar[str] = "m"
+    energy: ClassVar[bool] = False
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    component: str = key(_component_key)
+    point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def _of(self, model: ModelView, states: np.ndarray) -> np.ndarray:
+        dofs, point = model.rigid_point(self.body, self.point)
+        return _component(states[:, dofs] @ point.T, self.component)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return self._of(model, samples.q)
+
+
+@dataclass(frozen=True)
+class BodyVelocity(BodyPosition):
+    """Velocity (m/s) of a point of a rigid body (as ``body_position``)."""
+
+    type: ClassVar[str] = "body_velocity"
+    unit: ClassVar[str] = "m/s"
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return self._of(model, samples.v)
 
 
 def _body_key(value: Any, path: str, context: Context) -> str:
@@ -577,22 +615,27 @@ class DissipatedEnergy(Sensor):
 
 @dataclass(frozen=True)
 class ConstraintViolation(Sensor):
-    """max |A q| of the joint rows (m; 0 without joints)."""
+    """max |A q| of the joint rows and |Phi(q)| of the quadratic constraint rows (rigid
+    bodies, 3D joints) (m, or 1 for the unit-length rows; 0 without joints)."""
 
     type: ClassVar[str] = "constraint_violation"
     unit: ClassVar[str] = "m"
     energy: ClassVar[bool] = False
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
-        if model.joints.shape[0] == 0:
-            return np.zeros(len(samples.q))
-        return np.abs(model.joints @ samples.q.T).max(axis=0)
+        violation = np.zeros(len(samples.q))
+        if model.joints.shape[0]:
+            violation = np.abs(model.joints @ samples.q.T).max(axis=0)
+        if model.holonomic:
+            violation = np.maximum(violation, [np.abs(model.holonomic.value(q)).max()
+                                               for q in samples.q])
+        return violation
 
 
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce)
+    SectionForce, BodyPosition, BodyVelocity)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
