@@ -81,8 +81,11 @@ class HolonomicConstraints:
         #: entries of the structure on free coordinates, and their free column
         self._free_entries = np.flatnonzero(columns >= 0)
         rows = np.repeat(np.arange(self.rows), np.diff(self.structure.indptr))
-        self._free_rows, self._free_columns = rows[self._free_entries], \
-            columns[self._free_entries]
+        #: the CSR structure (rows, nf) of the free columns (row-major, as ``structure``)
+        self.free_indptr = np.concatenate(
+            [[0], np.cumsum(np.bincount(rows[self._free_entries], minlength=self.rows))]
+        ).astype(np.int32)
+        self.free_indices = columns[self._free_entries].astype(np.int32)
         self._free_shape = (self.rows, free.size)
 
     def __bool__(self) -> bool:
@@ -108,9 +111,12 @@ class HolonomicConstraints:
 
     def jacobian_free(self, q_full: np.ndarray) -> scipy.sparse.csr_matrix:
         """The free columns of Phi_q (rows, nf) at q_full."""
-        data = self.jacobian_data(q_full)[self._free_entries]
-        return scipy.sparse.csr_matrix((data, (self._free_rows, self._free_columns)),
-                                       shape=self._free_shape)
+        return scipy.sparse.csr_matrix((self.jacobian_free_data(q_full), self.free_indices,
+                                        self.free_indptr), shape=self._free_shape)
+
+    def jacobian_free_data(self, q_full: np.ndarray) -> np.ndarray:
+        """The values of the free columns of Phi_q at q_full (``free_indices`` order)."""
+        return self.jacobian_data(q_full)[self._free_entries]
 
     def curvature(self, v_full: np.ndarray) -> np.ndarray:
         """v^T H v (rows,) at the velocities v_full (size,)."""

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse
 
 from runtime.catalog import NEWTON_MODES
 from runtime.kernels import abi, jit
@@ -29,9 +30,11 @@ from runtime.solve.python_engine import (
     CONTRACTION,
     MAX_FULL_STEPS,
     NON_FINITE,
+    PROJECTION_FAILED,
     SINGULAR,
     Counters,
     Divergence,
+    ManifoldProjection,
     State,
     alpha_parameters,
     initial_state,
@@ -120,11 +123,13 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded") -> tuple[str
               f"{kinds}, {integrator}, {solver} linear solver. Do not edit.")
     follower = bool(dae.state_loads)
     header = env.get_template("stepper_header.h.j2").render(
-        banner=banner, groups=groups, slots=slots_needed, follower=follower)
+        banner=banner, groups=groups, slots=slots_needed, follower=follower,
+        holonomic=dae.nonlinear)
     source = env.get_template("stepper.c.j2").render(
         banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
         bandwidth=dae.bandwidth, damped=any(g["damped"] for g in groups), follower=follower,
-        sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip())
+        sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip(),
+        holonomic=dae.nonlinear)
     return source, header
 
 
@@ -197,8 +202,9 @@ class CompiledEngine:
     def _model(self, step: float):
         dae, ffi = self.dae, self._ffi
         m = ffi.new("ancf_model *")
-        nf, nj, bw = dae.free.size, dae.joints, dae.bandwidth
+        nf, nj, bw = dae.free.size, dae.constraint_rows, dae.bandwidth
         m.size, m.nf, m.np, m.nj, m.bw = dae.size, nf, dae.prescribed.size, nj, bw
+        m.nlin = dae.joints
         m.nloads = len(dae.load_laws)
         position = np.full(dae.size, -1)
         position[dae.free] = np.arange(nf)
@@ -209,7 +215,15 @@ class CompiledEngine:
         # column j: rows j - bw .. j (the sparse solver multiplies by M in the pattern)
         m.mass_band = self._buffer(np.zeros(1) if sparse else dae.mass_band.T)
         self._csr(dae.mass_fp, "mfp", m)
-        self._csr(dae.joints_free, "af", m)
+        rows = dae.joints_free
+        if dae.nonlinear:    # the quadratic rows' structure; the callback fills their values
+            h, joints = dae.holonomic, dae.joints_free
+            self._af_data = np.concatenate([joints.data, np.zeros(h.free_indices.size)])
+            rows = scipy.sparse.csr_matrix(
+                (self._af_data, np.concatenate([joints.indices, h.free_indices]),
+                 np.concatenate([joints.indptr, joints.nnz + h.free_indptr[1:]])),
+                shape=(nj, nf))
+        self._csr(rows, "af", m)
         self._csr(dae.joints_prescribed, "ap", m)
         m.joint_fixed = self._buffer(dae.joint_fixed_part)
         m.projector = self._buffer(dae.projector)
@@ -227,9 +241,12 @@ class CompiledEngine:
         if dae.state_loads:
             self._follower(m)
         ld = bw + 1
-        m.q_full = self._buffer(dae.fixed_values.copy())
+        self._q_full, self._v_full = dae.fixed_values.copy(), np.zeros(dae.size)
+        m.q_full = self._buffer(self._q_full)
         m.f_full = self._work(dae.size)
-        m.v_full = self._work(dae.size)
+        m.v_full = self._buffer(self._v_full)
+        if dae.nonlinear:
+            self._holonomic(m)
         for name in ("force", "residual", "x", "a_old", "base", "base_v", "v_iter",
                      "abar_new"):
             setattr(m, name, self._work(nf))
@@ -285,6 +302,64 @@ class CompiledEngine:
                                       "const double *, int, double *, double *, double *)",
                                       evaluate)
         m.follower = self._callback
+
+    def _holonomic(self, m) -> None:
+        """Bind the quadratic constraint rows: Python callbacks (``runtime.model.holonomic``
+        through the DAE) that evaluate them at the step's q_full, v_full, a_full and the
+        state's multipliers, and the trapezoidal projection onto them
+        (``ManifoldProjection``, the Python engine's)."""
+        dae, ffi, model = self.dae, self._ffi, self.dae.model
+        h, nlin, offset = dae.holonomic, dae.joints, dae.joints_free.nnz
+        pattern = model.pattern
+        slots = np.unique(np.concatenate([s[s >= 0].ravel() for s in model.holonomic_slots]))
+        m.nholonomic = slots.size
+        m.holonomic_slots = self._buffer(slots, "int")
+        m.holonomic_rows = self._buffer(
+            np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))[slots], "int")
+        m.holonomic_cols = self._buffer(pattern.indices[slots], "int")
+        data, value, a_full = np.zeros(max(slots.size, 1)), np.zeros(h.rows), np.zeros(dae.size)
+        m.holonomic_data, m.holonomic_value = self._buffer(data), self._buffer(value)
+        m.a_full = self._buffer(a_full)
+        m.af_kept = self._work(self._af_data.size)
+        q_full, v_full, af = self._q_full, self._v_full, self._af_data
+
+        def evaluate(mode: int, jacobian: int) -> int:
+            try:
+                af[offset:] = h.jacobian_free_data(q_full)
+                if mode == 0:
+                    value[:] = h.value(q_full)
+                else:
+                    value[:] = h.jacobian(q_full) @ a_full + h.curvature(v_full)
+                if jacobian:
+                    lam = self._state_arrays[3]
+                    data[:slots.size] = model.holonomic_stiffness(lam[nlin:])[slots]
+                return 0
+            except Exception as error:   # reported after the call
+                self._callback_error = error
+                return -1
+
+        projection = None
+        if self.integrator == "trapezoidal":
+            projection = ManifoldProjection(dae, self.linear,
+                                            self.settings.tolerance * dae.scale,
+                                            self.settings.max_iterations)
+
+        def project() -> int:
+            try:
+                q, v = self._state_arrays[0], self._state_arrays[1]
+                projected = projection(q, v, q_full[dae.prescribed], v_full[dae.prescribed])
+                if projected is None:
+                    return -1
+                q[:], v[:] = projected
+                return 0
+            except Exception as error:
+                self._callback_error = error
+                return -1
+
+        self._callback_error = None
+        self._holonomic_callbacks = (ffi.callback("int(int, int)", evaluate, error=-1),
+                                     ffi.callback("int(void)", project, error=-1))
+        m.holonomic, m.project = self._holonomic_callbacks
 
     def raise_callback_error(self) -> None:
         """Raise what a follower load's evaluation raised during the last call, if any."""
@@ -486,6 +561,8 @@ class CompiledEngine:
             return NON_FINITE
         if status == 2:
             return newton_not_converged(self.settings.max_iterations, s.last_correction)
+        if status == 4:
+            return PROJECTION_FAILED
         return SINGULAR
 
 
@@ -509,7 +586,7 @@ class CompiledStatic:
         self._m.residual_floor = self.convergence.floor
         rest = np.zeros(dae.free.size)
         self._s = self.engine._state(State(0.0, dae.fixed_values[dae.free], rest, rest,
-                                           np.zeros(dae.joints),
+                                           np.zeros(dae.constraint_rows),
                                            {"dissipated": 0.0, "power": 0.0}))
         self._qp = dae.prescribed_motion([0.0])[0][0]
         self._qp_buffer = self.engine._buffer(self._qp)
