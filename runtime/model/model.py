@@ -226,8 +226,8 @@ class Model:
 
     def _build_constraints(self) -> None:
         built = Built(np.zeros(self.size, bool))
-        for index, rigid in enumerate(self.rigid.values()):
-            block = rigid.item.constraint_block(rigid.first, f"body[{index}]")
+        for name, rigid in self.rigid.items():
+            block = rigid.item.constraint_block(rigid.first, f"body {name!r}")
             if block is not None:
                 built.blocks.append(block)
         for constraint in self.scene.constraints:

@@ -519,11 +519,14 @@ class ManifoldProjection:
     constraint rows, Phi(q) = 0 then Phi_q v = 0: q -= M^-1 C^T (C M^-1 C^T)^-1 Phi(q) with
     C = [A; Phi_q] at the current q, iterated until the correction is within ``tolerance``
     (m), at most ``max_iterations`` times; then the velocities with C at the projected q.
-    Both engines project through it (the compiled one by a callback)."""
+    M is factorised once by a solver of the kind of ``solver``.  Both engines project
+    through it (the compiled one by a callback)."""
 
     def __init__(self, dae: DAESystem, solver, tolerance: float, max_iterations: int) -> None:
         self.dae, self.tolerance, self.max_iterations = dae, tolerance, max_iterations
-        self.mass = solver.factor(linear.pattern_values(dae.mass_ff, dae.model.pattern))
+        # a solver of its own: a sparse factorisation lasts until its solver's next one
+        own = linear.make(solver.name, dae.model.pattern)
+        self.mass = own.factor(linear.pattern_values(dae.mass_ff, dae.model.pattern))
 
     def __call__(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray, vp: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray] | None:

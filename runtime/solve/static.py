@@ -214,7 +214,8 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
     while done < 1.0 - 1e-12:
         target = min(1.0, done + increment)
         try:
-            q_new, mu_new, used = newton(q, target, multipliers)
+            q_new, mu_new, used = newton(q, target, _rigid_multipliers(
+                model, q, target * model.nominal_load(), multipliers))
             energy.check(q, done, q_new, target)
         except IllConditionedError:
             raise
@@ -232,6 +233,25 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
     return StaticResult(q, multipliers, iterations, steps)
+
+
+def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
+                       multipliers: np.ndarray) -> np.ndarray:
+    """The multipliers corrected so that the constraint forces balance ``load`` (size,) on
+    the coordinates of the rigid items at q (least squares, the smallest correction): a
+    rigid body has no elastic stiffness, only the geometric stiffness of its constraints
+    (Phi_q^T lambda)_q, so Newton needs multipliers of the right size from its first
+    iteration (from zero, a body hanging from a revolute joint has a singular matrix)."""
+    if not model.holonomic or not model.rigid:
+        return multipliers
+    position = np.full(model.size, -1)
+    position[model.free] = np.arange(model.free.size)
+    rigid = position[np.concatenate([r.dofs for r in model.rigid.values()])]
+    rigid = rigid[rigid >= 0]
+    rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
+                               format="csc")[:, rigid].toarray()
+    mismatch = load[model.free][rigid] - rows.T @ multipliers
+    return multipliers + np.linalg.lstsq(rows.T, mismatch, rcond=None)[0]
 
 
 class _PathEnergy:

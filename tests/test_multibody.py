@@ -1,0 +1,375 @@
+"""Multibody models: rigid bodies in natural coordinates, point masses, their joints and the
+quadratic constraint rows in both engines and the static analysis (docs/multibody.md).
+
+Checked against what does not share their code: the elliptic-integral period of a physical
+pendulum, Euler's equations of a torque-free body (SciPy's ODE solver), conservation of
+energy and angular momentum, free fall, finite differences of every constraint Jacobian and
+geometric stiffness, the other engine, the same load as a point force."""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+
+import numpy as np
+import pytest
+import scipy.integrate
+import scipy.special
+
+from runtime.model.errors import SceneError
+from runtime.model.model import Model
+from runtime.model.scene import load_scene, parse_scene
+from runtime.solve import engines
+from runtime.solve.static import solve_static
+from scenes import path as scene_path
+
+G = 9.81
+
+PENDULUM = """
+[[body]]
+type = "rigid"
+name = "bar"
+box = {size = [1.0, 0.05, 0.05]}
+density = 7800.0
+centre_of_mass = [0.5, 0.0, 0.0]
+[[constraint]]
+type = "body_revolute"
+body = "bar"
+axis = [0, 0, 1]
+[[load]]
+type = "gravity"
+acceleration = [0, -9.81, 0]
+[analysis.dynamic]
+t_end = 1.5
+step = 1e-3
+"""
+
+
+def scene_of(text: str):
+    return parse_scene(tomllib.loads(text))
+
+
+def run(scene, engine: str = "python", **settings):
+    """(times (k,), q (k, size), v (k, size), engine) of a dynamic run of ``scene``."""
+    dynamic = dataclasses.replace(scene.dynamic, **settings)
+    model = Model(scene)
+    stepper = engines.make(engine, model, dynamic, model.reference.copy())
+    out = []
+    stepper.run(dynamic.t_end, dynamic.step,
+                lambda t, q, v: out.append((t, q.copy(), v.copy())))
+    return (np.array([o[0] for o in out]), np.array([o[1] for o in out]),
+            np.array([o[2] for o in out]), stepper)
+
+
+def crossings(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Times where x changes sign from + to - (linear interpolation)."""
+    k = np.flatnonzero((x[:-1] > 0) & (x[1:] <= 0))
+    return t[k] + (t[k + 1] - t[k]) * x[k] / (x[k] - x[k + 1])
+
+
+@pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
+def test_rigid_pendulum_period_is_the_elliptic_integral_one(integrator):
+    """A box pinned at one end, released horizontally (amplitude 90 degrees): its axis
+    passes the vertical at T/4 and 5T/4 with T = 4 sqrt(I_p / (m g d)) K(sin^2 45 deg)."""
+    scene = scene_of(PENDULUM)
+    t, q, _, stepper = run(scene, integrator=integrator)
+    mass, inertia = scene.rigid_bodies[0].mass_properties()
+    pivot_inertia = inertia[2, 2] + mass * 0.5**2
+    period = 4 * np.sqrt(pivot_inertia / (mass * G * 0.5)) * scipy.special.ellipk(0.5)
+    down = crossings(t, q[:, 3])          # u_x: the bar's axis through the vertical
+    assert down[0] == pytest.approx(period / 4, rel=2e-5)
+    t, q, _, _ = run(scene, integrator=integrator, t_end=2.5)
+    down = crossings(t, q[:, 3])
+    assert down[1] - down[0] == pytest.approx(period, rel=1e-5)
+    # the quadratic rows converge quadratically: a few Newton iterations per step
+    assert stepper.counters.newton_iterations <= 2.5 * stepper.counters.steps
+
+
+@pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
+def test_constraint_drift_stays_below_the_tolerance_over_a_long_run(integrator):
+    scene = scene_of(PENDULUM)
+    _, q, v, stepper = run(scene, integrator=integrator, t_end=6.0, step=2e-3)
+    model = Model(scene)
+    drift = max(np.abs(model.holonomic.value(x)).max() for x in q)
+    assert drift <= scene.dynamic.tolerance
+    velocity = max(np.abs(model.holonomic.jacobian(x) @ y).max() for x, y in
+                   zip(q, v, strict=True))
+    if integrator == "trapezoidal":      # projected onto Phi_q v = 0 as well
+        assert velocity <= 1e-9
+
+
+def _body_rates(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Angular velocities in body axes (k, 3) from natural coordinates: R^T dR/dt."""
+    rot = q[:, 3:12].reshape(-1, 3, 3).transpose(0, 2, 1)      # columns u, v, w
+    rate = v[:, 3:12].reshape(-1, 3, 3).transpose(0, 2, 1)
+    skew = np.einsum("kji,kjl->kil", rot, rate)
+    return np.stack([skew[:, 2, 1], skew[:, 0, 2], skew[:, 1, 0]], axis=1)
+
+
+def test_torque_free_asymmetric_body_follows_eulers_equations():
+    """A box spinning near its intermediate axis tumbles; its body rates follow Euler's
+    equations (SciPy, to 1e-11), its energy and angular momentum (from R I R^T omega, not
+    the mass matrix) are conserved."""
+    omega0 = np.array([0.05, 4.0, 0.02])
+    scene = scene_of(f"""
+[[body]]
+type = "rigid"
+name = "box"
+box = {{size = [0.3, 0.2, 0.1]}}
+density = 1000.0
+position = [1.0, 2.0, 3.0]
+velocity = [0.1, -0.2, 0.3]
+angular_velocity = {omega0.tolist()}
+[analysis.dynamic]
+t_end = 3.0
+step = 1e-3
+""")
+    t, q, v, _ = run(scene, integrator="trapezoidal")
+    _, inertia = scene.rigid_bodies[0].mass_properties()
+    moments = np.diag(inertia)
+
+    def euler(_, w):
+        a, b, c = moments
+        return [(b - c) / a * w[1] * w[2], (c - a) / b * w[2] * w[0],
+                (a - b) / c * w[0] * w[1]]
+
+    exact = scipy.integrate.solve_ivp(euler, (0, t[-1]), omega0, t_eval=t, rtol=1e-11,
+                                      atol=1e-12).y.T
+    rates = _body_rates(q, v)
+    assert np.abs(rates[:, 0]).max() > 1.0          # it tumbles
+    assert np.abs(rates - exact).max() <= 2e-3 * np.abs(omega0).max()
+    energy = 0.5 * np.einsum("ki,i,ki->k", rates, moments, rates)
+    assert np.ptp(energy) <= 1e-6 * energy[0]
+    rot = q[:, 3:12].reshape(-1, 3, 3).transpose(0, 2, 1)
+    momentum = np.einsum("kij,j,kj->ki", rot, moments, rates)
+    assert np.abs(momentum - momentum[0]).max() <= 1e-6 * np.linalg.norm(momentum[0])
+    # the centre of mass moves uniformly
+    assert np.abs(q[:, :3] - (np.array([1.0, 2.0, 3.0]) + np.outer(t, [0.1, -0.2, 0.3]))
+                  ).max() <= 1e-9
+
+
+def test_a_particle_falls_freely():
+    scene = scene_of("""
+[[body]]
+type = "point_mass"
+name = "ball"
+mass = 2.0
+position = [0.0, 0.0, 1.0]
+velocity = [1.0, 0.0, 0.0]
+[[load]]
+type = "gravity"
+acceleration = [0, 0, -9.81]
+[[sensor]]
+name = "z"
+type = "body_position"
+body = "ball"
+component = "z"
+[analysis.dynamic]
+t_end = 0.5
+step = 1e-2
+""")
+    t, q, _, _ = run(scene)
+    assert np.allclose(q[:, 2], 1.0 - G * t**2 / 2, atol=1e-12)
+    assert np.allclose(q[:, 0], t, atol=1e-12)
+
+
+def _finite_difference_check(block, rng):
+    """Phi_q against central differences of Phi, the geometric stiffness against those of
+    Phi_q^T lambda, and v^T H v against the difference of Phi_q v along v."""
+    x = rng.normal(size=block.dofs.size)
+    lam = rng.normal(size=block.rows)
+    step = 1e-6
+    identity = np.eye(x.size)
+    numeric = np.array([(block.value(x + step * e) - block.value(x - step * e)) / (2 * step)
+                        for e in identity]).T
+    assert np.abs(block.jacobian(x) - numeric).max() <= 1e-8
+    stiffness = np.tensordot(lam, block.hessians, 1)
+    numeric = np.array([(block.jacobian(x + step * e).T @ lam - block.jacobian(x - step * e).T
+                         @ lam) / (2 * step) for e in identity]).T
+    assert np.abs(stiffness - numeric).max() <= 1e-8
+    velocity = rng.normal(size=x.size)
+    numeric = (block.jacobian(x + step * velocity) @ velocity
+               - block.jacobian(x - step * velocity) @ velocity) / (2 * step)
+    assert np.abs(block.curvature(velocity) - numeric).max() <= 1e-8
+
+
+def test_every_constraint_jacobian_matches_finite_differences():
+    """The rigid body's six rows, the revolute joint to the ground (linear rows with a
+    constant), to a beam node and between two bodies (bilinear rows)."""
+    scene = load_scene(scene_path("double_pendulum"))
+    extra = scene_of("""
+[[body]]
+type = "rigid"
+name = "a"
+mass = 1.0
+inertia = [0.1, 0.2, 0.25]
+[[body]]
+type = "rigid"
+name = "b"
+mass = 2.0
+inertia = [[0.3, 0.01, 0.0], [0.01, 0.2, 0.0], [0.0, 0.0, 0.4]]
+position = [1.0, 0.0, 0.0]
+rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+[[constraint]]
+type = "body_revolute"
+body = "a"
+point = [1.0, 0.0, 0.0]
+other = "b"
+axis = [0.6, 0.0, 0.8]
+[[constraint]]
+type = "body_spherical"
+body = "a"
+""")
+    rng = np.random.default_rng(17)
+    blocks = Model(scene).holonomic.blocks + Model(extra).holonomic.blocks
+    owners = [block.owner for block in blocks]
+    assert len(blocks) == 7 and "body_revolute of a" in owners
+    for block in blocks:
+        _finite_difference_check(block, rng)
+
+
+def test_joints_hold_at_the_initial_pose():
+    """Every constraint row vanishes at t = 0 (the joined points coincide, the axes align),
+    and the two-body revolute leaves exactly one relative rotation: 2 x 6 free motions
+    less 5 rows, at the reference."""
+    extra = scene_of("""
+[[body]]
+type = "rigid"
+name = "a"
+mass = 1.0
+inertia = [0.1, 0.2, 0.25]
+[[body]]
+type = "rigid"
+name = "b"
+mass = 2.0
+inertia = [0.3, 0.2, 0.4]
+position = [1.0, 0.0, 0.0]
+rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+[[constraint]]
+type = "body_revolute"
+body = "a"
+point = [1.0, 0.0, 0.0]
+other = "b"
+axis = [0.6, 0.0, 0.8]
+""")
+    model = Model(extra)
+    assert np.abs(model.holonomic.value(model.reference)).max() == 0.0
+    assert np.abs(model.joints @ model.reference).max() <= 1e-15
+    jacobian = np.vstack([model.joints.toarray(),
+                          model.holonomic.jacobian(model.reference).toarray()])
+    assert 24 - np.linalg.matrix_rank(jacobian) == 7
+
+
+@pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
+def test_engines_agree_on_the_double_pendulum(integrator):
+    scene = load_scene(scene_path("double_pendulum"))
+    python = run(scene, "python", integrator=integrator, t_end=0.1)
+    compiled = run(scene, "compiled", integrator=integrator, t_end=0.1)
+    assert np.abs(python[1] - compiled[1]).max() <= 1e-10
+    assert np.abs(python[2] - compiled[2]).max() <= 1e-8
+    assert python[3].counters == compiled[3].counters
+
+
+def test_static_rigid_body_on_a_cantilever_weighs_as_a_point_force():
+    """A rigid body hanging from a cantilever's tip by a revolute joint (held about its
+    axis by gravity alone: the constraints' geometric stiffness) bends the beam as its
+    weight m g at the tip does."""
+    beam = """
+[material.steel]
+E = 2.1e11
+nu = 0.0
+rho = 7800.0
+[[body]]
+name = "beam"
+element = "beam3d"
+material = "steel"
+section = {height = 0.02, width = 0.02}
+elements = 4
+start = [0, 0, 0]
+end = [1, 0, 0]
+[[constraint]]
+type = "clamp"
+node = "beam:0"
+[analysis.static]
+"""
+    hanging = scene_of(beam + """
+[[body]]
+type = "rigid"
+name = "weight"
+mass = 5.0
+inertia = [0.01, 0.01, 0.01]
+centre_of_mass = [0.0, -0.2, 0.0]
+position = [1, 0, 0]
+[[constraint]]
+type = "body_revolute"
+body = "weight"
+node = "beam:-1"
+axis = [0, 0, 1]
+[[load]]
+type = "body_force"
+body = "weight"
+point = [0.0, -0.2, 0.0]
+force = [0, -49.05, 0]
+""")
+    loaded = scene_of(beam + """
+[[load]]
+type = "point_force"
+node = "beam:-1"
+force = [0, -49.05, 0]
+""")
+    results = []
+    for scene in (hanging, loaded):
+        model = Model(scene)
+        results.append((model, solve_static(model, scene.static)))
+    (model, hung), (_, point) = results
+    tip = model.node_dofs(model.node_index(scene.constraints[0].node) + 4, "r")
+    assert abs(point.q[tip[1]]) > 1e-4
+    assert hung.q[tip] == pytest.approx(point.q[tip], rel=1e-9, abs=1e-12)
+    # a rigid body's coordinates have no stiffness for the compiled step's Schur
+    # complement: the static solve is the Python one with either engine
+    assert engines.static_newton("compiled", model, hanging.static, "trapezoidal") is None
+
+
+@pytest.mark.parametrize("table, culprit", [
+    ('mass = -1.0\ninertia = [1, 1, 1]', "body[0].mass: expected a positive number"),
+    ('mass = 1.0\ninertia = [1, 1, -1]', "body[0].inertia: expected a positive definite"),
+    ('mass = 1.0\ninertia = [1, 1, 3]', "body[0].inertia: principal moments"),
+    ('mass = 1.0\ninertia = [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]',
+     "body[0].inertia: expected a symmetric"),
+    ('mass = 1.0\ninertia = [1, 1, 1]\nrotation = [[1, 0, 0], [0, 1, 0.1], [0, 0, 1]]',
+     "body[0].rotation: expected a rotation matrix"),
+    ('mass = 1.0\ninertia = [1, 1, 1]\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]',
+     "body[0].rotation: expected a rotation matrix"),
+    ('mass = 1.0', "body[0].inertia: missing required key"),
+    ('box = {size = [1, 1, 1]}\nmass = 1.0', "body[0].mass: a box takes a density"),
+    ('box = {size = [1, -1, 1]}\ndensity = 1.0', "body[0].box.size: expected positive"),
+])
+def test_bad_rigid_bodies_name_the_key(table, culprit):
+    with pytest.raises(SceneError, match=culprit.replace("[", r"\[")):
+        scene_of(f'[[body]]\ntype = "rigid"\nname = "b"\n{table}\n')
+
+
+def test_bad_joint_points_and_names_are_scene_errors():
+    head = '[[body]]\ntype = "rigid"\nname = "b"\nmass = 1.0\ninertia = [1, 1, 1]\n'
+    with pytest.raises(SceneError, match=r"constraint\[0\].body: expected the name of a rigid"):
+        scene_of(head + '[[constraint]]\ntype = "body_spherical"\nbody = "nope"\n')
+    with pytest.raises(SceneError, match=r"constraint\[0\].point: the joined points must"):
+        scene_of(head + '[[body]]\ntype = "point_mass"\nname = "p"\nmass = 1.0\n'
+                 'position = [1, 0, 0]\n[[constraint]]\ntype = "body_spherical"\n'
+                 'body = "b"\nother = "p"\n')
+
+
+def test_bad_rigid_body_exits_2_from_the_cli(tmp_path, capsys):
+    from runtime.cli import main
+
+    scene = tmp_path / "bad.toml"
+    scene.write_text('[[body]]\ntype = "rigid"\nname = "b"\nmass = -2.0\n'
+                     'inertia = [1, 1, 1]\n')
+    assert main(["run", str(scene), "--out", str(tmp_path / "out")]) == 2
+    assert "body[0].mass" in capsys.readouterr().err
+
+
+def test_rigid_scene_round_trips_through_toml():
+    scene = load_scene(scene_path("double_pendulum"))
+    again = parse_scene(tomllib.loads(scene.to_toml()))
+    assert again == scene
