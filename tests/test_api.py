@@ -233,7 +233,7 @@ def test_unknown_types_are_errors_listing_the_registry():
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
                        'point_force, point_moment, gravity, line_force, line_moment, pressure, '
-                       'distributed_force, python')
+                       'distributed_force, python, body_force, spring_damper')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 

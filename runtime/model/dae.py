@@ -252,7 +252,7 @@ class StateLoads:
             if not load.follows:
                 continue
             evaluate = load.state_force(model)
-            dofs = evaluate.dofs if isinstance(evaluate, PythonForce) else evaluate.maps.dofs
+            dofs = evaluate.dofs if hasattr(evaluate, "dofs") else evaluate.maps.dofs
             rows, cols = position[dofs][:, :, None], position[dofs][:, None, :]
             flat = rows * nf + cols
             slots = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
@@ -285,7 +285,8 @@ class StateLoads:
         data_dot = None
         for index, evaluate, slots in self.loads:
             factor = factors[index]
-            if isinstance(evaluate, PythonForce):
+            moving = getattr(evaluate, "reads_velocity", False)
+            if moving:
                 patches = evaluate(q_full, jacobian, v_full, t)
             else:
                 patches = evaluate(q_full, jacobian)
@@ -294,7 +295,7 @@ class StateLoads:
             if jacobian:
                 keep = slots >= 0
                 data += np.bincount(slots[keep], factor * patches.jacobian[keep], self.nnz)
-                if isinstance(evaluate, PythonForce):
+                if moving:
                     data_dot = (np.zeros(self.nnz) if data_dot is None else data_dot) + \
                         np.bincount(slots[keep], factor * patches.jacobian_dot[keep], self.nnz)
         return force, data, data_dot

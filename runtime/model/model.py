@@ -263,11 +263,13 @@ class Model:
         position[self.free] = np.arange(self.free.size)
         nf = self.free.size
         keeps, flats = [], []
-        # the element groups, then the coupled coordinates of the rigid items (mass) and of
-        # the quadratic constraint rows (their geometric stiffness)
+        # the element groups, then the coupled coordinates of the rigid items (mass), of
+        # the quadratic constraint rows (their geometric stiffness) and of force elements
         groups = [body.element_dofs for body in self.bodies.values()] + [
             rigid.dofs[None, :] for rigid in self.rigid.values() if rigid.dofs.size] + [
-            block.dofs[None, :] for block in self.holonomic.blocks]
+            block.dofs[None, :] for block in self.holonomic.blocks] + [
+            load.coupled_dofs(self)[None, :] for load in self.scene.loads
+            if hasattr(load, "coupled_dofs")]
         for dofs in groups:
             ndof = dofs.shape[1]
             r = position[np.repeat(dofs, ndof, axis=1)]
