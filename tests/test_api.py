@@ -64,6 +64,7 @@ from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
+from runtime.model.items.rigid import RIGID_BODIES
 from runtime.model.items.sensors import (
     SENSORS,
     Acceleration,
@@ -242,13 +243,15 @@ def test_registries_are_keyed_by_type():
     for registry in (CONSTRAINTS, LOADS, SENSORS):
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
-                                 "revolute", "weld"]
+                                 "revolute", "weld", "body_spherical", "body_revolute"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
-                           "line_moment", "pressure", "distributed_force", "python"]
+                           "line_moment", "pressure", "distributed_force", "python",
+                           "body_force", "spring_damper"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
-                             "strain", "stress", "section"]
+                             "strain", "stress", "section", "body_position", "body_velocity"]
+    assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
 def test_output_table():

@@ -451,3 +451,41 @@ def test_engines_agree_on_springs_between_a_particle_and_a_spinning_body(integra
     assert np.abs(python[1] - compiled[1]).max() <= 1e-12
     assert np.abs(python[2] - compiled[2]).max() <= 1e-10
     assert python[3].counters == compiled[3].counters
+
+
+def test_python_api_builds_the_same_scene_as_toml():
+    from runtime import (
+        BodyPosition,
+        BodyRevolute,
+        Dynamic,
+        Gravity,
+        RigidBody,
+        Scene,
+        SpringDamper,
+    )
+    from runtime.model.items.loads import End
+
+    scene = Scene(materials={}, bodies=(),
+                  rigid_bodies=[RigidBody("bar", box={"size": [1.0, 0.05, 0.05]},
+                                          density=7800.0, centre_of_mass=(0.5, 0.0, 0.0))],
+                  constraints=[BodyRevolute(body="bar", axis=(0, 0, 1))],
+                  loads=[Gravity((0, -9.81, 0)),
+                         SpringDamper(End(body="bar", point=(1.0, 0.0, 0.0)),
+                                      End(anchor=(1.0, 1.0, 0.0)), 10.0)],
+                  sensors=[BodyPosition("tip_y", body="bar", component="y",
+                                        point=(1.0, 0.0, 0.0))],
+                  dynamic=Dynamic(t_end=1.5, step=1e-3))
+    assert parse_scene(tomllib.loads(scene.to_toml())) == scene
+    with pytest.raises(SceneError, match=r"body\[0\].mass: expected a positive number"):
+        Scene(materials={}, bodies=(), rigid_bodies=[RigidBody("b", mass=-1.0,
+                                                               inertia=(1, 1, 1))])
+
+
+def test_static_analysis_of_a_free_rigid_body_names_it():
+    from runtime.solve.static import FreeMechanismError
+
+    scene = scene_of('[[body]]\ntype = "rigid"\nname = "loose"\nmass = 1.0\n'
+                     'inertia = [1, 1, 1]\n[[load]]\ntype = "gravity"\n'
+                     'acceleration = [0, 0, -9.81]\n[analysis.static]\n')
+    with pytest.raises(FreeMechanismError, match="rigid body 'loose' is free to move"):
+        solve_static(Model(scene), scene.static)

@@ -539,6 +539,8 @@ class Model:
         joints: computed in that small basis (columns normalised per body), with
         ``tolerance`` on the eigenvalues of its Gram matrix (relative to 1).
         """
+        if not self.bodies:      # rigid items only: ``runtime.solve.static.check_held``
+            return []
         rotations = 1 if self.dim == 2 else 3
         per_body = self.dim + rotations
         positions = self.reference[self.position_dofs()]

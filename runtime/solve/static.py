@@ -52,11 +52,25 @@ class FreeMechanismError(ValueError):
 
 def check_held(model: Model) -> None:
     """FreeMechanismError naming every body free to move (``Model.free_motions``)."""
-    motions = model.free_motions()
+    motions = model.free_motions() + [
+        f"rigid body {name!r} is free to move (no joint or spring holds it)"
+        for name in model.rigid if name not in _held_rigid(model)]
     if motions:
         raise FreeMechanismError(
             f"analysis.static: {'; '.join(motions)}: a static analysis needs every body held "
             f"(add a clamp, a pin or a joint to a held body), or remove [analysis.static]")
+
+
+def _held_rigid(model: Model) -> set[str]:
+    """Names of the rigid items that some joint or force element reaches (a point mass on
+    a node moves with its node)."""
+    held = {name for name, rigid in model.rigid.items() if not rigid.dofs.size}
+    for item in (*model.scene.constraints, *model.scene.loads):
+        for key in ("body", "other"):
+            held.add(getattr(item, key, None))
+        for end in (getattr(item, "end_a", None), getattr(item, "end_b", None)):
+            held.add(getattr(end, "body", None))
+    return held
 
 
 @dataclass(frozen=True)
