@@ -18,6 +18,11 @@ import scenes
 from runtime import (
     Arc,
     Body,
+    BodyForce,
+    BodyPosition,
+    BodyRevolute,
+    BodySpherical,
+    BodyVelocity,
     Clamp,
     Constant,
     ConstantRate,
@@ -27,6 +32,7 @@ from runtime import (
     DissipatedEnergy,
     DistributedForce,
     Dynamic,
+    End,
     Gravity,
     Hub,
     KineticEnergy,
@@ -39,12 +45,14 @@ from runtime import (
     Output,
     Pin,
     PointForce,
+    PointMass,
     PointMoment,
     Position,
     PotentialEnergy,
     Pressure,
     Rectangle,
     Revolute,
+    RigidBody,
     Scene,
     SceneError,
     Sine,
@@ -52,6 +60,7 @@ from runtime import (
     Spherical,
     Spin,
     SpinUp,
+    SpringDamper,
     Static,
     StrainEnergy,
     Table,
@@ -481,6 +490,8 @@ def random_scene(rng: random.Random) -> Scene:
                                                else ("z", "norm"))))
         sensors.append(rng.choice(options))
 
+    rigid = _rigid_items(rng, chain, constraints, loads, sensors) \
+        if dim == 3 and rng.random() < 0.5 else []
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
         if rng.random() < 0.5 else None
     modal = Modal(rng.randint(1, 2), rng.choice(["reference", "static"])) \
@@ -501,8 +512,46 @@ def random_scene(rng: random.Random) -> Scene:
                     rng.choice([None, "python", "compiled"]))
     output = Output(*(rng.random() < 0.5 for _ in range(3)))
     return Scene(title=rng.choice(TITLES), materials=materials, bodies=bodies,
+                 rigid_bodies=rigid,
                  constraints=constraints, loads=loads, sensors=sensors, static=static,
                  modal=modal, dynamic=dynamic, solver=solver, output=output)
+
+
+def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list,
+                 sensors: list) -> list:
+    """Rigid bodies and point masses (3D) with their joints, loads and sensors, appended to
+    ``constraints``, ``loads`` and ``sensors``: a body on the chain's last node, a body
+    turning about a ground axis, a particle and a mass on a node."""
+    frame, _ = np.linalg.qr(np.array([_vector(rng, 3) for _ in range(3)]))
+    if np.linalg.det(frame) < 0:
+        frame[:, 0] *= -1
+    end = chain[-1]
+    tip = end.node_position(end.n_nodes - 1)
+    sides = [_number(rng, 0.1, 1.0) for _ in range(3)]
+    shape = rng.choice([{"box": {"size": sides}}, {"cylinder": {"radius": sides[0],
+                                                               "length": sides[1]}}])
+    crank = RigidBody("crank", position=tip, rotation=tuple(map(tuple, frame)),
+                      velocity=_vector(rng, 3) if rng.random() < 0.5 else None,
+                      angular_velocity=_vector(rng, 3) if rng.random() < 0.5 else None,
+                      centre_of_mass=_vector(rng, 3, 0.2), density=_number(rng, 100, 9000),
+                      **shape)
+    moments = sorted(_number(rng, 0.5, 1.0) for _ in range(3))
+    wheel = RigidBody("wheel", mass=_number(rng, 0.1, 10), inertia=tuple(moments),
+                      position=_vector(rng, 3, 5.0))
+    bob = PointMass("bob", _number(rng, 0.1, 5), position=_vector(rng, 3, 5.0),
+                    velocity=_vector(rng, 3))
+    on_node = PointMass("lump", _number(rng, 0.1, 5), node=NodeRef(chain[0].name, 0))
+    constraints.append(BodySpherical(body="crank", node=f"{end.name}:-1"))
+    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3)))
+    loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
+    loads.append(SpringDamper(End(body="bob"), rng.choice([
+        End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),
+        End(body="wheel", point=_vector(rng, 3))]), _number(rng, 0, 1e4),
+        _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
+    sensors.append(rng.choice([BodyPosition, BodyVelocity])(
+        f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
+        rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))
+    return [crank, wheel, bob, on_node]
 
 
 def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -> list:
@@ -539,14 +588,14 @@ def test_random_scenes_round_trip_through_toml(tmp_path):
             path.write_text(text, encoding="utf-8")
             assert load_scene(path) == scene
         kinds.update(type(x).__name__ for x in (*scene.constraints, *scene.loads,
-                                                 *scene.sensors))
+                                                 *scene.sensors, *scene.rigid_bodies))
         kinds.update(k for k in ("arc", "initial_angular_velocity", "quadrature", "rectangle")
                      if any(getattr(b, k) is not None for b in scene.bodies))
         kinds.update(b.element for b in scene.bodies)
     # every class of every registry and every element kind was exercised
     # (a Python load names a function of a module: tests/test_python_loads.py round-trips it)
-    expected = {cls.__name__ for r in (CONSTRAINTS, LOADS, SENSORS) for cls in r.values()
-                if cls.type != "python"}
+    expected = {cls.__name__ for r in (CONSTRAINTS, LOADS, SENSORS, RIGID_BODIES)
+                for cls in r.values() if cls.type != "python"}
     assert expected | {"arc", "initial_angular_velocity", "quadrature", "rectangle",
                        *generated_kinds()} <= kinds
 

@@ -348,9 +348,6 @@ class SpringDamper(Load):
     def follows(self) -> bool:
         return True
 
-    def targets(self) -> list[NodeRef]:
-        return [end.node for end in (self.end_a, self.end_b) if end.node is not None]
-
     def nominal(self, model: ModelView) -> np.ndarray:
         return np.zeros(model.size)
 
