@@ -29,6 +29,7 @@ from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
     Acceleration,
     BodyPosition,
+    BodyReaction,
     BodyVelocity,
     ConstraintViolation,
     Displacement,
@@ -61,11 +62,11 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyRevolute", "BodySpherical",
-    "BodyVelocity", "Clamp", "Constant", "ConstantRate", "ConstraintViolation", "CosineRamp",
-    "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element", "End", "Gravity",
-    "Hub", "KineticEnergy", "LineForce", "LineMoment", "LinearRamp", "Material", "Modal",
-    "NodeRef", "Output", "Pin", "PointForce", "PointMass", "PointMoment", "Position",
+    "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyReaction", "BodyRevolute",
+    "BodySpherical", "BodyVelocity", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
+    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
+    "End", "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment", "LinearRamp", "Material",
+    "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMass", "PointMoment", "Position",
     "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result",
     "Revolute", "RigidBody", "Scene", "SceneError", "SectionForce", "Sensor", "Sine", "Solver",
     "Spherical", "Spin", "SpinUp", "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress",

@@ -20,6 +20,7 @@ from runtime import (
     Body,
     BodyForce,
     BodyPosition,
+    BodyReaction,
     BodyRevolute,
     BodySpherical,
     BodyVelocity,
@@ -259,7 +260,8 @@ def test_registries_are_keyed_by_type():
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
-                             "strain", "stress", "section", "body_position", "body_velocity"]
+                             "strain", "stress", "section", "body_position", "body_velocity",
+                             "body_reaction"]
     assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
@@ -541,6 +543,7 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     bob = PointMass("bob", _number(rng, 0.1, 5), position=_vector(rng, 3, 5.0),
                     velocity=_vector(rng, 3))
     on_node = PointMass("lump", _number(rng, 0.1, 5), node=NodeRef(chain[0].name, 0))
+    joint = len(constraints)
     constraints.append(BodySpherical(body="crank", node=f"{end.name}:-1"))
     constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3)))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
@@ -551,6 +554,9 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     sensors.append(rng.choice([BodyPosition, BodyVelocity])(
         f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
         rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))
+    sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", rng.choice(["force", "moment"]),
+                                rng.choice(["x", "y", "z", "norm"]),
+                                rng.choice([None, joint])))
     return [crank, wheel, bob, on_node]
 
 

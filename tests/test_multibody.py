@@ -489,3 +489,37 @@ def test_static_analysis_of_a_free_rigid_body_names_it():
                      'acceleration = [0, 0, -9.81]\n[analysis.static]\n')
     with pytest.raises(FreeMechanismError, match="rigid body 'loose' is free to move"):
         solve_static(Model(scene), scene.static)
+
+
+def test_pivot_reaction_of_the_pendulum_is_the_closed_form_one():
+    """The pivot's force on the released bar, from the multipliers, against m (a_c - g)
+    with the rigid pendulum's closed form a_c (tangential d alpha, centripetal d omega^2),
+    at t = 0 and after 0.3 s (angle and angular velocity of the run's state); zero moment
+    about the pivot's axis."""
+    from runtime import run_scene
+
+    text = PENDULUM.replace("t_end = 1.5", "t_end = 0.3") + "".join(
+        f'[[sensor]]\nname = "{name}"\ntype = "body_reaction"\nbody = "bar"\n'
+        f'component = "{component}"\nquantity = "{quantity}"\nconstraint = 0\n'
+        for name, component, quantity in (("rx", "x", "force"), ("ry", "y", "force"),
+                                          ("mz", "z", "moment")))
+    scene = scene_of(text)
+    result = run_scene(scene, engine="python", progress=False, store_states=True)
+    mass, inertia = scene.rigid_bodies[0].mass_properties()
+    d = 0.5
+    pivot = inertia[2, 2] + mass * d * d
+    for row in (0, -1):
+        u, rate = result.states.q[row, 3:6], result.states.v[row, 3:6]
+        theta = np.arctan2(-u[1], u[0])                 # below the horizontal
+        omega2 = (u[0] * rate[1] - u[1] * rate[0]) ** 2
+        alpha = mass * G * d * np.cos(theta) / pivot
+        radial, tangent = -u[:2], np.array([-u[1], u[0]]) * -1.0
+        accel = d * omega2 * radial + d * alpha * tangent
+        expected = mass * (accel - np.array([0.0, -G]))
+        got = np.array([result.sensors["rx"][row], result.sensors["ry"][row]])
+        assert got == pytest.approx(expected, rel=1e-9, abs=1e-9 * mass * G)
+        assert abs(result.sensors["mz"][row]) <= 1e-9 * mass * G
+    assert theta > 0.3
+    with pytest.raises(SceneError, match=r"sensor\[0\].constraint: expected the index"):
+        scene_of(PENDULUM + '[[sensor]]\nname = "r"\ntype = "body_reaction"\nbody = "bar"\n'
+                 'constraint = 3\n')

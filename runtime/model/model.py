@@ -230,8 +230,15 @@ class Model:
             block = rigid.item.constraint_block(rigid.first, f"body {name!r}")
             if block is not None:
                 built.blocks.append(block)
+        #: the multipliers of each scene constraint: indices into [joints; quadratic rows]
+        self.constraint_multipliers: list = []
         for constraint in self.scene.constraints:
+            rows = len(built.rows)
+            quadratic = sum(block.rows for block in built.blocks)
             constraint.apply(self, built)
+            self.constraint_multipliers.append((
+                list(range(rows, len(built.rows))),
+                list(range(quadratic, sum(block.rows for block in built.blocks)))))
         fixed = built.fixed
         self.hubs = built.hubs  # (node, angle law, axis (3,))
         prescribed = np.zeros(self.size, bool)
@@ -250,6 +257,9 @@ class Model:
         self.joints_prescribed = self.joints[:, self.prescribed]
         #: the quadratic constraint rows (rigid bodies' own, nonlinear joints)
         self.holonomic = HolonomicConstraints(built.blocks, self.size, self.free)
+        joints = len(built.rows)
+        self.constraint_multipliers = [(linear + [joints + r for r in quadratic])
+                                       for linear, quadratic in self.constraint_multipliers]
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
         self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
 

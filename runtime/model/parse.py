@@ -476,6 +476,14 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
     check_reactions(tuple(sensors), constraints)
+    for i, sensor in enumerate(sensors):
+        index = getattr(sensor, "constraint", None)
+        if index is not None and (index >= len(constraints) or sensor.body not in (
+                getattr(constraints[index], "body", None),
+                getattr(constraints[index], "other", None))):
+            raise SceneError(f"sensor[{i}].constraint: expected the index of a joint of body "
+                             f"{show(sensor.body)} among the {len(constraints)} "
+                             f"[[constraint]] tables, got {index}")
 
     analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
     static = _static(analysis["static"], sensors) if "static" in analysis else None

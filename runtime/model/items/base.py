@@ -46,6 +46,8 @@ class ModelView(Protocol):
     joints: scipy.sparse.csr_matrix
     #: the quadratic constraint rows Phi(q) = 0 (``runtime.model.holonomic``)
     holonomic: Any
+    #: per scene constraint, the indices of its multipliers in [joints; quadratic rows]
+    constraint_multipliers: list
     bodies: dict[str, BodyView]
     scene: Any
     dissipated_energy: float
