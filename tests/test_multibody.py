@@ -523,3 +523,23 @@ def test_pivot_reaction_of_the_pendulum_is_the_closed_form_one():
     with pytest.raises(SceneError, match=r"sensor\[0\].constraint: expected the index"):
         scene_of(PENDULUM + '[[sensor]]\nname = "r"\ntype = "body_reaction"\nbody = "bar"\n'
                  'constraint = 3\n')
+
+
+def test_slider_crank_with_a_stiff_rod_follows_the_rigid_position_formula():
+    """scenes/slider_crank.toml with the rod 100 times stiffer: over a revolution the
+    slider is at x = r cos(phi) + sqrt(L^2 - r^2 sin^2(phi)) (phi the crank angle of the
+    run) to 1e-5 of the crank length r (the rod's own stretch, F L / EA with the pivot
+    force below 30 N, is 2e-8 m, 1e-7 r)."""
+    scene = load_scene(scene_path("slider_crank"))
+    stiff = dataclasses.replace(scene.materials["aluminium"], E=7.0e12)
+    scene = dataclasses.replace(scene, materials={"aluminium": stiff})
+    t, q, _, _ = run(scene, "compiled")
+    model = Model(scene)
+    crank = model.rigid["crank"].dofs
+    slider = model.rigid["slider"].dofs
+    phi = np.arctan2(q[:, crank[4]], q[:, crank[3]])
+    r, length = 0.15, 0.5
+    exact = r * np.cos(phi) + np.sqrt(length**2 - (r * np.sin(phi)) ** 2)
+    assert np.ptp(np.unwrap(phi)) > 2 * np.pi          # a whole revolution
+    assert np.abs(q[:, slider[0]] - exact).max() <= 1e-5 * r
+    assert np.abs(q[:, slider[1:]]).max() <= 1e-12      # on the prismatic axis

@@ -27,7 +27,7 @@ from runtime.model.items.constraints import Built, Constraint
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 
-__all__ = ["BodyRevolute", "BodySpherical"]
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
@@ -200,3 +200,45 @@ class BodyRevolute(BodySpherical):
             hessians[k, n:, :n] = coupling.T
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
                                            np.zeros((2, joined.size)), np.zeros(2)))
+
+
+def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+@dataclass(frozen=True)
+class BodyPrismatic(Constraint):
+    """A slider on the ground: the point ``point`` (body coordinates) of the rigid body or
+    point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
+    rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
+    and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
+    the infinitesimal rotations about w0, u0 and v0)."""
+
+    type: ClassVar[str] = "body_prismatic"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
+    axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
+
+    def targets(self) -> list[NodeRef]:
+        return []
+
+    @property
+    def target_key(self) -> str:
+        return "body"
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        dofs, point = model.rigid_point(self.body, self.point)
+        normals = _normals(np.asarray(self.axis))
+        rows = normals @ point                                   # (2, k)
+        built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
+                                           np.zeros((2, dofs.size, dofs.size)), rows,
+                                           -rows @ model.reference[dofs]))
+        rigid = model.rigid[self.body]
+        if rigid.dofs.size != 12:
+            return
+        axes = model.reference[rigid.dofs[3:]].reshape(3, 3)     # u0, v0, w0
+        for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
+            built.rows.append({int(rigid.dofs[3 + 3 * a + c]): float(axes[b, c])
+                               for c in range(3) if axes[b, c] != 0.0})

@@ -244,7 +244,11 @@ class Weld(Joint):
 
 
 # the joints of rigid bodies build on the classes above
-from runtime.model.items.body_joints import BodyRevolute, BodySpherical  # noqa: E402
+from runtime.model.items.body_joints import (  # noqa: E402
+    BodyPrismatic,
+    BodyRevolute,
+    BodySpherical,
+)
 
 CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
-                                                    BodySpherical, BodyRevolute)
+                                                    BodySpherical, BodyRevolute, BodyPrismatic)
