@@ -543,3 +543,58 @@ def test_slider_crank_with_a_stiff_rod_follows_the_rigid_position_formula():
     assert np.ptp(np.unwrap(phi)) > 2 * np.pi          # a whole revolution
     assert np.abs(q[:, slider[0]] - exact).max() <= 1e-5 * r
     assert np.abs(q[:, slider[1:]]).max() <= 1e-12      # on the prismatic axis
+
+
+def test_undamped_springs_conserve_energy_and_the_damper_dissipates():
+    """The ball and the spinning plate on springs (SPRING, the damper set to zero): the
+    total energy (kinetic + spring energy) stays within 1e-5 of its start over 1 s; with the
+    damper it falls."""
+    from runtime.model.items.sensors import Samples, TotalEnergy
+
+    undamped = scene_of(SPRING.replace("damping = 3.0", "damping = 0.0"))
+    damped = scene_of(SPRING)
+    energies = []
+    for scene in (undamped, damped):
+        t, q, v, _ = run(scene, integrator="trapezoidal")
+        model = Model(scene)
+        energies.append(TotalEnergy("e").values(model, Samples(t, q, v, np.zeros(t.size))))
+    assert np.ptp(energies[0]) <= 1e-5 * energies[0][0]
+    assert energies[0].min() > 0.05 * energies[0][0]           # springs hold energy
+    assert energies[1][-1] < 0.9 * energies[1][0]
+
+
+def test_a_point_mass_on_a_node_weighs_as_its_point_force():
+    """A 3 kg mass on a cantilever's tip under gravity bends it as 3 g N at the tip does
+    (the beam's own weight in both), and adds 3 kg to the model's translational mass."""
+    beam = """
+[material.steel]
+E = 2.1e11
+nu = 0.0
+rho = 7800.0
+[[body]]
+name = "beam"
+element = "beam3d"
+material = "steel"
+section = {height = 0.02, width = 0.02}
+elements = 4
+start = [0, 0, 0]
+end = [1, 0, 0]
+[[constraint]]
+type = "clamp"
+node = "beam:0"
+[[load]]
+type = "gravity"
+acceleration = [0, -9.81, 0]
+[analysis.static]
+"""
+    with_mass = scene_of(beam + '[[body]]\ntype = "point_mass"\nname = "m"\nmass = 3.0\n'
+                         'node = "beam:-1"\n')
+    with_force = scene_of(beam + '[[load]]\ntype = "point_force"\nnode = "beam:-1"\n'
+                          'force = [0, -29.43, 0]\n')
+    a, b = Model(with_mass), Model(with_force)
+    translation = a.rigid_field(translation=(0.0, 1.0, 0.0))
+    assert translation @ (a.mass @ translation) - translation @ (b.mass @ translation) == \
+        pytest.approx(3.0, rel=1e-12)
+    qa = solve_static(a, with_mass.static).q
+    qb = solve_static(b, with_force.static).q
+    assert np.abs(qa - qb).max() <= 1e-12 * np.abs(qb).max() + 1e-15

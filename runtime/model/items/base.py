@@ -80,3 +80,6 @@ class ModelView(Protocol):
 
     def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
         """Potential energy (J) of the gravity loads at ``q`` and time ``t``."""
+
+    def spring_energy(self, q: np.ndarray, t: float | None = 0.0) -> float:
+        """Energy (J) stored in the springs of the spring-dampers at ``q`` and time ``t``."""

@@ -645,23 +645,26 @@ class KineticEnergy(Sensor):
 
 @dataclass(frozen=True)
 class PotentialEnergy(Sensor):
-    """Potential energy (J) of the gravity loads relative to the reference."""
+    """Potential energy (J) of the gravity loads relative to the reference, plus the
+    energy stored in the springs of spring-dampers."""
 
     type: ClassVar[str] = "potential_energy"
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
-        return model.gravity_potential(samples.q, samples.t)
+        return (model.gravity_potential(samples.q, samples.t)
+                + model.spring_energy(samples.q, samples.t))
 
 
 @dataclass(frozen=True)
 class TotalEnergy(Sensor):
-    """Strain + kinetic + gravity potential energy (J) of the whole model."""
+    """Strain + kinetic + potential energy (J: gravity and springs) of the whole model."""
 
     type: ClassVar[str] = "total_energy"
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return (model.strain_energy(samples.q) + model.kinetic_energy(samples.v)
-                + model.gravity_potential(samples.q, samples.t))
+                + model.gravity_potential(samples.q, samples.t)
+                + model.spring_energy(samples.q, samples.t))
 
 
 @dataclass(frozen=True)
