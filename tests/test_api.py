@@ -20,6 +20,7 @@ from runtime import (
     Body,
     BodyForce,
     BodyPosition,
+    BodyPrismatic,
     BodyReaction,
     BodyRevolute,
     BodySpherical,
@@ -253,7 +254,8 @@ def test_registries_are_keyed_by_type():
     for registry in (CONSTRAINTS, LOADS, SENSORS):
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
-                                 "revolute", "weld", "body_spherical", "body_revolute"]
+                                 "revolute", "weld", "body_spherical", "body_revolute",
+                                 "body_prismatic"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
                            "body_force", "spring_damper"]
@@ -546,6 +548,7 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     joint = len(constraints)
     constraints.append(BodySpherical(body="crank", node=f"{end.name}:-1"))
     constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3)))
+    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3)))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
     loads.append(SpringDamper(End(body="bob"), rng.choice([
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),

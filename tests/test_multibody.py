@@ -598,3 +598,12 @@ acceleration = [0, -9.81, 0]
     qa = solve_static(a, with_mass.static).q
     qb = solve_static(b, with_force.static).q
     assert np.abs(qa - qb).max() <= 1e-12 * np.abs(qb).max() + 1e-15
+
+
+def test_a_redundant_joint_is_named_when_the_model_is_built():
+    text = PENDULUM + ('[[constraint]]\ntype = "body_spherical"\nbody = "bar"\n'
+                       'point = [0.0, 0.0, 0.0]\n')
+    with pytest.raises(SceneError, match=r"^constraint\[1\]: redundant: a row of this "
+                                         r"body_spherical joint"):
+        Model(scene_of(text))
+    Model(scene_of(PENDULUM))           # the pendulum's own joint is not

@@ -25,6 +25,7 @@ from runtime.element import reference as geometry
 from runtime.element.element import Element
 from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
+from runtime.model.errors import SceneError
 from runtime.model.holonomic import HolonomicConstraints
 from runtime.model.items.constraints import Built
 from runtime.model.items.rigid import RigidItem
@@ -260,8 +261,45 @@ class Model:
         joints = len(built.rows)
         self.constraint_multipliers = [(linear + [joints + r for r in quadratic])
                                        for linear, quadratic in self.constraint_multipliers]
+        self._check_independent()
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
         self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
+
+    def _check_independent(self) -> None:
+        """SceneError naming the first constraint whose rows repeat what the rigid bodies'
+        rows and the constraints before it already hold (their multipliers would be
+        singular): [A; Phi_q] at t = 0 over the rows that touch the rigid items' coordinates
+        (free columns), row by row: a row in the span of those before is redundant."""
+        if not self.rigid or not self.holonomic:
+            return
+        rigid = np.concatenate([r.dofs for r in self.rigid.values()])
+        matrix = scipy.sparse.vstack([self.joints, self.holonomic.jacobian(self.reference)],
+                                     format="csr")
+        free = np.zeros(self.size, bool)
+        free[self.free] = True
+        owners = np.full(matrix.shape[0], -1)
+        for index, rows in enumerate(self.constraint_multipliers):
+            owners[rows] = index
+        touching = np.flatnonzero(np.asarray(abs(matrix[:, rigid]).sum(axis=1)).ravel() > 0)
+        # the rigid bodies' own rows first, then the constraints' in order
+        touching = touching[np.argsort(owners[touching], kind="stable")]
+        dense = matrix[touching][:, free].toarray()
+        basis: list[np.ndarray] = []     # orthonormal rows spanning those before
+        for row, owner in zip(dense, owners[touching], strict=True):
+            rest = row.copy()
+            for _ in range(2):           # Gram-Schmidt, twice for round-off
+                for unit in basis:
+                    rest -= (unit @ rest) * unit
+            size = float(np.linalg.norm(rest))
+            if size > 1e-9 * max(float(np.linalg.norm(row)), 1e-300):
+                basis.append(rest / size)
+            elif owner >= 0:
+                index = int(owner)
+                raise SceneError(
+                    f"constraint[{index}]: redundant: a row of this "
+                    f"{self.scene.constraints[index].type} joint repeats what the rigid "
+                    f"bodies and the constraints before it already hold (the multipliers "
+                    f"would be singular); remove it or free what it repeats")
 
     def _build_maps(self) -> None:
         """Scatter maps from element Jacobians to the free-free CSR matrix.
