@@ -607,3 +607,10 @@ def test_a_redundant_joint_is_named_when_the_model_is_built():
                                          r"body_spherical joint"):
         Model(scene_of(text))
     Model(scene_of(PENDULUM))           # the pendulum's own joint is not
+
+
+def test_modal_and_arc_length_analyses_of_rigid_models_are_scene_errors():
+    with pytest.raises(SceneError, match=r"^analysis.modal: modes of models with rigid"):
+        scene_of(PENDULUM + "[analysis.modal]\nmodes = 2\n")
+    with pytest.raises(SceneError, match=r"^analysis.static.method: arc_length does not"):
+        scene_of(PENDULUM + '[analysis.static]\nmethod = "arc_length"\n')
