@@ -182,7 +182,7 @@ class CompiledEngine:
     # --- binding arrays ----------------------------------------------------------------
 
     def _buffer(self, array, ctype: str = "double"):
-        dtype = np.float64 if ctype == "double" else np.int32
+        dtype = {"double": np.float64, "int": np.int32, "long": np.int64}[ctype]
         array = np.ascontiguousarray(array, dtype=dtype)
         if array.size == 0:
             array = np.zeros(1, dtype)
@@ -304,45 +304,46 @@ class CompiledEngine:
         m.follower = self._callback
 
     def _holonomic(self, m) -> None:
-        """Bind the quadratic constraint rows: Python callbacks (``runtime.model.holonomic``
-        through the DAE) that evaluate them at the step's q_full, v_full, a_full and the
-        state's multipliers, and the trapezoidal projection onto them
+        """Bind the quadratic constraint rows as data for the step's ``quadratic_rows``
+        (per row its coordinates, linear parts, Hessian entries, constant; the header says
+        the layout) and the trapezoidal projection onto them, a Python callback
         (``ManifoldProjection``, the Python engine's)."""
-        dae, ffi, model = self.dae, self._ffi, self.dae.model
-        h, nlin, offset = dae.holonomic, dae.joints, dae.joints_free.nnz
-        pattern = model.pattern
-        slots = np.unique(np.concatenate([s[s >= 0].ravel() for s in model.holonomic_slots]))
-        m.nholonomic = slots.size
-        m.holonomic_slots = self._buffer(slots, "int")
-        m.holonomic_rows = self._buffer(
-            np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))[slots], "int")
-        m.holonomic_cols = self._buffer(pattern.indices[slots], "int")
-        data, value, a_full = np.zeros(max(slots.size, 1)), np.zeros(h.rows), np.zeros(dae.size)
-        m.holonomic_data, m.holonomic_value = self._buffer(data), self._buffer(value)
-        m.a_full = self._buffer(a_full)
+        dae, model = self.dae, self.dae.model
+        h, offset = dae.holonomic, dae.joints_free.nnz
+        free = np.zeros(dae.size, bool)
+        free[dae.free] = True
+        a_list, g_list, af_list, b_list, h_list, slot_list = [], [], [], [], [], []
+        aptr, hptr, row = [0], [0], 0
+        for block, slots in zip(h.blocks, model.holonomic_slots, strict=True):
+            rank = np.cumsum(free[block.dofs]) - 1       # place among the free columns
+            for r in range(block.rows):
+                for j, a in enumerate(block.dofs):
+                    a_list.append(a)
+                    g_list.append(block.linear[r, j])
+                    af_list.append(offset + h.free_indptr[row] + rank[j] if free[a] else -1)
+                    nonzero = np.flatnonzero(block.hessians[r, j])
+                    b_list.extend(block.dofs[nonzero])
+                    h_list.extend(block.hessians[r, j, nonzero])
+                    slot_list.extend(slots[j, nonzero])
+                    hptr.append(len(b_list))
+                aptr.append(len(a_list))
+                row += 1
+        m.nrows_h = h.rows
+        for name, values in (("h_aptr", aptr), ("h_a", a_list), ("h_af", af_list),
+                             ("h_hptr", hptr), ("h_b", b_list), ("h_slot", slot_list)):
+            setattr(m, name, self._buffer(np.array(values, np.int64), "long"))
+        for name, values in (("h_g", g_list), ("h_h", h_list),
+                             ("h_c", np.concatenate([b.constant for b in h.blocks]))):
+            setattr(m, name, self._buffer(np.array(values, float)))
+        m.holonomic_value = self._work(h.rows)
+        m.a_full = self._work(dae.size)
         m.af_kept = self._work(self._af_data.size)
-        q_full, v_full, af = self._q_full, self._v_full, self._af_data
-
-        def evaluate(mode: int, jacobian: int) -> int:
-            try:
-                af[offset:] = h.jacobian_free_data(q_full)
-                if mode == 0:
-                    value[:] = h.value(q_full)
-                else:
-                    value[:] = h.jacobian(q_full) @ a_full + h.curvature(v_full)
-                if jacobian:
-                    lam = self._state_arrays[3]
-                    data[:slots.size] = model.holonomic_stiffness(lam[nlin:])[slots]
-                return 0
-            except Exception as error:   # reported after the call
-                self._callback_error = error
-                return -1
-
         projection = None
         if self.integrator == "trapezoidal":
             projection = ManifoldProjection(dae, self.linear,
                                             self.settings.tolerance * dae.scale,
                                             self.settings.max_iterations)
+        q_full, v_full = self._q_full, self._v_full
 
         def project() -> int:
             try:
@@ -352,14 +353,13 @@ class CompiledEngine:
                     return -1
                 q[:], v[:] = projected
                 return 0
-            except Exception as error:
+            except Exception as error:   # reported after the call
                 self._callback_error = error
                 return -1
 
         self._callback_error = None
-        self._holonomic_callbacks = (ffi.callback("int(int, int)", evaluate, error=-1),
-                                     ffi.callback("int(void)", project, error=-1))
-        m.holonomic, m.project = self._holonomic_callbacks
+        self._project_callback = self._ffi.callback("int(void)", project, error=-1)
+        m.project = self._project_callback
 
     def raise_callback_error(self) -> None:
         """Raise what a follower load's evaluation raised during the last call, if any."""
