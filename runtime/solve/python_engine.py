@@ -178,12 +178,19 @@ def linear_solver(dae: DAESystem):
 
 def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
-    prescribed motions), M a = F - M_fp a_p with the joints' accelerations
-    A_f a + A_p a_p = 0 (M factorised by ``solver``, default ``linear_solver(dae)``)."""
+    prescribed motions; with quadratic constraint rows projected onto [A; Phi_q] v = 0),
+    M a = F - M_fp a_p with the joints' accelerations A_f a + A_p a_p = 0 (M factorised by
+    ``solver``, default ``linear_solver(dae)``)."""
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
     q_full = dae.full_coordinates(q, qp)
+    solver = solver or linear_solver(dae)
+    mass = linear.pattern_values(dae.mass_ff, dae.model.pattern)
+    if dae.nonlinear:     # velocities onto Phi_q v = 0 (mass-orthogonal; a no-op when the
+        # scene's initial velocities are consistent, as the mechanisms' rigid motions are)
+        v = v - SchurSolver(solver.factor(mass), dae.constraint_matrix(q_full)).solve(
+            np.zeros_like(v), dae.velocity_violation(q_full, dae.full_velocities(v, vp)))[0]
     force, _, _ = dae.internal_forces(q_full, dae.full_velocities(v, vp), jacobian=False)
     factors = dae.load_factors([t])[0]
     force = force[dae.free] + factors @ dae.load_vectors
@@ -193,8 +200,6 @@ def initial_state(dae: DAESystem, t: float = 0.0, solver=None) -> State:
                                               dae.full_velocities(v, vp), t)[0][dae.free]
         except LoadFunctionError as error:   # a Python load failed at the start
             raise Divergence(t, str(error)) from None
-    solver = solver or linear_solver(dae)
-    mass = linear.pattern_values(dae.mass_ff, dae.model.pattern)
     if dae.nonlinear:       # Phi_q a = -(Phi_q,p a_p + v^T H v)
         v_full = dae.full_velocities(v, vp)
         a, lam = SchurSolver(solver.factor(mass), dae.constraint_matrix(q_full)).solve(
