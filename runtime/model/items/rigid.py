@@ -267,6 +267,23 @@ class RigidBody(RigidItem):
     def point_map(self, point: tuple[float, ...]) -> np.ndarray:
         return natural_map(np.asarray(point, float))
 
+    def extent(self) -> np.ndarray:
+        """The corners (8, 3) in body coordinates (m) of the box it is drawn as (VTK
+        hexahedron order): its box, the box around its cylinder, or the box of its mass
+        and inertia (sides a^2 = 6 (I2 + I3 - I1) / m, ...), centred on the centre of mass."""
+        if self.box is not None:
+            sides = np.array(self.box["size"], float)
+        elif self.cylinder is not None:
+            diameter = 2 * self.cylinder["radius"]
+            sides = np.array([diameter, diameter, self.cylinder["length"]])
+        else:
+            mass, inertia = self.mass_properties()
+            moments = np.diag(inertia)
+            sides = np.sqrt(np.maximum(6 * (moments.sum() - 2 * moments) / mass, 0.0))
+        unit = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                         [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float) - 0.5
+        return unit * sides + np.asarray(self.centre_of_mass)
+
 
 def _node_key(value: Any, path: str, context: Context) -> NodeRef:
     return node_key(value, path, context)
