@@ -311,9 +311,9 @@ class Integrator:
         return total, (data, data_dot)
 
     def residual(self, a: np.ndarray, force: np.ndarray, ap: np.ndarray,
-                 multipliers: np.ndarray, q_full: np.ndarray) -> np.ndarray:
+                 multipliers: np.ndarray, q_full: np.ndarray | None) -> np.ndarray:
         """M_ff a + M_fp a_p + A^T lambda (+ Phi_q(q)^T lambda) - F: the equations of motion
-        of the free part at the coordinates q_full."""
+        of the free part at the coordinates q_full (read only with quadratic rows)."""
         dae = self.dae
         residual = dae.mass_ff @ a - force
         if ap.size:
@@ -335,7 +335,8 @@ class Integrator:
         Returns (dx, dy)."""
         rebuild = self._full_step or self._refresh or self._solver is None
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
-        q_full = self.dae.full_coordinates(q, prescribed[0])
+        # the coordinates the quadratic rows are evaluated at (unused by linear joints)
+        q_full = self.dae.full_coordinates(q, prescribed[0]) if self.dae.nonlinear else None
         self.counters.newton_iterations += 1
         if rebuild:
             mass_coef, jacobian_coef, damping_coef = coefficients
