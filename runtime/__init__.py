@@ -10,10 +10,16 @@ from runtime.app.simulation import run_scene
 from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
-from runtime.model.items.body_joints import BodyPrismatic, BodyRevolute, BodySpherical
+from runtime.model.items.body_joints import (
+    BodyPrismatic,
+    BodyRevolute,
+    BodySpherical,
+    BodyWeld,
+)
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
 from runtime.model.items.loads import (
     BodyForce,
+    BodyTorque,
     DistributedForce,
     End,
     Gravity,
@@ -63,13 +69,13 @@ from runtime.model.time_laws import (
 
 __all__ = [
     "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyPrismatic", "BodyReaction",
-    "BodyRevolute", "BodySpherical", "BodyVelocity", "Clamp", "Constant", "ConstantRate",
-    "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce",
-    "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment",
-    "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMass",
-    "PointMoment", "Position", "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad",
-    "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
-    "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "SpringDamper",
-    "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy", "Velocity", "Weld",
-    "load_scene", "run_scene",
+    "BodyRevolute", "BodySpherical", "BodyTorque", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
+    "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
+    "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
+    "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",
+    "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
+    "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
+    "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
+    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
+    "Velocity", "Weld", "load_scene", "run_scene",
 ]

@@ -24,7 +24,9 @@ from runtime import (
     BodyReaction,
     BodyRevolute,
     BodySpherical,
+    BodyTorque,
     BodyVelocity,
+    BodyWeld,
     Clamp,
     Constant,
     ConstantRate,
@@ -245,7 +247,8 @@ def test_unknown_types_are_errors_listing_the_registry():
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
                        'point_force, point_moment, gravity, line_force, line_moment, pressure, '
-                       'distributed_force, python, body_force, spring_damper')
+                       'distributed_force, python, body_force, spring_damper, '
+                       'body_torque')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -255,10 +258,10 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld", "body_spherical", "body_revolute",
-                                 "body_prismatic"]
+                                 "body_prismatic", "body_weld"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
-                           "body_force", "spring_damper"]
+                           "body_force", "spring_damper", "body_torque"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
@@ -494,7 +497,7 @@ def random_scene(rng: random.Random) -> Scene:
                                                else ("z", "norm"))))
         sensors.append(rng.choice(options))
 
-    rigid = _rigid_items(rng, chain, constraints, loads, sensors) \
+    rigid = _rigid_items(rng, chain, constraints, loads, sensors, held) \
         if dim == 3 and rng.random() < 0.5 else []
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
         if rng.random() < 0.5 else None
@@ -523,7 +526,7 @@ def random_scene(rng: random.Random) -> Scene:
 
 
 def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list,
-                 sensors: list) -> list:
+                 sensors: list, held: dict) -> list:
     """Rigid bodies and point masses (3D) with their joints, loads and sensors, appended to
     ``constraints``, ``loads`` and ``sensors``: a body on the chain's last node, a body
     turning about a ground axis, a particle and a mass on a node."""
@@ -561,6 +564,13 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", rng.choice(["force", "moment"]),
                                 rng.choice(["x", "y", "z", "norm"]),
                                 rng.choice([None, joint])))
+    if held.get((chain[0].name, 0)) is None:    # a hub welded to the chain's free start
+        hub = RigidBody("hub", mass=_number(rng, 0.1, 10), inertia=tuple(moments),
+                        position=chain[0].node_position(0))
+        constraints.append(BodyWeld(body="hub", node=f"{chain[0].name}:0"))
+        loads.append(BodyTorque(body="hub", torque=_number(rng, -10, 10),
+                                axis=_vector(rng, 3), time_law=_law(rng)))
+        return [crank, wheel, bob, on_node, hub]
     return [crank, wheel, bob, on_node]
 
 

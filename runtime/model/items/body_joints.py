@@ -27,7 +27,7 @@ from runtime.model.items.constraints import Built, Constraint
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 
-__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical"]
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
@@ -242,3 +242,41 @@ class BodyPrismatic(Constraint):
         for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
             built.rows.append({int(rigid.dofs[3 + 3 * a + c]): float(axes[b, c])
                                for c in range(3) if axes[b, c] != 0.0})
+
+
+@dataclass(frozen=True)
+class BodyWeld(BodySpherical):
+    """A rigid connection of a rigid body and a ``node`` of a meshed body (the node's
+    section turns with the body, as a clamp on a hub that moves): shared position, and each
+    of the node's gradient vectors a fixed combination of the body's axes,
+    ``r_k = sum_a c_ka e_a`` with c_ka = e_a0 . r_k0 at t = 0 (linear rows: 3 per vector).
+    The node keeps its reference section's shape and size (its gradients do not stretch)."""
+
+    type: ClassVar[str] = "body_weld"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        joint = super().parse(data, path, context)
+        if joint.node is None:
+            raise SceneError(f"{path}.node: a body_weld joins a rigid body to a node of a "
+                             "meshed body; expected node = \"BODY:INDEX\"")
+        if not isinstance(context.rigid[joint.body], RigidBody):
+            raise SceneError(f"{path}.body: a weld needs a rigid body (type = \"rigid\"), "
+                             f"got the point mass {show(joint.body)}")
+        return joint
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        super().apply(model, built)
+        body = model.rigid[self.body]
+        axes = model.reference[body.dofs[3:]].reshape(3, 3)          # e_a0 (rows)
+        node = model.node_index(self.node)
+        for name in model.node_vectors(node):
+            if name == "r":
+                continue
+            gradient = model.node_dofs(node, name)
+            coefficients = axes @ model.reference[gradient]           # c_a = e_a0 . r_k0
+            for c in range(3):
+                row = {int(body.dofs[3 + 3 * a + c]): float(coefficients[a])
+                       for a in range(3) if coefficients[a] != 0.0}
+                row[int(gradient[c])] = -1.0
+                built.rows.append(row)

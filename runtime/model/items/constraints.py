@@ -248,7 +248,9 @@ from runtime.model.items.body_joints import (  # noqa: E402
     BodyPrismatic,
     BodyRevolute,
     BodySpherical,
+    BodyWeld,
 )
 
 CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
-                                                    BodySpherical, BodyRevolute, BodyPrismatic)
+                                                    BodySpherical, BodyRevolute, BodyPrismatic,
+                                                    BodyWeld)

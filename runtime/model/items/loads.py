@@ -21,9 +21,9 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
-from runtime.model.items.force_elements import SpringDamperForce
+from runtime.model.items.force_elements import BodyTorqueForce, SpringDamperForce
 from runtime.model.items.python_loads import PythonForce, PythonFunction
-from runtime.model.items.rigid import rigid_key
+from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -38,11 +38,12 @@ from runtime.model.schema import (
     number,
     registry,
     rotation_vector,
+    unit_axis,
     vector,
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "BodyForce", "DistributedForce", "End", "Gravity", "LineForce",
+__all__ = ["LOADS", "BodyForce", "BodyTorque", "DistributedForce", "End", "Gravity", "LineForce",
            "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment", "Pressure",
            "PythonLoad", "SpringDamper"]
 
@@ -273,6 +274,47 @@ class BodyForce(Load):
         out = np.zeros(model.size)
         out[dofs] += point.T @ np.asarray(self.force)
         return out
+
+
+def _finite_key(value: Any, path: str, context: Context) -> float:
+    return number(value, path)
+
+
+def _body_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+@dataclass(frozen=True)
+class BodyTorque(Load):
+    """A torque ``torque`` (N m) times its ``time_law`` about the ``axis`` (body
+    coordinates, unit; default z) of the rigid body ``body``, turning with the body: a motor
+    on a body in a revolute joint about that axis (``runtime.model.items.force_elements``)."""
+
+    type: ClassVar[str] = "body_torque"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    torque: float = key(_finite_key)
+    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0))
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        load = super().parse(data, path, context)
+        if not isinstance(context.rigid[load.body], RigidBody):
+            raise SceneError(f"{path}.body: a torque needs a rigid body (type = \"rigid\"), "
+                             f"got the point mass {show(load.body)}")
+        return load
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def state_force(self, model: ModelView) -> BodyTorqueForce:
+        return BodyTorqueForce(model.rigid[self.body].dofs, np.asarray(self.axis),
+                               self.torque)
 
 
 @dataclass(frozen=True)
@@ -590,4 +632,4 @@ class PythonLoad(Load):
 
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
                                         Pressure, DistributedForce, PythonLoad, BodyForce,
-                                        SpringDamper)
+                                        SpringDamper, BodyTorque)
