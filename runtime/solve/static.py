@@ -65,10 +65,10 @@ def _held_rigid(model: Model) -> set[str]:
     """Names of the rigid items that some joint or force element reaches (a point mass on
     a node moves with its node)."""
     held = {name for name, rigid in model.rigid.items() if not rigid.dofs.size}
-    for item in (*model.scene.constraints, *model.scene.loads):
-        for key in ("body", "other"):
-            held.add(getattr(item, key, None))
-        for end in (getattr(item, "end_a", None), getattr(item, "end_b", None)):
+    for constraint in model.scene.constraints:      # the body joints
+        held.update((getattr(constraint, "body", None), getattr(constraint, "other", None)))
+    for load in model.scene.loads:                  # the ends of spring-dampers
+        for end in (getattr(load, "end_a", None), getattr(load, "end_b", None)):
             held.add(getattr(end, "body", None))
     return held
 
