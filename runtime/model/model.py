@@ -233,10 +233,13 @@ class Model:
                 built.blocks.append(block)
         #: the multipliers of each scene constraint: indices into [joints; quadratic rows]
         self.constraint_multipliers: list = []
-        for constraint in self.scene.constraints:
+        for index, constraint in enumerate(self.scene.constraints):
             rows = len(built.rows)
             quadratic = sum(block.rows for block in built.blocks)
-            constraint.apply(self, built)
+            try:
+                constraint.apply(self, built)
+            except SceneError as error:   # what only the model can check (gradients' span)
+                raise SceneError(f"constraint[{index}]: {error}") from None
             self.constraint_multipliers.append((
                 list(range(rows, len(built.rows))),
                 list(range(quadratic, sum(block.rows for block in built.blocks)))))

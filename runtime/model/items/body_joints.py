@@ -23,7 +23,7 @@ import numpy as np
 from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint
+from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 
@@ -135,14 +135,6 @@ class BodySpherical(Constraint):
             built.rows.append(row)
 
 
-def _normals(axis: np.ndarray) -> np.ndarray:
-    """Two unit vectors (2, 3) normal to the unit ``axis`` and to each other."""
-    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-    first = np.cross(axis, helper)
-    first /= np.linalg.norm(first)
-    return np.array([first, np.cross(axis, first)])
-
-
 @dataclass(frozen=True)
 class BodyRevolute(BodySpherical):
     """A spherical joint that also keeps the body's ``axis`` (body coordinates) aligned with
@@ -157,7 +149,7 @@ class BodyRevolute(BodySpherical):
         dofs = body.dofs
         frame = body.item.frame
         axis_world = frame @ np.asarray(self.axis)
-        normals = _normals(axis_world)
+        normals = normals_of(axis_world)
         # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
         axis_map = natural_map(np.asarray(self.axis)) - natural_map(np.zeros(3))
         if self.node is None and self.other is None:      # normals fixed: linear rows
@@ -173,21 +165,8 @@ class BodyRevolute(BodySpherical):
             maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
             first_map, first_dofs = axis_map, dofs
         else:                           # the node's axis a = G c, the body's normals
-            node = model.node_index(self.node)
-            names = [name for name in model.node_vectors(node) if name != "r"]
-            gradients = np.array([model.reference[model.node_dofs(node, name)]
-                                  for name in names]).T       # (3, gradients)
-            combination, *_ = np.linalg.lstsq(gradients, axis_world, rcond=None)
-            if np.abs(gradients @ combination - axis_world).max() > 1e-9:
-                raise SceneError(f"{self.type}: the axis {tuple(axis_world)} is not a "
-                                 f"combination of the gradients {', '.join(names)} of node "
-                                 f"{self.node} (its section's frame); choose an axis in it")
-            all_dofs = model.node_dofs(node)
-            first_map = np.zeros((3, all_dofs.size))
-            for k, name in enumerate(names):
-                start = model.node_vectors(node).index(name) * 3
-                first_map[:, start:start + 3] += combination[k] * np.eye(3)
-            first_dofs = all_dofs
+            first_dofs, first_map = gradient_map(model, model.node_index(self.node),
+                                                 axis_world, f"{self.type}: the axis")
             local = frame.T @ normals.T
             maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
             other_dofs = dofs
@@ -230,7 +209,7 @@ class BodyPrismatic(Constraint):
 
     def apply(self, model: ModelView, built: Built) -> None:
         dofs, point = model.rigid_point(self.body, self.point)
-        normals = _normals(np.asarray(self.axis))
+        normals = normals_of(np.asarray(self.axis))
         rows = normals @ point                                   # (2, k)
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
                                            np.zeros((2, dofs.size, dofs.size)), rows,
