@@ -418,8 +418,12 @@ def random_scene(rng: random.Random) -> Scene:
     chain = [b for b in bodies if b is not plate]
     for a, b in zip(chain, chain[1:], strict=False):
         full = all(len(element_kind(x.element).vectors) == dim + 1 for x in (a, b))
-        joints = [Spherical] + ([Weld] if full else []) + ([Revolute] if dim == 2 else [])
-        constraints.append(rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0))))
+        joints = [Spherical] + ([Weld] if full else []) + ([Revolute] if dim == 2 or full
+                                                          else [])
+        joint = rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0)))
+        if isinstance(joint, Revolute) and dim == 3 and rng.random() < 0.5:
+            joint = dataclasses.replace(joint, axis=_vector(rng, 3))   # normalised
+        constraints.append(joint)
     if plate is not None:
         edge = rng.choice(["x=0", "x=-1", "y=0", "y=-1"])
         constraints.append(rng.choice([Clamp, Pin])(edge=f"sheet:{edge}"))
