@@ -871,3 +871,26 @@ def test_3d_revolute_axis_outside_the_gradients_is_a_scene_error():
                                                           'element = "cable3d"')
     with pytest.raises(SceneError, match=r"^constraint\[1\]: revolute: the axis"):
         Model(scene_of(text))
+
+
+def test_joint_forces_on_the_node_and_on_the_body_are_opposite():
+    """Newton's third law across the double pendulum's hinge: the reaction sensor of the
+    rod's first node (its joint's multipliers on the node) is minus the body_reaction of the
+    link's joint to it (on the body), at every output."""
+    scene = load_scene(scene_path("double_pendulum"))
+    extra = "".join(
+        f'[[sensor]]\nname = "{kind}_{c}"\ntype = "{kind}"\n{where}\ncomponent = "{c}"\n'
+        for kind, where in (("reaction", 'node = "rod:0"'),
+                            ("body_reaction", 'body = "link"\nconstraint = 1'))
+        for c in "xyz")
+    text = scene_path("double_pendulum").read_text().replace(
+        "[analysis.dynamic]", extra + "[analysis.dynamic]").replace("t_end = 1.0",
+                                                                   "t_end = 0.1")
+    from runtime import run_scene
+
+    result = run_scene(scene_of(text), engine="python", progress=False)
+    for c in "xyz":
+        node, body = result.sensors[f"reaction_{c}"], result.sensors[f"body_reaction_{c}"]
+        assert np.abs(node + body).max() <= 1e-9 * max(1.0, np.abs(body).max())
+    assert np.abs(result.sensors["reaction_y"]).max() > 0.1       # it carries the rod
+    assert scene.constraints[1].node is not None
