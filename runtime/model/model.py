@@ -637,7 +637,8 @@ class Model:
                 absent.append(row / np.linalg.norm(row))
         basis = scipy.sparse.hstack(columns).tocsr()
         held = np.concatenate([self.fixed, self.prescribed])
-        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis,
+        rows = scipy.sparse.vstack([self.joints, self.holonomic.jacobian(self.reference)])
+        constrained = scipy.sparse.vstack([basis[held], rows @ basis,
                                            scipy.sparse.csr_matrix(
                                                np.reshape(absent, (-1, basis.shape[1])))])
         values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())
