@@ -10,9 +10,18 @@ from runtime.app.simulation import run_scene
 from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
+from runtime.model.items.body_joints import (
+    BodyPrismatic,
+    BodyRevolute,
+    BodySpherical,
+    BodyWeld,
+)
 from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical, Weld
 from runtime.model.items.loads import (
+    BodyForce,
+    BodyTorque,
     DistributedForce,
+    End,
     Gravity,
     LineForce,
     LineMoment,
@@ -20,9 +29,14 @@ from runtime.model.items.loads import (
     PointMoment,
     Pressure,
     PythonLoad,
+    SpringDamper,
 )
+from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
     Acceleration,
+    BodyPosition,
+    BodyReaction,
+    BodyVelocity,
     ConstraintViolation,
     Displacement,
     DissipatedEnergy,
@@ -54,12 +68,14 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
-    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
-    "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment", "LinearRamp", "Material",
-    "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMoment", "Position",
-    "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result",
-    "Revolute", "Scene", "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical",
-    "Spin", "SpinUp", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
+    "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyPrismatic", "BodyReaction",
+    "BodyRevolute", "BodySpherical", "BodyTorque", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
+    "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
+    "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
+    "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",
+    "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
+    "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
+    "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
+    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
     "Velocity", "Weld", "load_scene", "run_scene",
 ]

@@ -253,7 +253,8 @@ def test_unknown_top_level_key_and_toml_errors_fail(tmp_path):
     assert (tmp_path / "c" / "summary.json").exists()
 
 
-def test_revolute_joint_in_a_3d_scene_fails_with_exit_2(tmp_path):
+def test_static_analysis_of_a_body_hinged_in_3d_names_its_free_rotation(tmp_path):
+    # a 3D revolute joint (quadratic rows) leaves the second beam free to turn about z only
     data = cantilever(elements=2, element="beam3d", static={}).to_dict()
     second = dict(data["body"][0], name="other", start=[1.0, 0.0, 0.0], end=[2.0, 0.0, 0.0])
     data["body"].append(second)
@@ -261,7 +262,7 @@ def test_revolute_joint_in_a_3d_scene_fails_with_exit_2(tmp_path):
     summary, code = run(write(tmp_path, data), tmp_path / "out", quiet=True)
     assert code == 2
     assert summary["status"] == "failed"
-    assert "revolute" in summary["message"]
+    assert "body 'other' is free to rotate about z:" in summary["message"]
 
 
 # --------------------------------------------------------------------------- divergence

@@ -55,6 +55,9 @@ PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 MAX_FRAMES = 100
 #: VTK cell of a sample grid by the number of meshed axes (beams 1, plates 2, bricks 3)
 CELL_TYPES = {1: "line", 2: "quad", 3: "hexahedron"}
+#: the edges of a box of corners numbered as ``RigidBody.extent`` (VTK hexahedron order), as
+#: one polyline through every edge (some twice)
+_BOX_EDGES = np.array([0, 1, 2, 3, 0, 4, 5, 6, 7, 4, 5, 1, 2, 6, 7, 3])
 #: sample points are matched on a grid of 2**-20 element units (as meshing.structured_mesh)
 _KEY = 2**20
 
@@ -100,9 +103,19 @@ class Shape:
             outline += _polylines(first + points[:, _grid_loop(fractions)])
             node_points.append(first + nodes)
             first += count
+        for rigid in model.rigid.values():    # rigid bodies: their box (hexahedron)
+            if not hasattr(rigid.item, "extent"):
+                continue
+            corners = rigid.item.extent()                       # (8, 3) body coordinates
+            values = np.column_stack([np.ones(8), corners])     # natural_map's weights
+            points = first + np.arange(8)[None, :]
+            self._bodies.append((rigid.dofs[None, :], values, points))
+            cells.setdefault(CELL_TYPES[3], []).append(points)
+            outline += _polylines(points[:, _BOX_EDGES])
+            first += 8
         self.points = first
         self.cells = [(name, np.concatenate(blocks)) for name, blocks in cells.items()]
-        self.node_points = np.concatenate(node_points)
+        self.node_points = np.concatenate(node_points) if node_points else np.zeros(0, int)
         self.outline = np.concatenate([np.append(line, -1) for line in outline])[:-1]
 
     def sample(self, q: np.ndarray) -> np.ndarray:
@@ -135,6 +148,7 @@ class Shape:
                 np.add.at(target, where, full[..., rows, cols].reshape(-1, 6))
             np.add.at(mises, where, material.von_mises(found.cauchy[0]).ravel())
             np.add.at(count, where, 1.0)
+        count = np.maximum(count, 1.0)     # rigid bodies' points: no strain
         return {"green_lagrange_strain": strain / count[:, None],
                 "cauchy_stress": stress / count[:, None], "von_mises_stress": mises / count}
 

@@ -62,7 +62,7 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
     for i, c in enumerate(constraints):
         if isinstance(c, Hub):
             check_hub_axis(f"constraint[{i}].axis", c, by_name[c.node.body])
-    scale = max(b.placement.extent() for b in bodies)
+    scale = max((b.placement.extent() for b in bodies), default=1.0)
     # joints tie node positions together; held nodes are tied to the ground (None)
     parent: dict[NodeRef | None, NodeRef | None] = {}
     ties: dict[NodeRef | None, list[int]] = {}

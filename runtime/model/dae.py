@@ -89,6 +89,11 @@ class DAESystem:
         # initial velocities of the free coordinates (m/s; the model's initial conditions)
         self.initial_velocity = model.initial_velocities()[self.free]
         self.projector = self._projector()
+        #: the quadratic constraint rows Phi(q) = 0 (rigid bodies, 3D joints); their
+        #: multipliers follow the joints' (``constraint_rows`` in all)
+        self.holonomic = model.holonomic
+        self.nonlinear = bool(self.holonomic)
+        self.constraint_rows = self.joints + self.holonomic.rows
 
     @property
     def damped(self) -> bool:
@@ -131,6 +136,50 @@ class DAESystem:
                                                 self.joints_free.T.toarray())
         schur = self.joints_free @ minv_at
         return np.linalg.solve(schur.T, minv_at.T).T
+
+    # --- all constraint rows: the linear joints, then the quadratic rows ----------------
+    # (used only when ``nonlinear``: a model with linear joints alone keeps their constant
+    # rows and the precomputed ``projector``)
+
+    def constraint_matrix(self, q_full: np.ndarray) -> scipy.sparse.csr_matrix:
+        """[A_f; Phi_q,f(q)] (constraint_rows, nf): the free columns of every row at q_full."""
+        return scipy.sparse.vstack([self.joints_free, self.holonomic.jacobian_free(q_full)],
+                                   format="csr")
+
+    def violation(self, q_full: np.ndarray) -> np.ndarray:
+        """[A q; Phi(q)] (constraint_rows,) at the coordinates q_full (size,)."""
+        return np.concatenate([self.model.joints @ q_full, self.holonomic.value(q_full)])
+
+    def velocity_violation(self, q_full: np.ndarray, v_full: np.ndarray) -> np.ndarray:
+        """[A v; Phi_q(q) v] (constraint_rows,) at q_full and the velocities v_full."""
+        return np.concatenate([self.model.joints @ v_full,
+                               self.holonomic.jacobian(q_full) @ v_full])
+
+    def acceleration_violation(self, q_full: np.ndarray, v_full: np.ndarray,
+                               a_full: np.ndarray) -> np.ndarray:
+        """[A a; Phi_q a + v^T H v] (constraint_rows,): the second time derivative of the
+        constraints at q_full, v_full and the accelerations a_full (size,)."""
+        return np.concatenate([self.model.joints @ a_full,
+                               self.holonomic.jacobian(q_full) @ a_full
+                               + self.holonomic.curvature(v_full)])
+
+    def constraint_forces(self, q_full: np.ndarray, multipliers: np.ndarray) -> np.ndarray:
+        """A_f^T lambda_joints + Phi_q,f(q)^T lambda_rows (nf,) for the multipliers
+        (constraint_rows,)."""
+        nj = self.joints
+        force = self.holonomic.jacobian_free(q_full).T @ multipliers[nj:]
+        if nj:
+            force += self.joints_free.T @ multipliers[:nj]
+        return force
+
+    def geometric_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
+        """(Phi_q^T lambda)_q (pattern nnz,) of the quadratic rows' multipliers (taken from
+        the constraint_rows multipliers)."""
+        return self.model.holonomic_stiffness(multipliers[self.joints:])
+
+    def full_accelerations(self, a_free: np.ndarray, a_prescribed: np.ndarray) -> np.ndarray:
+        """a_full (size,): fixed coordinates at rest."""
+        return self.full_velocities(a_free, a_prescribed)
 
     # --- time-dependent data, vectorised over the step times of a block ------------------
 
@@ -203,7 +252,7 @@ class StateLoads:
             if not load.follows:
                 continue
             evaluate = load.state_force(model)
-            dofs = evaluate.dofs if isinstance(evaluate, PythonForce) else evaluate.maps.dofs
+            dofs = evaluate.dofs if hasattr(evaluate, "dofs") else evaluate.maps.dofs
             rows, cols = position[dofs][:, :, None], position[dofs][:, None, :]
             flat = rows * nf + cols
             slots = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
@@ -236,7 +285,8 @@ class StateLoads:
         data_dot = None
         for index, evaluate, slots in self.loads:
             factor = factors[index]
-            if isinstance(evaluate, PythonForce):
+            moving = getattr(evaluate, "reads_velocity", False)
+            if moving:
                 patches = evaluate(q_full, jacobian, v_full, t)
             else:
                 patches = evaluate(q_full, jacobian)
@@ -245,7 +295,7 @@ class StateLoads:
             if jacobian:
                 keep = slots >= 0
                 data += np.bincount(slots[keep], factor * patches.jacobian[keep], self.nnz)
-                if isinstance(evaluate, PythonForce):
+                if moving:
                     data_dot = (np.zeros(self.nnz) if data_dot is None else data_dot) + \
                         np.bincount(slots[keep], factor * patches.jacobian_dot[keep], self.nnz)
         return force, data, data_dot

@@ -25,7 +25,10 @@ from runtime.element import reference as geometry
 from runtime.element.element import Element
 from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
+from runtime.model.errors import SceneError
+from runtime.model.holonomic import HolonomicConstraints
 from runtime.model.items.constraints import Built
+from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
 from runtime.model.schema import NodeRef
 
@@ -79,6 +82,20 @@ class BodyMesh:
         return self.element.damping > 0
 
 
+@dataclass
+class RigidCoordinates:
+    """A rigid item of the model (``runtime.model.items.rigid``) and its first global
+    coordinate."""
+
+    item: RigidItem
+    first: int
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """Its own global coordinates (none for a point mass on a node)."""
+        return np.arange(self.first, self.first + self.item.coordinates)
+
+
 def node_references(kind: ElementKind, mesh: meshing.Mesh, e0s: np.ndarray) -> np.ndarray:
     """Reference coordinates (nodes * per_node,) of the mesh's nodes from its elements'
     references (elements, ndof) (a node shared by elements takes the last one's value)."""
@@ -121,11 +138,19 @@ class Model:
             self.timing["compile_s"] += element.timing["compile_s"]
             nodes += len(mesh.points)
             coordinates += len(mesh.points) * kind.per_node
-        self.size = coordinates
         self.n_nodes = nodes
         self._body_list = list(self.bodies.values())
         self._first_nodes = np.array([b.first_node for b in self._body_list])
-        self.reference = np.concatenate([b.reference for b in self.bodies.values()])
+        #: the rigid bodies and point masses by name, with their first coordinate (their
+        #: coordinates follow those of the meshed bodies)
+        self.rigid: dict[str, RigidCoordinates] = {}
+        for item in scene.rigid_bodies:
+            self.rigid[item.name] = RigidCoordinates(item, coordinates)
+            coordinates += item.coordinates
+        self.size = coordinates
+        self.reference = np.concatenate([b.reference for b in self.bodies.values()]
+                                        + [r.item.initial_coordinates()
+                                           for r in self.rigid.values()])
         self._build_mass()
         self._build_constraints()
         self._build_maps()
@@ -163,6 +188,8 @@ class Model:
 
     def position_dofs(self) -> np.ndarray:
         """Coordinates of the positions r of every node, (nodes, dim), in node order."""
+        if not self.bodies:
+            return np.zeros((0, self.dim), int)
         return np.concatenate([
             body.first_coordinate + (np.arange(body.nodes)[:, None] * body.kind.per_node
                                      + body.kind.vectors.index("r") * self.dim
@@ -186,6 +213,13 @@ class Model:
             rows.append(np.repeat(dofs, ndof, axis=1).ravel())
             cols.append(np.tile(dofs, (1, ndof)).ravel())
             vals.append(np.broadcast_to(mass.ravel(), (dofs.shape[0], ndof * ndof)).ravel())
+        for rigid in self.rigid.values():
+            mass = rigid.item.mass_matrix()
+            dofs = rigid.dofs if rigid.dofs.size else self.node_dofs(
+                self.node_index(rigid.item.node), "r")
+            rows.append(np.repeat(dofs, dofs.size))
+            cols.append(np.tile(dofs, dofs.size))
+            vals.append((mass if rigid.dofs.size else rigid.item.mass * np.eye(3)).ravel())
         self.mass = scipy.sparse.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(self.size, self.size))
@@ -193,8 +227,22 @@ class Model:
 
     def _build_constraints(self) -> None:
         built = Built(np.zeros(self.size, bool))
-        for constraint in self.scene.constraints:
-            constraint.apply(self, built)
+        for name, rigid in self.rigid.items():
+            block = rigid.item.constraint_block(rigid.first, f"body {name!r}")
+            if block is not None:
+                built.blocks.append(block)
+        #: the multipliers of each scene constraint: indices into [joints; quadratic rows]
+        self.constraint_multipliers: list = []
+        for index, constraint in enumerate(self.scene.constraints):
+            rows = len(built.rows)
+            quadratic = sum(block.rows for block in built.blocks)
+            try:
+                constraint.apply(self, built)
+            except SceneError as error:   # what only the model can check (gradients' span)
+                raise SceneError(f"constraint[{index}]: {error}") from None
+            self.constraint_multipliers.append((
+                list(range(rows, len(built.rows))),
+                list(range(quadratic, sum(block.rows for block in built.blocks)))))
         fixed = built.fixed
         self.hubs = built.hubs  # (node, angle law, axis (3,))
         prescribed = np.zeros(self.size, bool)
@@ -211,8 +259,50 @@ class Model:
                                               shape=(len(built.rows), self.size))
         self.joints_free = self.joints[:, self.free]
         self.joints_prescribed = self.joints[:, self.prescribed]
+        #: the quadratic constraint rows (rigid bodies' own, nonlinear joints)
+        self.holonomic = HolonomicConstraints(built.blocks, self.size, self.free)
+        joints = len(built.rows)
+        self.constraint_multipliers = [(linear + [joints + r for r in quadratic])
+                                       for linear, quadratic in self.constraint_multipliers]
+        self._check_independent()
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
         self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
+
+    def _check_independent(self) -> None:
+        """SceneError naming the first constraint whose rows repeat what the rigid bodies'
+        rows and the constraints before it already hold (their multipliers would be
+        singular): [A; Phi_q] at t = 0 over the rows that touch the rigid items' coordinates
+        (free columns), row by row: a row in the span of those before is redundant."""
+        if not self.rigid or not self.holonomic:
+            return
+        rigid = np.concatenate([r.dofs for r in self.rigid.values()])
+        matrix = scipy.sparse.vstack([self.joints, self.holonomic.jacobian(self.reference)],
+                                     format="csr")
+        free = np.zeros(self.size, bool)
+        free[self.free] = True
+        owners = np.full(matrix.shape[0], -1)
+        for index, rows in enumerate(self.constraint_multipliers):
+            owners[rows] = index
+        touching = np.flatnonzero(np.asarray(abs(matrix[:, rigid]).sum(axis=1)).ravel() > 0)
+        # the rigid bodies' own rows first, then the constraints' in order
+        touching = touching[np.argsort(owners[touching], kind="stable")]
+        dense = matrix[touching][:, free].toarray()
+        basis: list[np.ndarray] = []     # orthonormal rows spanning those before
+        for row, owner in zip(dense, owners[touching], strict=True):
+            rest = row.copy()
+            for _ in range(2):           # Gram-Schmidt, twice for round-off
+                for unit in basis:
+                    rest -= (unit @ rest) * unit
+            size = float(np.linalg.norm(rest))
+            if size > 1e-9 * max(float(np.linalg.norm(row)), 1e-300):
+                basis.append(rest / size)
+            elif owner >= 0:
+                index = int(owner)
+                raise SceneError(
+                    f"constraint[{index}]: redundant: a row of this "
+                    f"{self.scene.constraints[index].type} joint repeats what the rigid "
+                    f"bodies and the constraints before it already hold (the multipliers "
+                    f"would be singular); remove it or free what it repeats")
 
     def _build_maps(self) -> None:
         """Scatter maps from element Jacobians to the free-free CSR matrix.
@@ -224,8 +314,14 @@ class Model:
         position[self.free] = np.arange(self.free.size)
         nf = self.free.size
         keeps, flats = [], []
-        for body in self.bodies.values():
-            dofs = body.element_dofs
+        # the element groups, then the coupled coordinates of the rigid items (mass), of
+        # the quadratic constraint rows (their geometric stiffness) and of force elements
+        groups = [body.element_dofs for body in self.bodies.values()] + [
+            rigid.dofs[None, :] for rigid in self.rigid.values() if rigid.dofs.size] + [
+            block.dofs[None, :] for block in self.holonomic.blocks] + [
+            load.coupled_dofs(self)[None, :] for load in self.scene.loads
+            if hasattr(load, "coupled_dofs")]
+        for dofs in groups:
             ndof = dofs.shape[1]
             r = position[np.repeat(dofs, ndof, axis=1)]
             c = position[np.tile(dofs, (1, ndof))]
@@ -233,6 +329,7 @@ class Model:
             keeps.append(keep.ravel())
             flats.append((r.astype(np.int64) * nf + c)[keep])
         unique, slots = np.unique(np.concatenate(flats), return_inverse=True)
+        self._pattern_keys = unique
         rows, cols = unique // nf, unique % nf
         indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=nf))])
         self.pattern = scipy.sparse.csr_matrix(
@@ -240,13 +337,38 @@ class Model:
             shape=(nf, nf))
         bounds = np.cumsum([0] + [f.size for f in flats])
         self._jac_targets = [(keep, slots[bounds[i]:bounds[i + 1]])
-                             for i, keep in enumerate(keeps)]
+                             for i, keep in enumerate(keeps)][:len(self.bodies)]
+        #: slots (k, k) of every quadratic block's geometric stiffness (-1: not free)
+        self.holonomic_slots = [self.slots(block.dofs) for block in self.holonomic.blocks]
         # banded (upper) storage of LAPACK: entry (i, j), i <= j, at [u + i - j, j]
         self.bandwidth = int(np.abs(rows - cols).max(initial=0))
         upper = rows <= cols
         self._band_slots = np.flatnonzero(upper)
         self._band_index = (self.bandwidth + rows[upper] - cols[upper]) * nf + cols[upper]
         self.mass_banded = self.banded(self.mass_ff[rows, cols].A1)
+
+    def slots(self, dofs: np.ndarray) -> np.ndarray:
+        """The positions (k, k) in ``pattern`` order of the entries (i, j) of the coordinates
+        ``dofs`` (k,), -1 where either is not free (the pattern must hold the others)."""
+        position = np.full(self.size, -1)
+        position[self.free] = np.arange(self.free.size)
+        rows, cols = position[dofs][:, None], position[dofs][None, :]
+        flat = rows.astype(np.int64) * self.free.size + cols
+        found = np.minimum(np.searchsorted(self._pattern_keys, flat),
+                           max(self._pattern_keys.size - 1, 0))
+        inside = (rows >= 0) & (cols >= 0)
+        assert np.all(self._pattern_keys[found[inside]] == flat[inside])
+        return np.where(inside, found, -1)
+
+    def holonomic_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
+        """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for
+        their multipliers (rows,) as data in ``pattern`` order (nnz,)."""
+        data = np.zeros(self.pattern.nnz)
+        for slots, block in zip(self.holonomic_slots,
+                                self.holonomic.stiffness_blocks(multipliers), strict=True):
+            keep = slots >= 0
+            data += np.bincount(slots[keep], block[keep], self.pattern.nnz)
+        return data
 
     def banded(self, data: np.ndarray) -> np.ndarray:
         """Upper banded storage ((bandwidth + 1, nf), LAPACK layout) of a free-free matrix
@@ -378,6 +500,23 @@ class Model:
                 total -= scale * ((q - self.reference) @ force)
         return float(total[0]) if q.ndim == 1 else total
 
+    def spring_energy(self, q: np.ndarray, t=0.0):
+        """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers (times
+        their time law at t; the nominal value when t is None), at q (size,) or a block
+        (k, size) with times t (k,)."""
+        rows = np.atleast_2d(q)
+        total = np.zeros(rows.shape[0])
+        for load in self.scene.loads:
+            if not hasattr(load, "coupled_dofs"):
+                continue
+            element = load.state_force(self)
+            scale = 1.0 if t is None else load.time_law.sample(
+                np.broadcast_to(np.atleast_1d(np.asarray(t, float)), total.shape))[0]
+            stretch = np.array([np.linalg.norm(element.vector(x)) for x in rows]) \
+                - element.length
+            total += scale * 0.5 * element.stiffness * stretch**2
+        return float(total[0]) if q.ndim == 1 else total
+
     # --- frames and rigid motions --------------------------------------------------------
 
     def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
@@ -410,6 +549,18 @@ class Model:
                 arms[:, k] -= np.zeros(self.dim) if about is None else np.asarray(about, float)
                 part += _cross(rotation, arms)
             field[mesh.coordinates] = part.ravel()
+        for name, rigid in self.rigid.items():
+            if (body is not None and name != body) or not rigid.dofs.size:
+                continue
+            vectors = self.reference[rigid.dofs].reshape(-1, 3)    # a point (, its axes)
+            part = np.zeros_like(vectors)
+            if translation is not None:
+                part[0] += np.asarray(translation, float)
+            if rotation is not None:
+                arms = vectors.copy()
+                arms[0] -= np.zeros(3) if about is None else np.asarray(about, float)
+                part += _cross(rotation, arms)
+            field[rigid.dofs] = part.ravel()
         return field
 
     def initial_velocities(self) -> np.ndarray:
@@ -422,9 +573,20 @@ class Model:
             if body.initial_velocity is not None or spin is not None:
                 velocities += self.rigid_field(body.initial_velocity, spin and spin.omega,
                                                spin and spin.about, body.name)
+        for rigid in self.rigid.values():
+            velocities[rigid.dofs] = rigid.item.initial_velocities()
         velocities[self.fixed] = 0.0
         velocities[self.prescribed] = 0.0
         return velocities
+
+    def rigid_point(self, name: str, point: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """(coordinates (k,), map (3, k)) of the position of the body point ``point`` (body
+        coordinates, m) of the rigid item ``name``: a rigid body's natural coordinates, a
+        particle's position, or the node of a point mass on a node."""
+        rigid = self.rigid[name]
+        if not rigid.dofs.size:
+            return self.node_dofs(self.node_index(rigid.item.node), "r"), np.eye(3)
+        return rigid.dofs, rigid.item.point_map(point)
 
     def free_motions(self, tolerance: float = 1e-12) -> list[str]:
         """The rigid motions the constraints leave free (see ``_free_motions``), computed
@@ -445,6 +607,8 @@ class Model:
         joints: computed in that small basis (columns normalised per body), with
         ``tolerance`` on the eigenvalues of its Gram matrix (relative to 1).
         """
+        if not self.bodies:      # rigid items only: ``runtime.solve.static.check_held``
+            return []
         rotations = 1 if self.dim == 2 else 3
         per_body = self.dim + rotations
         positions = self.reference[self.position_dofs()]
@@ -473,7 +637,8 @@ class Model:
                 absent.append(row / np.linalg.norm(row))
         basis = scipy.sparse.hstack(columns).tocsr()
         held = np.concatenate([self.fixed, self.prescribed])
-        constrained = scipy.sparse.vstack([basis[held], self.joints @ basis,
+        rows = scipy.sparse.vstack([self.joints, self.holonomic.jacobian(self.reference)])
+        constrained = scipy.sparse.vstack([basis[held], rows @ basis,
                                            scipy.sparse.csr_matrix(
                                                np.reshape(absent, (-1, basis.shape[1])))])
         values, vectors = np.linalg.eigh((constrained.T @ constrained).toarray())

@@ -33,8 +33,10 @@ from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
+from runtime.model.items.body_joints import BodyPrismatic, BodySpherical
 from runtime.model.items.constraints import CONSTRAINTS
 from runtime.model.items.loads import LOADS
+from runtime.model.items.rigid import RIGID_BODIES, RigidBody, RigidItem
 from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
 from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
@@ -394,6 +396,21 @@ def _output(data: Any) -> Output:
         (f.name for f in dataclasses.fields(Output)), boolean)))
 
 
+def _rigid_bodies(tables: list[tuple[int, dict]], bodies: list[Body],
+                  context: Context) -> tuple[RigidItem, ...]:
+    """The rigid items (rigid bodies, point masses) of the ``[[body]]`` tables with a
+    ``type`` (``tables``: (index in [[body]], table)), their names unique among all bodies."""
+    items: list[RigidItem] = []
+    names = {b.name for b in bodies}
+    for i, raw in tables:
+        item = parse_record(RIGID_BODIES, "body", raw, f"body[{i}]", context)
+        if item.name in names:
+            raise SceneError(f"body[{i}].name: duplicate body name {show(item.name)}")
+        names.add(item.name)
+        items.append(item)
+    return tuple(items)
+
+
 def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     """The validated fields of the ``Scene`` of the parsed TOML ``data`` (``source`` names
     it: a file path).
@@ -421,7 +438,11 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     if not raw_bodies:
         raise SceneError("body: a scene needs at least one [[body]], got none")
     bodies: list[Body] = []
+    rigid_tables = [(i, raw) for i, raw in enumerate(raw_bodies)
+                    if isinstance(raw, dict) and "type" in raw]
     for i, raw in enumerate(raw_bodies):
+        if isinstance(raw, dict) and "type" in raw:
+            continue
         body = _body(i, raw, materials)
         if any(b.name == body.name for b in bodies):
             raise SceneError(f"body[{i}].name: duplicate body name {show(body.name)}")
@@ -433,8 +454,10 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     for i, body in enumerate(bodies):   # element sizes once the counts are known to fit
         body.placement.check_counts(body.counts, f"body[{i}]")
         _check_initial_motion(body, f"body[{i}]", materials[body.material].rho)
-    context = Context(bodies[0].dim, Nodes(tuple(bodies)),
+    context = Context(bodies[0].dim if bodies else 3, Nodes(tuple(bodies)),
                       None if source == "<scene>" else str(Path(source).resolve().parent))
+    rigid_bodies = _rigid_bodies(rigid_tables, bodies, context)
+    context = dataclasses.replace(context, rigid={r.name: r for r in rigid_bodies})
 
     constraints = tuple(parse_record(CONSTRAINTS, "constraint", c, f"constraint[{i}]", context)
                         for i, c in enumerate(_array_of_tables(data, "constraint")))
@@ -457,6 +480,14 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
     check_reactions(tuple(sensors), constraints)
+    for i, sensor in enumerate(sensors):
+        index = getattr(sensor, "constraint", None)
+        if index is not None and (index >= len(constraints) or sensor.body not in (
+                getattr(constraints[index], "body", None),
+                getattr(constraints[index], "other", None))):
+            raise SceneError(f"sensor[{i}].constraint: expected the index of a joint of body "
+                             f"{show(sensor.body)} among the {len(constraints)} "
+                             f"[[constraint]] tables, got {index}")
 
     analysis = keys(data.get("analysis", {}), "analysis", (), ("static", "modal", "dynamic"))
     static = _static(analysis["static"], sensors) if "static" in analysis else None
@@ -464,9 +495,21 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
     if dynamic is not None and dynamic.frequency_of is not None:
         check_frequency(dynamic, sensors)
+    quadratic = any(isinstance(r, RigidBody) for r in rigid_bodies) or any(
+        isinstance(c, BodySpherical | BodyPrismatic) for c in constraints)
+    if quadratic and modal is not None:
+        raise SceneError("analysis.modal: modes of models with rigid bodies or their joints "
+                         "(quadratic constraint rows) are not built yet; remove "
+                         "[analysis.modal]")
+    if quadratic and static is not None and static.method == "arc_length":
+        raise SceneError("analysis.static.method: arc_length does not take the quadratic "
+                         "constraint rows of rigid bodies and their joints yet; use "
+                         "\"load_stepping\"")
     solver = _solver(data.get("solver", {}))
     output = _output(data.get("output", {}))
-    check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic)
+    check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic,
+                sum(r.coordinates for r in rigid_bodies))
     return dict(title=title, materials=materials, bodies=tuple(bodies),
+                rigid_bodies=rigid_bodies,
                 constraints=constraints, loads=loads, sensors=tuple(sensors), static=static,
                 modal=modal, dynamic=dynamic, solver=solver, output=output, source=source)

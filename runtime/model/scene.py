@@ -30,6 +30,7 @@ from runtime.model.bodies import Body, Material
 from runtime.model.errors import SceneError, show
 from runtime.model.items.constraints import Constraint
 from runtime.model.items.loads import Load
+from runtime.model.items.rigid import RigidItem
 from runtime.model.items.sensors import Sensor
 from runtime.model.schema import plain, same
 from runtime.model.settings import Dynamic, Modal, Output, Solver, Static
@@ -55,6 +56,7 @@ class Scene:
     title: str = "untitled"
     materials: dict[str, Material]
     bodies: tuple[Body, ...]
+    rigid_bodies: tuple[RigidItem, ...] = ()
     constraints: tuple[Constraint, ...] = ()
     loads: tuple[Load, ...] = ()
     sensors: tuple[Sensor, ...] = ()
@@ -72,8 +74,8 @@ class Scene:
 
     @property
     def dim(self) -> int:
-        """Spatial dimension shared by every body (2 or 3)."""
-        return self.bodies[0].dim
+        """Spatial dimension shared by every body (2 or 3; rigid bodies are 3D)."""
+        return self.bodies[0].dim if self.bodies else 3
 
     def body(self, name: str) -> Body:
         """The body called ``name`` (KeyError otherwise)."""
@@ -91,7 +93,7 @@ class Scene:
         """The scene as the table a TOML file holds (what ``tomllib`` would return)."""
         data: dict[str, Any] = {"title": self.title,
                                 "material": _materials_table(self.materials),
-                                "body": plain(self.bodies)}
+                                "body": plain(self.bodies) + plain(self.rigid_bodies)}
         for name, items in (("constraint", self.constraints), ("load", self.loads),
                             ("sensor", self.sensors)):
             if items:

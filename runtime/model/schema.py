@@ -304,6 +304,8 @@ class Context:
     dim: int
     node: Nodes
     folder: str | None = None
+    #: the rigid bodies and point masses by name (``runtime.model.items.rigid``)
+    rigid: dict = dataclasses.field(default_factory=dict)
 
     @property
     def body_names(self) -> tuple[str, ...]:

@@ -74,14 +74,15 @@ def check_model_size(bodies: tuple[Body, ...]) -> None:
 
 def check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
                  sensors: list[Sensor], static: Static | None, modal: Modal | None,
-                 dynamic: Dynamic | None) -> None:
+                 dynamic: Dynamic | None, rigid_coordinates: int = 0) -> None:
     """Refuse what cannot run on this machine in a sane time (``LIMITS``), before building;
-    the mesh itself passed ``_check_model_size``."""
+    the mesh itself passed ``_check_model_size``; ``rigid_coordinates``: those of the rigid
+    bodies and point masses."""
     memory = LIMITS["memory_bytes"]
     elements = sum(b.elements for b in bodies)
-    dim = bodies[0].dim
+    dim = bodies[0].dim if bodies else 3
     per_node = {b.name: element_kind(b.element).per_node for b in bodies}
-    coordinates = _coordinates(bodies)
+    coordinates = _coordinates(bodies) + rigid_coordinates
     model_bytes = _model_bytes(bodies)
     held = sum(c.held(dim, per_node[node.body]) for c in constraints
                if isinstance(c, NodeConstraint) for node in c.targets())

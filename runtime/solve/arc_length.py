@@ -84,6 +84,10 @@ class _PathTracer:
     """The state of a path being traced: the last converged point and the step length."""
 
     def __init__(self, model: Model, settings) -> None:
+        if model.holonomic:
+            raise ValueError("analysis.static.method: arc_length does not take the quadratic "
+                             "constraint rows of rigid bodies and their joints yet; use "
+                             "method = \"load_stepping\"")
         self.model, self.settings = model, settings
         self.convergence = Convergence.of(model, settings.tolerance)
         self.nominal = model.nominal_load()[model.free]

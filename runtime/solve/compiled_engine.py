@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse
 
 from runtime.catalog import NEWTON_MODES
 from runtime.kernels import abi, jit
@@ -29,9 +30,11 @@ from runtime.solve.python_engine import (
     CONTRACTION,
     MAX_FULL_STEPS,
     NON_FINITE,
+    PROJECTION_FAILED,
     SINGULAR,
     Counters,
     Divergence,
+    ManifoldProjection,
     State,
     alpha_parameters,
     initial_state,
@@ -127,12 +130,13 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded") -> tuple[str
               f"{kinds}, {integrator}, {solver} linear solver. Do not edit.")
     follower = bool(dae.state_loads)
     header = env.get_template("stepper_header.h.j2").render(
-        banner=banner, groups=groups, slots=slots_needed, follower=follower)
+        banner=banner, groups=groups, slots=slots_needed, follower=follower,
+        holonomic=dae.nonlinear)
     source = env.get_template("stepper.c.j2").render(
         banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
         bandwidth=dae.bandwidth, damped=any(g["damped"] for g in groups), follower=follower,
         sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip(),
-        lapack_band=dae.bandwidth >= LAPACK_BANDWIDTH)
+        lapack_band=dae.bandwidth >= LAPACK_BANDWIDTH, holonomic=dae.nonlinear)
     return source, header
 
 
@@ -191,7 +195,7 @@ class CompiledEngine:
     # --- binding arrays ----------------------------------------------------------------
 
     def _buffer(self, array, ctype: str = "double"):
-        dtype = np.float64 if ctype == "double" else np.int32
+        dtype = {"double": np.float64, "int": np.int32, "long": np.int64}[ctype]
         array = np.ascontiguousarray(array, dtype=dtype)
         if array.size == 0:
             array = np.zeros(1, dtype)
@@ -211,8 +215,9 @@ class CompiledEngine:
     def _model(self, step: float):
         dae, ffi = self.dae, self._ffi
         m = ffi.new("ancf_model *")
-        nf, nj, bw = dae.free.size, dae.joints, dae.bandwidth
+        nf, nj, bw = dae.free.size, dae.constraint_rows, dae.bandwidth
         m.size, m.nf, m.np, m.nj, m.bw = dae.size, nf, dae.prescribed.size, nj, bw
+        m.nlin = dae.joints
         m.nloads = len(dae.load_laws)
         position = np.full(dae.size, -1)
         position[dae.free] = np.arange(nf)
@@ -223,7 +228,15 @@ class CompiledEngine:
         # column j: rows j - bw .. j (the sparse solver multiplies by M in the pattern)
         m.mass_band = self._buffer(np.zeros(1) if sparse else dae.mass_band.T)
         self._csr(dae.mass_fp, "mfp", m)
-        self._csr(dae.joints_free, "af", m)
+        rows = dae.joints_free
+        if dae.nonlinear:    # the quadratic rows' structure; the callback fills their values
+            h, joints = dae.holonomic, dae.joints_free
+            self._af_data = np.concatenate([joints.data, np.zeros(h.free_indices.size)])
+            rows = scipy.sparse.csr_matrix(
+                (self._af_data, np.concatenate([joints.indices, h.free_indices]),
+                 np.concatenate([joints.indptr, joints.nnz + h.free_indptr[1:]])),
+                shape=(nj, nf))
+        self._csr(rows, "af", m)
         self._csr(dae.joints_prescribed, "ap", m)
         m.joint_fixed = self._buffer(dae.joint_fixed_part)
         m.projector = self._buffer(dae.projector)
@@ -241,9 +254,12 @@ class CompiledEngine:
         if dae.state_loads:
             self._follower(m)
         ld = bw + 1
-        m.q_full = self._buffer(dae.fixed_values.copy())
+        self._q_full, self._v_full = dae.fixed_values.copy(), np.zeros(dae.size)
+        m.q_full = self._buffer(self._q_full)
         m.f_full = self._work(dae.size)
-        m.v_full = self._work(dae.size)
+        m.v_full = self._buffer(self._v_full)
+        if dae.nonlinear:
+            self._holonomic(m)
         for name in ("force", "residual", "x", "a_old", "base", "base_v", "v_iter",
                      "abar_new", "saved_q", "saved_v", "saved_a", "saved_abar"):
             setattr(m, name, self._work(nf))
@@ -300,6 +316,64 @@ class CompiledEngine:
                                       "const double *, int, double *, double *, double *)",
                                       evaluate)
         m.follower = self._callback
+
+    def _holonomic(self, m) -> None:
+        """Bind the quadratic constraint rows as data for the step's ``quadratic_rows``
+        (per row its coordinates, linear parts, Hessian entries, constant; the header says
+        the layout) and the trapezoidal projection onto them, a Python callback
+        (``ManifoldProjection``, the Python engine's)."""
+        dae, model = self.dae, self.dae.model
+        h, offset = dae.holonomic, dae.joints_free.nnz
+        free = np.zeros(dae.size, bool)
+        free[dae.free] = True
+        a_list, g_list, af_list, b_list, h_list, slot_list = [], [], [], [], [], []
+        aptr, hptr, row = [0], [0], 0
+        for block, slots in zip(h.blocks, model.holonomic_slots, strict=True):
+            rank = np.cumsum(free[block.dofs]) - 1       # place among the free columns
+            for r in range(block.rows):
+                for j, a in enumerate(block.dofs):
+                    a_list.append(a)
+                    g_list.append(block.linear[r, j])
+                    af_list.append(offset + h.free_indptr[row] + rank[j] if free[a] else -1)
+                    nonzero = np.flatnonzero(block.hessians[r, j])
+                    b_list.extend(block.dofs[nonzero])
+                    h_list.extend(block.hessians[r, j, nonzero])
+                    slot_list.extend(slots[j, nonzero])
+                    hptr.append(len(b_list))
+                aptr.append(len(a_list))
+                row += 1
+        m.nrows_h = h.rows
+        for name, values in (("h_aptr", aptr), ("h_a", a_list), ("h_af", af_list),
+                             ("h_hptr", hptr), ("h_b", b_list), ("h_slot", slot_list)):
+            setattr(m, name, self._buffer(np.array(values, np.int64), "long"))
+        for name, values in (("h_g", g_list), ("h_h", h_list),
+                             ("h_c", np.concatenate([b.constant for b in h.blocks]))):
+            setattr(m, name, self._buffer(np.array(values, float)))
+        m.holonomic_value = self._work(h.rows)
+        m.a_full = self._work(dae.size)
+        m.af_kept = self._work(self._af_data.size)
+        projection = None
+        if self.integrator == "trapezoidal":
+            projection = ManifoldProjection(dae, self.linear,
+                                            self.settings.tolerance * dae.scale,
+                                            self.settings.max_iterations)
+        q_full, v_full = self._q_full, self._v_full
+
+        def project() -> int:
+            try:
+                q, v = self._state_arrays[0], self._state_arrays[1]
+                projected = projection(q, v, q_full[dae.prescribed], v_full[dae.prescribed])
+                if projected is None:
+                    return -1
+                q[:], v[:] = projected
+                return 0
+            except Exception as error:   # reported after the call
+                self._callback_error = error
+                return -1
+
+        self._callback_error = None
+        self._project_callback = self._ffi.callback("int(void)", project, error=-1)
+        m.project = self._project_callback
 
     def raise_callback_error(self) -> None:
         """Raise what a follower load's evaluation raised during the last call, if any."""
@@ -508,6 +582,8 @@ class CompiledEngine:
             return NON_FINITE
         if status == 2:
             return newton_not_converged(self.settings.max_iterations, s.last_correction)
+        if status == 4:
+            return PROJECTION_FAILED
         return SINGULAR
 
 
@@ -531,7 +607,7 @@ class CompiledStatic:
         self._m.residual_floor = self.convergence.floor
         rest = np.zeros(dae.free.size)
         self._s = self.engine._state(State(0.0, dae.fixed_values[dae.free], rest, rest,
-                                           np.zeros(dae.joints),
+                                           np.zeros(dae.constraint_rows),
                                            {"dissipated": 0.0, "power": 0.0}))
         self._qp = dae.prescribed_motion([0.0])[0][0]
         self._qp_buffer = self.engine._buffer(self._qp)

@@ -53,8 +53,11 @@ def make(name: str, model: Model, settings, q_full: np.ndarray):
 def static_newton(name: str, model: Model, settings, integrator: str):
     """The Newton solve of one static load increment of engine ``name`` (see
     ``runtime.solve.static.solve_static``): None for the Python one, the generated step's
-    for ``compiled`` (its module the one of a dynamic analysis with ``integrator``)."""
-    if name == "python":
+    for ``compiled`` (its module the one of a dynamic analysis with ``integrator``).
+    A model with rigid items of their own coordinates takes the Python solve with either
+    engine: their coordinates have no elastic stiffness, so the compiled step's Schur
+    complement (which needs the stiffness regular) cannot solve its saddle point."""
+    if name == "python" or any(r.dofs.size for r in model.rigid.values()):
         return None
     from runtime.solve.compiled_engine import CompiledStatic
 

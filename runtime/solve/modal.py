@@ -50,6 +50,10 @@ def modal_shapes(model: Model, q: np.ndarray, modes: int) -> ModalResult:
 def _modal(model: Model, q: np.ndarray, modes: int,
            vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """(frequencies (modes,), eigenvectors over the free coordinates (nf, modes) or None)."""
+    if model.holonomic:
+        raise ValueError("analysis.modal: modes of models with rigid bodies or their joints "
+                         "(quadratic constraint rows) are not built yet; remove "
+                         "[analysis.modal]")
     _, data = model.internal_forces(q)
     stiffness = -model.jacobian_matrix(data)
     mass = model.mass_ff

@@ -187,12 +187,20 @@ def mass_solver(dae: DAESystem) -> SchurSolver:
 
 def initial_state(dae: DAESystem, t: float = 0.0, mass: SchurSolver | None = None) -> State:
     """Consistent initial state: the model's initial velocities (at rest by default, except
-    prescribed motions), M a = F - M_fp a_p with the joints' accelerations
-    A_f a + A_p a_p = 0 (``mass``: ``mass_solver(dae)``, factorised once per engine)."""
+    prescribed motions; with quadratic constraint rows projected onto [A; Phi_q] v = 0),
+    M a = F - M_fp a_p with the joints' accelerations A_f a + A_p a_p = 0 (and
+    Phi_q a = -(Phi_q,p a_p + v^T H v) for quadratic rows); ``mass``: ``mass_solver(dae)``,
+    factorised once per engine."""
     qp, vp, ap = (x[0] for x in dae.prescribed_motion([t]))
     q = dae.fixed_values[dae.free].copy()
     v = dae.initial_velocity.copy()
     q_full = dae.full_coordinates(q, qp)
+    mass = mass or mass_solver(dae)
+    if dae.nonlinear:     # velocities onto Phi_q v = 0 (mass-orthogonal; a no-op when the
+        # scene's initial velocities are consistent, as the mechanisms' rigid motions are)
+        rows = SchurSolver(mass.factor, dae.constraint_matrix(q_full))
+        v = v - rows.solve(np.zeros_like(v), dae.velocity_violation(
+            q_full, dae.full_velocities(v, vp)))[0]
     force, _, _ = dae.internal_forces(q_full, dae.full_velocities(v, vp), jacobian=False)
     factors = dae.load_factors([t])[0]
     force = force[dae.free] + factors @ dae.load_vectors
@@ -202,8 +210,11 @@ def initial_state(dae: DAESystem, t: float = 0.0, mass: SchurSolver | None = Non
                                               dae.full_velocities(v, vp), t)[0][dae.free]
         except LoadFunctionError as error:   # a Python load failed at the start
             raise Divergence(t, str(error)) from None
-    a, lam = (mass or mass_solver(dae)).solve(force - dae.mass_fp @ ap,
-                                              -(dae.joints_prescribed @ ap))
+    if dae.nonlinear:       # Phi_q a = -(Phi_q,p a_p + v^T H v)
+        a, lam = rows.solve(force - dae.mass_fp @ ap, -dae.acceleration_violation(
+            q_full, dae.full_velocities(v, vp), dae.full_accelerations(np.zeros_like(v), ap)))
+    else:
+        a, lam = mass.solve(force - dae.mass_fp @ ap, -(dae.joints_prescribed @ ap))
     return State(t, q, v, a, lam, {"dissipated": 0.0,
                                    "power": dae.dissipation_power(q, v, qp, vp)})
 
@@ -237,11 +248,19 @@ class OutputDynamics:
                 force[row] += dae.state_loads.evaluate(q_full[row], factors[row], False,
                                                        v_full[row], float(times[row]))[0]
         rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
+        accelerations = np.zeros_like(force)
+        accelerations[:, dae.prescribed] = ap
+        if dae.nonlinear:     # the constraint rows at each state
+            lam = np.zeros((len(times), dae.constraint_rows))
+            for row in range(len(times)):
+                accelerations[row, dae.free], lam[row] = SchurSolver(
+                    dae.mass_band, dae.constraint_matrix(q_full[row])).solve(
+                    rhs[row], -dae.acceleration_violation(q_full[row], v_full[row],
+                                                          accelerations[row]))
+            return accelerations, lam, force
         a, lam = self.solver.solve(rhs.T, -(dae.joints_prescribed @ ap.T) if dae.joints
                                    else None)
-        accelerations = np.zeros_like(force)
         accelerations[:, dae.free] = a.T
-        accelerations[:, dae.prescribed] = ap
         return accelerations, np.asarray(lam).T.reshape(len(times), dae.joints), force
 
 
@@ -301,43 +320,55 @@ class Integrator:
         return total, (data, data_dot)
 
     def residual(self, a: np.ndarray, force: np.ndarray, ap: np.ndarray,
-                 multipliers: np.ndarray) -> np.ndarray:
-        """M_ff a + M_fp a_p + A^T lambda - F: the equations of motion of the free part."""
+                 multipliers: np.ndarray, q_full: np.ndarray | None) -> np.ndarray:
+        """M_ff a + M_fp a_p + A^T lambda (+ Phi_q(q)^T lambda) - F: the equations of motion
+        of the free part at the coordinates q_full (read only with quadratic rows)."""
         dae = self.dae
         residual = dae.mass_ff @ a - force
         if ap.size:
             residual += dae.mass_fp @ ap
-        if dae.joints:
+        if dae.nonlinear:
+            residual += dae.constraint_forces(q_full, multipliers)
+        elif dae.joints:
             residual += dae.joints_free.T @ multipliers
         return residual
 
     def linear_step(self, q: np.ndarray, v: np.ndarray, t: float, prescribed,
                     loads: np.ndarray, coefficients: tuple[float, float, float], residual_of,
-                    constraint):
+                    constraint, multipliers: np.ndarray):
         """One Newton iteration at (q, v): forces (and the Jacobians, when they are rebuilt),
-        the residual ``residual_of(force)``, and the solution of [[S, A^T], [A, 0]] [dx; dy]
-        = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) = ``coefficients``.
+        the residual ``residual_of(force, q_full)``, and the solution of [[S, A^T], [A, 0]]
+        [dx; dy] = -[r; c] with S = c_m M + c_q dF/dq + c_v dF/dv, (c_m, c_q, c_v) =
+        ``coefficients`` (with quadratic constraint rows, A holds their Phi_q at q and S
+        their geometric stiffness -c_q (Phi_q^T lambda)_q at the ``multipliers``).
         Returns (dx, dy)."""
         rebuild = self._full_step or self._refresh or self._solver is None
         force, (data, data_dot) = self.forces(q, v, t, prescribed, loads, rebuild)
+        # the coordinates the quadratic rows are evaluated at (unused by linear joints)
+        q_full = self.dae.full_coordinates(q, prescribed[0]) if self.dae.nonlinear else None
         self.counters.newton_iterations += 1
         if rebuild:
             mass_coef, jacobian_coef, damping_coef = coefficients
             values = jacobian_coef * data + mass_coef * self._mass
             if data_dot is not None:
                 values += damping_coef * data_dot
+            rows = self.dae.joints_free
+            if self.dae.nonlinear:
+                values = values - jacobian_coef * self.dae.geometric_stiffness(multipliers)
+                rows = self.dae.constraint_matrix(q_full)
             start = time.perf_counter()
             try:
-                self._solver = SchurSolver(self.linear.factor(values), self.dae.joints_free)
+                self._solver = SchurSolver(self.linear.factor(values), rows)
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
                 self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
+        violation = constraint(q_full)
         start = time.perf_counter()
-        solution = self._solver.solve(-residual_of(force), None if constraint is None
-                                      else -constraint)
+        solution = self._solver.solve(-residual_of(force, q_full), None if violation is None
+                                      else -violation)
         self.timing["solve_s"] += time.perf_counter() - start
         return solution
 
@@ -452,6 +483,8 @@ class Integrator:
 class Trapezoidal(Integrator):
     """The paper's integrator (see the module docstring)."""
 
+    _projection: ManifoldProjection | None = None
+
     def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
         dae = self.dae
         qp, vp, ap = prescribed
@@ -460,14 +493,20 @@ class Trapezoidal(Integrator):
         base_v = state.v + h / 2 * state.a
         k = h * h / 4
 
+        def constraint(q_full: np.ndarray) -> np.ndarray | None:
+            if dae.nonlinear:     # Phi_q a + v^T H v at the iterate
+                return dae.acceleration_violation(
+                    q_full, dae.full_velocities(base_v + h / 2 * a, vp),
+                    dae.full_accelerations(a, ap))
+            return dae.joints_free @ a + dae.joints_prescribed @ ap if dae.joints else None
+
         def iterate() -> np.ndarray:
             nonlocal a, lam
-            constraint = (dae.joints_free @ a + dae.joints_prescribed @ ap
-                          if dae.joints else None)
             da, dlam = self.linear_step(base_q + k * a, base_v + h / 2 * a, t, prescribed,
                                         loads, (1.0, -k, -h / 2),
-                                        lambda force: self.residual(a, force, ap, lam),
-                                        constraint)
+                                        lambda force, q_full: self.residual(a, force, ap, lam,
+                                                                            q_full),
+                                        constraint, lam)
             a = a + da
             lam = lam + dlam
             return k * da
@@ -475,7 +514,16 @@ class Trapezoidal(Integrator):
         self.newton_loop(t, iterate)
         q = base_q + k * a
         v = state.v + h / 2 * (state.a + a)
-        if dae.joints:
+        if dae.nonlinear:
+            if self._projection is None:
+                self._projection = ManifoldProjection(
+                    dae, self.linear, self.settings.tolerance * self.scale,
+                    self.settings.max_iterations)
+            projected = self._projection(q, v, qp, vp)
+            if projected is None:
+                raise Divergence(t, PROJECTION_FAILED)
+            q, v = projected
+        elif dae.joints:
             q, v = self.project(q, v, qp, vp)
         return State(t, q, v, a, lam, self.dissipation(state, q, v, prescribed, h))
 
@@ -488,6 +536,46 @@ class Trapezoidal(Integrator):
             q = q - dae.projector @ violation
         v = v - dae.projector @ (dae.joints_free @ v + dae.joints_prescribed @ vp)
         return q, v
+
+
+
+class ManifoldProjection:
+    """The trapezoidal scheme's mass-orthogonal projection onto the joints and the quadratic
+    constraint rows, Phi(q) = 0 then Phi_q v = 0: q -= M^-1 C^T (C M^-1 C^T)^-1 Phi(q) with
+    C = [A; Phi_q] at the current q, iterated until the correction is within ``tolerance``
+    (m), at most ``max_iterations`` times; then the velocities with C at the projected q.
+    M is factorised once by a solver of the kind of ``solver``.  Both engines project
+    through it (the compiled one by a callback)."""
+
+    def __init__(self, dae: DAESystem, solver, tolerance: float, max_iterations: int) -> None:
+        self.dae, self.tolerance, self.max_iterations = dae, tolerance, max_iterations
+        # a solver of its own: a sparse factorisation lasts until its solver's next one
+        own = linear.make(solver.name, dae.model.pattern)
+        self.mass = own.factor(linear.pattern_values(dae.mass_ff, dae.model.pattern))
+
+    def __call__(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray, vp: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Projected (q, v) (free coordinates) with the prescribed values and rates (qp, vp);
+        None if the positions did not converge."""
+        dae = self.dae
+        for _ in range(self.max_iterations):
+            q_full = dae.full_coordinates(q, qp)
+            projector = SchurSolver(self.mass, dae.constraint_matrix(q_full))
+            correction = projector.solve(np.zeros_like(q), dae.violation(q_full))[0]
+            q = q - correction
+            if float(np.abs(correction).max(initial=0.0)) <= self.tolerance:
+                break
+        else:
+            return None
+        q_full = dae.full_coordinates(q, qp)
+        projector = SchurSolver(self.mass, dae.constraint_matrix(q_full))
+        v = v - projector.solve(np.zeros_like(v), dae.velocity_violation(
+            q_full, dae.full_velocities(v, vp)))[0]
+        return q, v
+
+
+#: the cause of a projection that does not converge, worded identically by both engines
+PROJECTION_FAILED = "the projection onto the constraints did not converge"
 
 
 class GeneralizedAlpha(Integrator):
@@ -518,13 +606,18 @@ class GeneralizedAlpha(Integrator):
         gamma_prime = gamma / (h * beta)
         fixed_part = dae.joints_prescribed @ qp + dae.joint_fixed_part
 
+        def constraint(q_full: np.ndarray) -> np.ndarray | None:
+            if dae.nonlinear:
+                return dae.violation(q_full)
+            return dae.joints_free @ q + fixed_part if dae.joints else None
+
         def iterate() -> np.ndarray:
             nonlocal q, v, a, lam
-            constraint = dae.joints_free @ q + fixed_part if dae.joints else None
             dq, dlam = self.linear_step(q, v, t, prescribed, loads,
                                         (beta_prime, -1.0, -gamma_prime),
-                                        lambda force: self.residual(a, force, ap, lam),
-                                        constraint)
+                                        lambda force, q_full: self.residual(a, force, ap, lam,
+                                                                            q_full),
+                                        constraint, lam)
             q = q + dq
             v = v + gamma_prime * dq
             a = a + beta_prime * dq

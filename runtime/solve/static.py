@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse
 
 from runtime.model.dae import StateLoads
 from runtime.model.model import Model
@@ -51,11 +52,25 @@ class FreeMechanismError(ValueError):
 
 def check_held(model: Model) -> None:
     """FreeMechanismError naming every body free to move (``Model.free_motions``)."""
-    motions = model.free_motions()
+    motions = model.free_motions() + [
+        f"rigid body {name!r} is free to move (no joint or spring holds it)"
+        for name in model.rigid if name not in _held_rigid(model)]
     if motions:
         raise FreeMechanismError(
             f"analysis.static: {'; '.join(motions)}: a static analysis needs every body held "
             f"(add a clamp, a pin or a joint to a held body), or remove [analysis.static]")
+
+
+def _held_rigid(model: Model) -> set[str]:
+    """Names of the rigid items that some joint or force element reaches (a point mass on
+    a node moves with its node)."""
+    held = {name for name, rigid in model.rigid.items() if not rigid.dofs.size}
+    for constraint in model.scene.constraints:      # the body joints
+        held.update((getattr(constraint, "body", None), getattr(constraint, "other", None)))
+    for load in model.scene.loads:                  # the ends of spring-dampers
+        for end in (getattr(load, "end_a", None), getattr(load, "end_b", None)):
+            held.add(getattr(end, "body", None))
+    return held
 
 
 @dataclass(frozen=True)
@@ -149,17 +164,22 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
     test = convergence or Convergence.of(model, settings.tolerance)
     applied = load[free]
     q = q.copy()
+    holonomic, nj = model.holonomic, joints.shape[0]
     for iteration in range(1, settings.max_iterations + 1):
         force, data = model.internal_forces(q)
         if state_load is not None:
             follower, follower_data = state_load(q)
             force, data = force + follower, data + follower_data
-        residual = force[free] + applied - joints.T @ multipliers
+        rows, violation = joints, model.joints @ q
+        if holonomic:     # quadratic rows: Phi_q at q, their geometric stiffness in J
+            rows = scipy.sparse.vstack([joints, holonomic.jacobian_free(q)], format="csr")
+            violation = np.concatenate([violation, holonomic.value(q)])
+            data = data - model.holonomic_stiffness(multipliers[nj:])
+        residual = force[free] + applied - rows.T @ multipliers
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")
         # J dq - A^T dmu = -R and A dq = -A q, written with the positive definite -J
-        step, dual = _solve(model, -1.0, data, residual, -(model.joints @ q),
-                            state_load is None)
+        step, dual = _solve(model, -1.0, data, residual, -violation, state_load is None, rows)
         q[free] += step
         multipliers = multipliers + dual
         size, scale = float(np.abs(step).max(initial=0.0)), force_scale(force, applied)
@@ -202,13 +222,14 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
     """
     check_held(model)
     q = model.reference.copy()
-    multipliers = np.zeros(model.joints.shape[0])
+    multipliers = np.zeros(model.joints.shape[0] + model.holonomic.rows)
     done, increment, iterations, steps = 0.0, 1.0 / settings.load_steps, 0, 0
     energy, snapped = _PathEnergy(model), False
     while done < 1.0 - 1e-12:
         target = min(1.0, done + increment)
         try:
-            q_new, mu_new, used = newton(q, target, multipliers)
+            q_new, mu_new, used = newton(q, target, _rigid_multipliers(
+                model, q, target * model.nominal_load(), multipliers))
             energy.check(q, done, q_new, target)
         except IllConditionedError:
             raise
@@ -226,6 +247,25 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
     return StaticResult(q, multipliers, iterations, steps)
+
+
+def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
+                       multipliers: np.ndarray) -> np.ndarray:
+    """The multipliers corrected so that the constraint forces balance ``load`` (size,) on
+    the coordinates of the rigid items at q (least squares, the smallest correction): a
+    rigid body has no elastic stiffness, only the geometric stiffness of its constraints
+    (Phi_q^T lambda)_q, so Newton needs multipliers of the right size from its first
+    iteration (from zero, a body hanging from a revolute joint has a singular matrix)."""
+    if not model.holonomic or not model.rigid:
+        return multipliers
+    position = np.full(model.size, -1)
+    position[model.free] = np.arange(model.free.size)
+    rigid = position[np.concatenate([r.dofs for r in model.rigid.values()])]
+    rigid = rigid[rigid >= 0]
+    rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
+                               format="csc")[:, rigid].toarray()
+    mismatch = load[model.free][rigid] - rows.T @ multipliers
+    return multipliers + np.linalg.lstsq(rows.T, mismatch, rcond=None)[0]
 
 
 class _PathEnergy:
@@ -267,13 +307,16 @@ class _PathEnergy:
 
 
 def _solve(model: Model, jacobian_coef: float, data: np.ndarray, rhs: np.ndarray,
-           rhs_constraints: np.ndarray, symmetric: bool = True) -> tuple[np.ndarray, np.ndarray]:
+           rhs_constraints: np.ndarray, symmetric: bool = True,
+           rows: scipy.sparse.spmatrix | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Solve [[c J, A^T], [A, 0]] [x; y] = [rhs; rhs_constraints] over the free coordinates
     (J from ``Model.internal_forces`` data).  Without joints and symmetric by the model's
     linear solver (``runtime.solve.linear.for_model``: banded for chains, sparse for meshes);
     with joints (where J alone may be singular) or a non-symmetric J (follower loads) by the
-    sparse or small dense LU of the saddle point."""
-    if model.joints.shape[0] or not symmetric:
+    sparse or small dense LU of the saddle point; ``rows``: the constraint rows (default the
+    joints A_f; with quadratic rows, [A_f; Phi_q])."""
+    rows = model.joints_free if rows is None else rows
+    if rows.shape[0] or not symmetric:
         matrix = jacobian_coef * model.jacobian_matrix(data)
-        return SaddleSolver(matrix, model.joints_free).solve(rhs, rhs_constraints)
+        return SaddleSolver(matrix, rows).solve(rhs, rhs_constraints)
     return for_model(model).factor(jacobian_coef * data).solve(rhs), np.zeros(0)

@@ -44,9 +44,18 @@ class ModelView(Protocol):
     free: np.ndarray
     mass: scipy.sparse.csr_matrix
     joints: scipy.sparse.csr_matrix
+    #: the quadratic constraint rows Phi(q) = 0 (``runtime.model.holonomic``)
+    holonomic: Any
+    #: per scene constraint, the indices of its multipliers in [joints; quadratic rows]
+    constraint_multipliers: list
     bodies: dict[str, BodyView]
     scene: Any
     dissipated_energy: float
+    #: the rigid bodies and point masses (``RigidCoordinates``: ``item``, ``dofs``) by name
+    rigid: dict[str, Any]
+
+    def rigid_point(self, name: str, point: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """(coordinates (k,), map (3, k)) of the position of a rigid item's body point."""
 
     def node_index(self, ref: NodeRef) -> int:
         """Global node index of a scene node reference."""
@@ -71,3 +80,6 @@ class ModelView(Protocol):
 
     def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
         """Potential energy (J) of the gravity loads at ``q`` and time ``t``."""
+
+    def spring_energy(self, q: np.ndarray, t: float | None = 0.0) -> float:
+        """Energy (J) stored in the springs of the spring-dampers at ``q`` and time ``t``."""

@@ -17,6 +17,7 @@ import numpy as np
 
 from runtime.kernels.kind import is_first_gradient
 from runtime.model.errors import SceneError, show
+from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
@@ -46,12 +47,14 @@ class Built:
 
     fixed: (size,) bool, coordinates held at their initial values; hubs: (node, angle law,
     axis (3,)) of the nodes that follow a prescribed rigid rotation; rows: joint rows
-    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}.
+    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}; blocks: quadratic
+    constraint rows ``Phi(q) = 0`` (``runtime.model.holonomic``: rigid bodies, 3D joints).
     """
 
     fixed: np.ndarray
     hubs: list[tuple[int, Law, np.ndarray]] = field(default_factory=list)
     rows: list[dict[int, float]] = field(default_factory=list)
+    blocks: list[QuadraticBlock] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -182,6 +185,35 @@ class Joint(Constraint):
         built.rows.extend({i: 1.0, j: -1.0} for i, j in zip(a, b, strict=True))
 
 
+def normals_of(axis: np.ndarray) -> np.ndarray:
+    """Two unit vectors (2, 3) normal to the unit ``axis`` and to each other."""
+    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    first = np.cross(axis, helper)
+    first /= np.linalg.norm(first)
+    return np.array([first, np.cross(axis, first)])
+
+
+def gradient_map(model: ModelView, node: int, vector: np.ndarray,
+                 what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(the node's coordinates (k,), map (3, k)) of the fixed combination ``G c`` of a 3D
+    node's gradient vectors G that is ``vector`` (3,) at the reference: it turns and
+    stretches with the node's section.  SceneError (``what`` names the vector) when
+    ``vector`` is not in the span of the node's gradients."""
+    names = [name for name in model.node_vectors(node) if name != "r"]
+    gradients = np.array([model.reference[model.node_dofs(node, name)] for name in names]).T
+    combination, *_ = np.linalg.lstsq(gradients, vector, rcond=None)
+    if np.abs(gradients @ combination - vector).max() > 1e-9:
+        raise SceneError(f"{what} {tuple(float(x) for x in vector)} is not a combination "
+                         f"of the gradients {', '.join(names)} of the node (its section's "
+                         "frame); choose an axis in it")
+    dofs = model.node_dofs(node)
+    mapping = np.zeros((3, dofs.size))
+    for k, name in enumerate(names):
+        start = model.node_vectors(node).index(name) * 3
+        mapping[:, start:start + 3] += combination[k] * np.eye(3)
+    return dofs, mapping
+
+
 @dataclass(frozen=True)
 class Spherical(Joint):
     """Shared position, free relative rotation (a ball joint in 3D, a hinge in 2D)."""
@@ -191,12 +223,43 @@ class Spherical(Joint):
 
 @dataclass(frozen=True)
 class Revolute(Joint):
-    """Planar hinge: shared position, free relative rotation about z (2D scenes only)."""
+    """A hinge: shared position, free relative rotation about z (2D) or about ``axis``
+    (3D, default z): the axis a = G_A c as a fixed combination of the first node's gradients
+    stays normal to two vectors b_k = G_B d_k of the second's, normal to it at the
+    reference (two quadratic rows a . b_k = 0, bilinear in the nodes' coordinates;
+    ``runtime.model.holonomic``)."""
 
     type: ClassVar[str] = "revolute"
-    dims: ClassVar[tuple[int, ...]] = (2,)
-    dims_message: ClassVar[str] = ('a revolute joint is planar (2D scenes only); use '
-                                   '"spherical" in 3D')
+    axis: tuple[float, ...] | None = key(_axis_key, None,
+                                         only_3d="a 2D revolute joint turns about z")
+
+    def resolved(self, context: Context) -> Revolute:
+        if context.dim == 3 and self.axis is None:
+            return dataclasses.replace(self, axis=(0.0, 0.0, 1.0))
+        return self
+
+    def rows(self, dim: int, per_node: int) -> int:
+        return dim if dim == 2 else dim + 2
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        super().apply(model, built)
+        if model.dim == 2:
+            return
+        a, b = (model.node_index(n) for n in self.nodes)
+        axis = np.asarray(self.axis, float)
+        dofs_a, map_a = gradient_map(model, a, axis, "revolute: the axis")
+        blocks = [gradient_map(model, b, normal, "revolute: the normal")
+                  for normal in normals_of(axis)]
+        dofs_b = blocks[0][0]
+        joined = np.concatenate([dofs_a, dofs_b])
+        n = dofs_a.size
+        hessians = np.zeros((2, joined.size, joined.size))
+        for k, (_, map_b) in enumerate(blocks):
+            coupling = map_a.T @ map_b              # a . b_k = q_A^T (A^T B_k) q_B
+            hessians[k, :n, n:] = coupling
+            hessians[k, n:, :n] = coupling.T
+        built.blocks.append(QuadraticBlock("revolute", joined, hessians,
+                                           np.zeros((2, joined.size)), np.zeros(2)))
 
 
 @dataclass(frozen=True)
@@ -241,4 +304,14 @@ class Weld(Joint):
                 built.rows.append(row)
 
 
-CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld)
+# the joints of rigid bodies build on the classes above
+from runtime.model.items.body_joints import (  # noqa: E402
+    BodyPrismatic,
+    BodyRevolute,
+    BodySpherical,
+    BodyWeld,
+)
+
+CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
+                                                    BodySpherical, BodyRevolute, BodyPrismatic,
+                                                    BodyWeld)

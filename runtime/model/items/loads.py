@@ -21,7 +21,9 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
+from runtime.model.items.force_elements import BodyTorqueForce, SpringDamperForce
 from runtime.model.items.python_loads import PythonForce, PythonFunction
+from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -36,12 +38,14 @@ from runtime.model.schema import (
     number,
     registry,
     rotation_vector,
+    unit_axis,
     vector,
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "DistributedForce", "Gravity", "LineForce", "LineMoment", "Load",
-           "NodeLoad", "PointForce", "PointMoment", "Pressure", "PythonLoad"]
+__all__ = ["LOADS", "BodyForce", "BodyTorque", "DistributedForce", "End", "Gravity", "LineForce",
+           "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment", "Pressure",
+           "PythonLoad", "SpringDamper"]
 
 StateForce = Callable[[np.ndarray, bool], Patches]
 
@@ -246,6 +250,165 @@ class Gravity(Load):
 
     def nominal(self, model: ModelView) -> np.ndarray:
         return model.mass @ model.rigid_field(translation=self.acceleration)
+
+
+def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, 3, "a point in body coordinates, m")
+
+
+@dataclass(frozen=True)
+class BodyForce(Load):
+    """A force ``force`` (3,) in N, fixed in direction, at the point ``point`` (body
+    coordinates, m) of the rigid body or point mass ``body``: the generalised force N^T f
+    of the point's map (``runtime.model.items.rigid.natural_map``)."""
+
+    type: ClassVar[str] = "body_force"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    force: tuple[float, ...] = key(_vector_key)
+    point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        dofs, point = model.rigid_point(self.body, self.point)
+        out = np.zeros(model.size)
+        out[dofs] += point.T @ np.asarray(self.force)
+        return out
+
+
+def _finite_key(value: Any, path: str, context: Context) -> float:
+    return number(value, path)
+
+
+def _body_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+@dataclass(frozen=True)
+class BodyTorque(Load):
+    """A torque ``torque`` (N m) times its ``time_law`` about the ``axis`` (body
+    coordinates, unit; default z) of the rigid body ``body``, turning with the body: a motor
+    on a body in a revolute joint about that axis (``runtime.model.items.force_elements``)."""
+
+    type: ClassVar[str] = "body_torque"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    torque: float = key(_finite_key)
+    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0))
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        load = super().parse(data, path, context)
+        if not isinstance(context.rigid[load.body], RigidBody):
+            raise SceneError(f"{path}.body: a torque needs a rigid body (type = \"rigid\"), "
+                             f"got the point mass {show(load.body)}")
+        return load
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def state_force(self, model: ModelView) -> BodyTorqueForce:
+        return BodyTorqueForce(model.rigid[self.body].dofs, np.asarray(self.axis),
+                               self.torque)
+
+
+@dataclass(frozen=True)
+class End:
+    """An end of a force element: a ``node`` of a meshed body, the point ``point`` (body
+    coordinates, m) of a rigid ``body``, or a fixed ``anchor`` (3,) in m.  TOML: "BODY:INDEX",
+    {body = "NAME", point = [x, y, z]} (point default the origin) or [x, y, z]."""
+
+    node: NodeRef | None = None
+    body: str | None = None
+    point: tuple[float, ...] = (0.0, 0.0, 0.0)
+    anchor: tuple[float, ...] | None = None
+
+    @classmethod
+    def parse(cls, value: Any, path: str, context: Context) -> End:
+        if isinstance(value, str):
+            return cls(node=node_key(value, path, context))
+        if isinstance(value, list):
+            return cls(anchor=vector(value, path, 3, "an anchor point in m"))
+        if isinstance(value, dict) and set(value) <= {"body", "point"} and "body" in value:
+            point = _body_point_key(value.get("point", [0.0, 0.0, 0.0]), f"{path}.point",
+                                    context)
+            return cls(body=rigid_key(value["body"], f"{path}.body", context), point=point)
+        raise SceneError(f'{path}: expected a node "BODY:INDEX", a rigid body\'s point '
+                         f'{{body = "NAME", point = [x, y, z]}} or an anchor [x, y, z], got '
+                         f"{show(value)}")
+
+    def to_dict(self) -> Any:
+        if self.node is not None:
+            return self.node.spelled()
+        if self.anchor is not None:
+            return list(self.anchor)
+        return {"body": self.body, "point": list(self.point)}
+
+    def position(self, model: ModelView) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(coordinates (k,), map (3, k), constant (3,)) of its position."""
+        if self.node is not None:
+            return model.node_dofs(model.node_index(self.node), "r"), np.eye(3), np.zeros(3)
+        if self.anchor is not None:
+            return np.zeros(0, int), np.zeros((3, 0)), np.asarray(self.anchor, float)
+        dofs, point = model.rigid_point(self.body, self.point)
+        return dofs, point, np.zeros(3)
+
+
+def _end_key(value: Any, path: str, context: Context) -> End:
+    return End.parse(value, path, context)
+
+
+def _non_negative_key(value: Any, path: str, context: Context) -> float:
+    number_ = number(value, path)
+    if number_ < 0:
+        raise SceneError(f"{path}: expected a number >= 0, got {show(value)}")
+    return number_
+
+
+@dataclass(frozen=True)
+class SpringDamper(Load):
+    """A linear spring-damper between ``end_a`` and ``end_b`` (``End``): ``stiffness`` (N/m),
+    ``damping`` (N s/m), rest ``length`` (m; default the distance at t = 0); the force
+    k (L - L0) + c L' along the line of the ends, with exact Jacobians
+    (``runtime.model.items.force_elements``), times its ``time_law``."""
+
+    type: ClassVar[str] = "spring_damper"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
+    end_a: End = key(_end_key)
+    end_b: End = key(_end_key)
+    stiffness: float = key(_non_negative_key)
+    damping: float = key(_non_negative_key, 0.0)
+    length: float | None = key(_non_negative_key, None)
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def coupled_dofs(self, model: ModelView) -> np.ndarray:
+        """The coordinates its Jacobian couples (they join the model's pattern)."""
+        return self.state_force(model).dofs[0]
+
+    def state_force(self, model: ModelView) -> SpringDamperForce:
+        dofs_a, map_a, const_a = self.end_a.position(model)
+        dofs_b, map_b, const_b = self.end_b.position(model)
+        dofs = np.concatenate([dofs_b, dofs_a])
+        difference = np.hstack([map_b, -map_a])
+        offset = const_b - const_a
+        unique, inverse = np.unique(dofs, return_inverse=True)
+        merged = np.zeros((3, unique.size))
+        np.add.at(merged.T, inverse, difference.T)
+        rest = float(np.linalg.norm(merged @ model.reference[unique] + offset))
+        return SpringDamperForce(unique, merged, offset, self.stiffness, self.damping,
+                                 rest if self.length is None else self.length)
 
 
 @dataclass(frozen=True)
@@ -468,4 +631,5 @@ class PythonLoad(Load):
 
 
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
-                                        Pressure, DistributedForce, PythonLoad)
+                                        Pressure, DistributedForce, PythonLoad, BodyForce,
+                                        SpringDamper, BodyTorque)

@@ -68,6 +68,9 @@ class PythonForce:
     ``size`` coordinates; ``where`` (its key path, "load[0]") names it in errors.  ``calls``
     and ``seconds`` count the calls of ``function`` and the time spent in them."""
 
+    #: it reads the velocities: called as (q, jacobian, v, t), its patches ``MotionPatches``
+    reads_velocity = True
+
     def __init__(self, function: PythonFunction, jacobian: PythonFunction | None,
                  dofs: np.ndarray, size: int, where: str) -> None:
         self.function, self.jacobian_function = function, jacobian

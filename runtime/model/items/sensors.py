@@ -22,6 +22,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Joint
+from runtime.model.items.rigid import rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -197,6 +198,43 @@ class Velocity(Sensor):
         return _component(velocity, self.component)
 
 
+def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, 3, "a point in body coordinates, m")
+
+
+@dataclass(frozen=True)
+class BodyPosition(Sensor):
+    """Position (m) of the point ``point`` (body coordinates) of the rigid body or point mass
+    ``body``: one ``component`` (x | y | z | norm) in global axes."""
+
+    type: ClassVar[str] = "body_position"
+    unit: ClassVar[str] = "m"
+    energy: ClassVar[bool] = False
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    component: str = key(_component_key)
+    point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def _of(self, model: ModelView, states: np.ndarray) -> np.ndarray:
+        dofs, point = model.rigid_point(self.body, self.point)
+        return _component(states[:, dofs] @ point.T, self.component)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return self._of(model, samples.q)
+
+
+@dataclass(frozen=True)
+class BodyVelocity(BodyPosition):
+    """Velocity (m/s) of a point of a rigid body (as ``body_position``)."""
+
+    type: ClassVar[str] = "body_velocity"
+    unit: ClassVar[str] = "m/s"
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        return self._of(model, samples.v)
+
+
 def _body_key(value: Any, path: str, context: Context) -> str:
     return choice(value, path, context.body_names, "body")
 
@@ -303,10 +341,27 @@ def _constraint_force(model: ModelView, samples: Samples, dofs: np.ndarray) -> n
     """(k, dofs) generalised force of the constraints on coordinates ``dofs``: M a - F where
     they are held or prescribed, -A^T lambda where they are free."""
     held = samples.a @ model.mass[:, dofs] - samples.force[:, dofs]
-    if not model.joints.shape[0]:
+    if not model.joints.shape[0] and not model.holonomic:
         return np.where(np.isin(dofs, model.free), 0.0, held)
-    joints = np.asarray(samples.multipliers @ model.joints[:, dofs])
+    joints = _multiplier_force(model, samples, dofs)
     return np.where(np.isin(dofs, model.free), -joints, held)
+
+
+def _multiplier_force(model: ModelView, samples: Samples, dofs: np.ndarray,
+                      rows: list[int] | None = None) -> np.ndarray:
+    """(k, dofs) C^T lambda on the coordinates ``dofs`` of the constraint rows ``rows``
+    (indices into the multipliers [joints; quadratic rows]; None: all), C = [A; Phi_q(q)]."""
+    nj = model.joints.shape[0]
+    out = np.zeros((len(samples.q), dofs.size))
+    for k, (q, lam) in enumerate(zip(samples.q, samples.multipliers, strict=True)):
+        chosen = lam.copy() if rows is None else np.zeros_like(lam)
+        if rows is not None:
+            chosen[rows] = lam[rows]
+        if nj:
+            out[k] += model.joints[:, dofs].T @ chosen[:nj]
+        if model.holonomic:
+            out[k] += model.holonomic.jacobian(q)[:, dofs].T @ chosen[nj:]
+    return out
 
 
 def _cross3(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
@@ -316,6 +371,53 @@ def _cross3(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
     out = np.zeros((arm.shape[0], 3))
     out[:, 2] = arm[:, 0] * force[:, 1] - arm[:, 1] * force[:, 0]
     return out
+
+
+def _constraint_index_key(value: Any, path: str, context: Context) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise SceneError(f"{path}: expected the index (0, 1, ...) of a [[constraint]] of "
+                         f"the body, got {show(value)}")
+    return value
+
+
+@dataclass(frozen=True)
+class BodyReaction(Sensor):
+    """The ``quantity`` (force in N | moment in N m about the body's origin) that the
+    constraints exert on the rigid body ``body``: all of them, or the one ``constraint``
+    (its index among the [[constraint]] tables), from the multipliers: the generalised force
+    Q = -C^T lambda on the natural coordinates [r0, u, v, w] gives the force Q_r0 and the
+    moment sum_a e_a x Q_a (e_a = u, v, w; the body's own rigidity rows add none).  One
+    ``component`` (x | y | z | norm, the default) in global axes."""
+
+    type: ClassVar[str] = "body_reaction"
+    energy: ClassVar[bool] = False
+    dynamics: ClassVar[bool] = True
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    quantity: str = key(_quantity_key, "force")
+    component: str = key(_any_component_key, "norm")
+    constraint: int | None = key(_constraint_index_key, None)
+
+    @property
+    def unit(self) -> str:   # type: ignore[override]
+        return "N" if self.quantity == "force" else "N m"
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        rigid = model.rigid[self.body]
+        if rigid.dofs.size != 12:
+            raise ValueError(f"sensor {self.name}: body_reaction reads a rigid body "
+                             f"(type = \"rigid\"); {self.body!r} is a point mass")
+        if self.constraint is not None and self.constraint >= len(model.constraint_multipliers):
+            raise ValueError(f"sensor {self.name}: constraint {self.constraint} out of range")
+        rows = None if self.constraint is None else model.constraint_multipliers[
+            self.constraint]
+        force = -_multiplier_force(model, samples, rigid.dofs, rows)
+        if self.quantity == "force":
+            return _component(force[:, :3], self.component)
+        axes = samples.q[:, rigid.dofs[3:]].reshape(-1, 3, 3)
+        moment = sum(_cross3(axes[:, a], force[:, 3 + 3 * a:6 + 3 * a]) for a in range(3))
+        return _component(moment, self.component)
 
 
 def check_reactions(sensors: tuple[Sensor, ...], constraints: tuple) -> None:
@@ -543,23 +645,26 @@ class KineticEnergy(Sensor):
 
 @dataclass(frozen=True)
 class PotentialEnergy(Sensor):
-    """Potential energy (J) of the gravity loads relative to the reference."""
+    """Potential energy (J) of the gravity loads relative to the reference, plus the
+    energy stored in the springs of spring-dampers."""
 
     type: ClassVar[str] = "potential_energy"
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
-        return model.gravity_potential(samples.q, samples.t)
+        return (model.gravity_potential(samples.q, samples.t)
+                + model.spring_energy(samples.q, samples.t))
 
 
 @dataclass(frozen=True)
 class TotalEnergy(Sensor):
-    """Strain + kinetic + gravity potential energy (J) of the whole model."""
+    """Strain + kinetic + potential energy (J: gravity and springs) of the whole model."""
 
     type: ClassVar[str] = "total_energy"
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return (model.strain_energy(samples.q) + model.kinetic_energy(samples.v)
-                + model.gravity_potential(samples.q, samples.t))
+                + model.gravity_potential(samples.q, samples.t)
+                + model.spring_energy(samples.q, samples.t))
 
 
 @dataclass(frozen=True)
@@ -577,22 +682,27 @@ class DissipatedEnergy(Sensor):
 
 @dataclass(frozen=True)
 class ConstraintViolation(Sensor):
-    """max |A q| of the joint rows (m; 0 without joints)."""
+    """max |A q| of the joint rows and |Phi(q)| of the quadratic constraint rows (rigid
+    bodies, 3D joints) (m, or 1 for the unit-length rows; 0 without joints)."""
 
     type: ClassVar[str] = "constraint_violation"
     unit: ClassVar[str] = "m"
     energy: ClassVar[bool] = False
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
-        if model.joints.shape[0] == 0:
-            return np.zeros(len(samples.q))
-        return np.abs(model.joints @ samples.q.T).max(axis=0)
+        violation = np.zeros(len(samples.q))
+        if model.joints.shape[0]:
+            violation = np.abs(model.joints @ samples.q.T).max(axis=0)
+        if model.holonomic:
+            violation = np.maximum(violation, [np.abs(model.holonomic.value(q)).max()
+                                               for q in samples.q])
+        return violation
 
 
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce)
+    SectionForce, BodyPosition, BodyVelocity, BodyReaction)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 

@@ -1,0 +1,261 @@
+"""Joints of rigid bodies (``[[constraint]]`` tables ``body_spherical``, ``body_revolute``):
+a point of a rigid ``body`` (body coordinates ``point``) joined to the ground (where the
+point is at t = 0), to a ``node`` of a meshed body, or to the point ``other_point`` of another
+rigid body ``other``, at the same place at t = 0.
+
+In natural coordinates a body point is linear in the coordinates (``natural_map``), so the
+spherical rows ``r_P - r_Q = 0`` are linear joint rows (``A q = 0``) between bodies and nodes,
+and quadratic blocks (``runtime.model.holonomic``) with a constant to the ground.  The
+revolute joint adds two rows ``a . b_k = 0``: the joint axis ``a`` (the body's ``axis``,
+body coordinates, its direction at t = 0 shared by the other side) on one side, two unit
+vectors b_1, b_2 normal to it at t = 0 on the other: on the ground (constants: linear rows),
+on another body (bilinear: quadratic rows), or on a node, whose axis is a fixed combination
+of its gradient vectors (``G c = a`` at the reference; bilinear rows with the body's normals).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from runtime.model.errors import SceneError, show
+from runtime.model.holonomic import QuadraticBlock
+from runtime.model.items.base import ModelView
+from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
+from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
+from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
+
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld"]
+
+#: the joined points must coincide at t = 0 to this, relative to the scene's size
+COINCIDENT = 1e-9
+
+
+def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return vector(value, path, 3, "a point in body coordinates, m")
+
+
+def _axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+def _world_point(context: Context, name: str, point: tuple[float, ...]) -> np.ndarray:
+    item = context.rigid[name]
+    if isinstance(item, RigidBody):
+        return item.frame @ np.asarray(point, float) + np.asarray(item.position)
+    if item.node is not None:
+        return np.asarray(context.node.bodies[item.node.body].node_position(item.node.index))
+    return np.asarray(item.position, float)
+
+
+@dataclass(frozen=True)
+class BodySpherical(Constraint):
+    """A point of a rigid ``body`` held at a point (module docstring): shared position."""
+
+    type: ClassVar[str] = "body_spherical"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
+    node: NodeRef | str | None = key(node_key, None)
+    other: str | None = key(rigid_key, None)
+    other_point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        if "node" in data and "other" in data:
+            raise SceneError(f"{path}.other: expected a node or another body (or neither: "
+                             "the ground), got both")
+        if "other_point" in data and "other" not in data:
+            raise SceneError(f"{path}.other_point: a point of another body needs other")
+        joint = super().parse(data, path, context)
+        if joint.other == joint.body:
+            raise SceneError(f"{path}.other: expected another body than {show(joint.body)}")
+        here = _world_point(context, joint.body, joint.point)
+        there = joint.target_point(context)
+        scale = max(1.0, float(np.abs(here).max()), float(np.abs(there).max()))
+        if np.abs(here - there).max() > COINCIDENT * scale:
+            raise SceneError(f"{path}.point: the joined points must coincide at t = 0; "
+                             f"the body point is at {tuple(round(x, 12) for x in here)}, the "
+                             f"other at {tuple(round(x, 12) for x in there)}")
+        if isinstance(joint, BodyRevolute) and not isinstance(context.rigid[joint.body],
+                                                             RigidBody):
+            raise SceneError(f"{path}.body: a revolute joint needs a rigid body (type = "
+                             f"\"rigid\"), got the point mass {show(joint.body)}")
+        return joint
+
+    def targets(self) -> list[NodeRef]:
+        """The nodes it joins (its ``node``, if any)."""
+        return [] if self.node is None else [self.node]
+
+    @property
+    def target_key(self) -> str:
+        return "node"
+
+    def target_point(self, context: Context) -> np.ndarray | None:
+        """Where the other side is at t = 0 (the ground: where the body point is)."""
+        if self.node is not None:
+            body = context.node.bodies[self.node.body]
+            return np.asarray(body.node_position(self.node.index), float)
+        if self.other is not None:
+            return _world_point(context, self.other, self.other_point)
+        return _world_point(context, self.body, self.point)
+
+    def _side(self, model: ModelView) -> tuple[np.ndarray, np.ndarray]:
+        return model.rigid_point(self.body, self.point)
+
+    def _other_side(self, model: ModelView) -> tuple[np.ndarray, np.ndarray] | None:
+        """(coordinates, map (3, k)) of the other point, None for the ground."""
+        if self.node is not None:
+            return model.node_dofs(model.node_index(self.node), "r"), np.eye(3)
+        if self.other is not None:
+            return model.rigid_point(self.other, self.other_point)
+        return None
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        dofs, point = self._side(model)
+        other = self._other_side(model)
+        if other is None:      # r_P = its place at t = 0: linear rows with a constant
+            place = point @ model.reference[dofs]
+            built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
+                                               np.zeros((3, dofs.size, dofs.size)), point,
+                                               -place))
+            return
+        other_dofs, other_point = other
+        for c in range(3):
+            row: dict[int, float] = {}
+            for index, value in zip(dofs, point[c], strict=True):
+                if value != 0.0:
+                    row[int(index)] = row.get(int(index), 0.0) + float(value)
+            for index, value in zip(other_dofs, other_point[c], strict=True):
+                if value != 0.0:
+                    row[int(index)] = row.get(int(index), 0.0) - float(value)
+            built.rows.append(row)
+
+
+@dataclass(frozen=True)
+class BodyRevolute(BodySpherical):
+    """A spherical joint that also keeps the body's ``axis`` (body coordinates) aligned with
+    the other side's (module docstring): one relative rotation, about the axis."""
+
+    type: ClassVar[str] = "body_revolute"
+    axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0))
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        super().apply(model, built)
+        body = model.rigid[self.body]
+        dofs = body.dofs
+        frame = body.item.frame
+        axis_world = frame @ np.asarray(self.axis)
+        normals = normals_of(axis_world)
+        # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
+        axis_map = natural_map(np.asarray(self.axis)) - natural_map(np.zeros(3))
+        if self.node is None and self.other is None:      # normals fixed: linear rows
+            for normal in normals:
+                coefficients = normal @ axis_map
+                built.rows.append({int(i): float(v) for i, v in zip(dofs, coefficients,
+                                                                   strict=True) if v != 0.0})
+            return
+        if self.other is not None:       # the other body's normals: b_k = B_k q_other
+            other = model.rigid[self.other]
+            other_dofs = other.dofs
+            local = other.item.frame.T @ normals.T          # (3, 2) body components
+            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            first_map, first_dofs = axis_map, dofs
+        else:                           # the node's axis a = G c, the body's normals
+            first_dofs, first_map = gradient_map(model, model.node_index(self.node),
+                                                 axis_world, f"{self.type}: the axis")
+            local = frame.T @ normals.T
+            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            other_dofs = dofs
+        joined = np.concatenate([first_dofs, other_dofs])
+        n = first_dofs.size
+        hessians = np.zeros((2, joined.size, joined.size))
+        for k, normal_map in enumerate(maps):
+            coupling = first_map.T @ normal_map        # a . b = q_1^T (A^T B) q_2
+            hessians[k, :n, n:] = coupling
+            hessians[k, n:, :n] = coupling.T
+        built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
+                                           np.zeros((2, joined.size)), np.zeros(2)))
+
+
+def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
+    return unit_axis(value, path)
+
+
+@dataclass(frozen=True)
+class BodyPrismatic(Constraint):
+    """A slider on the ground: the point ``point`` (body coordinates) of the rigid body or
+    point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
+    rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
+    and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
+    the infinitesimal rotations about w0, u0 and v0)."""
+
+    type: ClassVar[str] = "body_prismatic"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
+    axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
+
+    def targets(self) -> list[NodeRef]:
+        return []
+
+    @property
+    def target_key(self) -> str:
+        return "body"
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        dofs, point = model.rigid_point(self.body, self.point)
+        normals = normals_of(np.asarray(self.axis))
+        rows = normals @ point                                   # (2, k)
+        built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
+                                           np.zeros((2, dofs.size, dofs.size)), rows,
+                                           -rows @ model.reference[dofs]))
+        rigid = model.rigid[self.body]
+        if rigid.dofs.size != 12:
+            return
+        axes = model.reference[rigid.dofs[3:]].reshape(3, 3)     # u0, v0, w0
+        for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
+            built.rows.append({int(rigid.dofs[3 + 3 * a + c]): float(axes[b, c])
+                               for c in range(3) if axes[b, c] != 0.0})
+
+
+@dataclass(frozen=True)
+class BodyWeld(BodySpherical):
+    """A rigid connection of a rigid body and a ``node`` of a meshed body (the node's
+    section turns with the body, as a clamp on a hub that moves): shared position, and each
+    of the node's gradient vectors a fixed combination of the body's axes,
+    ``r_k = sum_a c_ka e_a`` with c_ka = e_a0 . r_k0 at t = 0 (linear rows: 3 per vector).
+    The node keeps its reference section's shape and size (its gradients do not stretch)."""
+
+    type: ClassVar[str] = "body_weld"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        joint = super().parse(data, path, context)
+        if joint.node is None:
+            raise SceneError(f"{path}.node: a body_weld joins a rigid body to a node of a "
+                             "meshed body; expected node = \"BODY:INDEX\"")
+        if not isinstance(context.rigid[joint.body], RigidBody):
+            raise SceneError(f"{path}.body: a weld needs a rigid body (type = \"rigid\"), "
+                             f"got the point mass {show(joint.body)}")
+        return joint
+
+    def apply(self, model: ModelView, built: Built) -> None:
+        super().apply(model, built)
+        body = model.rigid[self.body]
+        axes = model.reference[body.dofs[3:]].reshape(3, 3)          # e_a0 (rows)
+        node = model.node_index(self.node)
+        for name in model.node_vectors(node):
+            if name == "r":
+                continue
+            gradient = model.node_dofs(node, name)
+            coefficients = axes @ model.reference[gradient]           # c_a = e_a0 . r_k0
+            for c in range(3):
+                row = {int(body.dofs[3 + 3 * a + c]): float(coefficients[a])
+                       for a in range(3) if coefficients[a] != 0.0}
+                row[int(gradient[c])] = -1.0
+                built.rows.append(row)

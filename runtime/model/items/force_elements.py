@@ -1,0 +1,100 @@
+"""Force elements: the linear point-to-point spring-damper, and a torque on a rigid body.
+
+The points are nodes of meshed bodies, points of rigid bodies (or point masses), or a fixed
+anchor; each position is linear in its coordinates, so with x = q[dofs] (k,) the vector
+between them is ``d = D x + d_0`` (D (3, k) constant, d_0 the anchor).  With L = |d|,
+n = d / L and the rate L' = n . D x', the force along the element is
+``f = k (L - L0) + c L'`` and the generalised force is ``Q = -f D^T n``; its exact Jacobians
+
+    dQ/dx  = -D^T [k n n^T + c n (D x' - n L')^T / L + f (I - n n^T) / L] D,
+    dQ/dx' = -c D^T n n^T D
+
+(``SpringDamperForce``; both engines evaluate it as a state load, ``runtime.model.dae``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from runtime.model.items.follower import Patches
+from runtime.model.items.python_loads import MotionPatches
+
+__all__ = ["BodyTorqueForce", "SpringDamperForce"]
+
+
+class SpringDamperForce:
+    """The state force of a spring-damper of ``stiffness`` k (N/m), ``damping`` c (N s/m) and
+    rest length ``length`` L0 (m) over the coordinates ``dofs`` (k,), with the map
+    ``difference`` D (3, k) and the constant ``offset`` d_0 (3,) of d = D x + d_0.  Reads
+    velocities (``reads_velocity``)."""
+
+    reads_velocity = True
+
+    def __init__(self, dofs: np.ndarray, difference: np.ndarray, offset: np.ndarray,
+                 stiffness: float, damping: float, length: float) -> None:
+        self.dofs = np.asarray(dofs, np.int64)[None, :]
+        self.difference, self.offset = difference, np.asarray(offset, float)
+        self.stiffness, self.damping, self.length = stiffness, damping, length
+
+    def vector(self, q: np.ndarray) -> np.ndarray:
+        """d (3,) at the coordinates q (size,)."""
+        return self.difference @ q[self.dofs[0]] + self.offset
+
+    def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
+                 t: float = 0.0) -> MotionPatches:
+        dofs = self.dofs[0]
+        D = self.difference
+        d = self.vector(q)
+        length = float(np.linalg.norm(d))
+        if length == 0.0:
+            raise ZeroDivisionError("a spring-damper of zero length has no direction")
+        n = d / length
+        rate_vector = np.zeros(3) if v is None else D @ v[dofs]
+        rate = float(n @ rate_vector)
+        f = self.stiffness * (length - self.length) + self.damping * rate
+        force = -f * (D.T @ n)
+        if not jacobian:
+            return MotionPatches(self.dofs, force[None], None, None)
+        across = (np.eye(3) - np.outer(n, n)) / length
+        inner = (self.stiffness * np.outer(n, n)
+                 + self.damping * np.outer(n, rate_vector - n * rate) / length + f * across)
+        d_q = -D.T @ inner @ D
+        d_v = -self.damping * D.T @ np.outer(n, n) @ D
+        return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
+
+
+def _cross_matrix(x: np.ndarray) -> np.ndarray:
+    """[x]_x (3, 3): [x]_x y = x cross y."""
+    return np.array([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]])
+
+
+class BodyTorqueForce:
+    """A torque ``torque`` T (N m) about the body axis n (``axis``, body coordinates, unit)
+    of a rigid body in natural coordinates [r0, u_1, u_2, u_3] at ``dofs`` (12,): the
+    moment M = T sum_b n_b u_b turns with the body.  Its generalised force does the virtual
+    work M . d theta of the rotations d u_a = d theta x u_a: ``Q_a = M x u_a / 2`` (then
+    sum_a u_a x Q_a = M for an orthonormal frame), with the exact Jacobian
+    ``dQ_a/du_c = (T n_c [u_a]_x^T + delta_ac [M]_x) / 2``."""
+
+    def __init__(self, dofs: np.ndarray, axis: np.ndarray, torque: float) -> None:
+        self.dofs = np.asarray(dofs, np.int64)[None, :]
+        self.axis, self.torque = np.asarray(axis, float), float(torque)
+
+    def __call__(self, q: np.ndarray, jacobian: bool) -> Patches:
+        axes = q[self.dofs[0][3:]].reshape(3, 3)           # rows u_1, u_2, u_3
+        moment = self.torque * (self.axis @ axes)         # M (3,)
+        force = np.zeros(12)
+        for a in range(3):
+            force[3 + 3 * a:6 + 3 * a] = 0.5 * np.cross(moment, axes[a])
+        if not jacobian:
+            return Patches(self.dofs, force[None], None)
+        d_q = np.zeros((12, 12))
+        spin = _cross_matrix(moment)
+        for a in range(3):
+            rows = slice(3 + 3 * a, 6 + 3 * a)
+            for c in range(3):
+                block = -0.5 * self.torque * self.axis[c] * _cross_matrix(axes[a])
+                if a == c:
+                    block = block + 0.5 * spin
+                d_q[rows, 3 + 3 * c:6 + 3 * c] = block
+        return Patches(self.dofs, force[None], d_q[None])
