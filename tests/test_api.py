@@ -76,6 +76,7 @@ from runtime import (
 from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
 from runtime.model.items.constraints import CONSTRAINTS
+from runtime.model.items.load_points import frame_gradients
 from runtime.model.items.loads import LOADS
 from runtime.model.items.rigid import RIGID_BODIES
 from runtime.model.items.sensors import (
@@ -435,11 +436,13 @@ def random_scene(rng: random.Random) -> Scene:
         for node in plate.mesh.on_line(a, line):
             held[("sheet", int(node))] = type(constraints[-1])
         other = {"x=0": "x=-1", "x=-1": "x=0", "y=0": "y=-1", "y=-1": "y=0"}[edge]
+        # follower loads and edge moments need a node frame (not r, r_z shells')
+        framed = frame_gradients(element_kind(plate.element)) is not None
         loads_on_plate = [rng.choice([
             LineForce(edge=f"sheet:{other}", force_per_length=_vector(rng, 3),
-                      follower=rng.random() < 0.5),
-            LineMoment(edge=f"sheet:{other}", moment_per_length=_vector(rng, 3),
-                       follower=rng.random() < 0.5),
+                      follower=framed and rng.random() < 0.5),
+            *([LineMoment(edge=f"sheet:{other}", moment_per_length=_vector(rng, 3),
+                          follower=rng.random() < 0.5)] if framed else []),
             Pressure(body="sheet", pressure=_number(rng, -1e3, 1e3))])]
     for body in chain:            # pins on interior nodes
         for index in range(1, body.n_nodes - 1):
@@ -455,8 +458,8 @@ def random_scene(rng: random.Random) -> Scene:
         law = _law(rng) if rng.random() < 0.5 else Constant()
         options = [Gravity(_vector(rng, dim, 10), time_law=law)]
         vectors = element_kind(body.element).vectors
-        # a follower load needs a frame: gradients enough to span one (not a 3D cable's)
-        framed = len(vectors) - 1 >= dim - 1
+        # a follower load needs a frame (not a 3D cable's, nor an r, r_z shell's)
+        framed = frame_gradients(element_kind(body.element)) is not None
         if holder is None:
             options.append(PointForce(f"{body.name}:{index - body.n_nodes}",
                                       _vector(rng, dim, 100), time_law=law,
@@ -480,8 +483,8 @@ def random_scene(rng: random.Random) -> Scene:
             node = f"sheet:{column - columns * rng.randrange(2)},{row}"
         name = rng.choice(["s", "tip.x", "U-", "_v"]) + str(i)
         components = ("x", "y", "norm") if dim == 2 else ("x", "y", "z", "norm")
-        # a frame needs gradients enough to span one (not a 3D cable's r_x alone)
-        framed = len(element_kind(body.element).vectors) - 1 >= dim - 1
+        # a frame needs gradients that span one (not a 3D cable's, nor an r, r_z shell's)
+        framed = frame_gradients(element_kind(body.element)) is not None
         options = [
             Displacement(name, node, rng.choice(components),
                          NodeRef(body.name, 0) if framed and rng.random() < 0.5 else None),

@@ -4,11 +4,13 @@ ratios inside one run mean something).
 
 Tables (Markdown):
 
-1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3) and rotating beam
-   (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3): simulate time of each
-   engine and Newton mode, the same run with the quadrature method (the paper's "without
-   invariants"), and Exudyn (``runtime.studies.peers``, when installed) with modified and full
-   Newton; min and median of the repeats, and ratios to Exudyn's default (modified Newton);
+1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3), rotating beam
+   (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3) and the shipped
+   slider-crank (rigid crank, 8-element beam3d or cable3d rod, slider, nonlinear joints):
+   simulate time of each engine and Newton mode, the same run with the quadrature method
+   (the paper's "without invariants"), and Exudyn (``runtime.studies.peers``, when
+   installed) with modified and full Newton; min and median of the repeats, and ratios to
+   Exudyn's default (modified Newton);
 2. the cost of a step from 10 to 100,000 beam3d elements: microseconds per step and per
    element-step, Newton iterations per step, and the shares of the element kernels and of
    the factorisations in the step;
@@ -33,6 +35,7 @@ import numpy as np
 
 import scenes
 from runtime.catalog import ENGINES, NEWTON_MODES
+from runtime.model.items.body_joints import BodyRevolute, BodySpherical
 from runtime.model.items.loads import PythonLoad
 from runtime.model.items.sensors import Sensors
 from runtime.model.model import Model
@@ -146,6 +149,47 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
             cases.append(Case(table, f"Exudyn ANCFCable2D {newton}", _exudyn(
                 peers.exudyn_rotating_beam, elements=10, t_end=t_rotating, step=1e-3,
                 newton=newton, integrator="generalized_alpha", rho_inf=0.8)))
+    return cases + _slider_crank_cases(quick, with_peer)
+
+
+def _cable_rod(scene: Scene) -> Scene:
+    """The slider-crank with a cable3d rod (the peer's element kind, in 3D) hinged at the
+    crank pin by a spherical joint (a cable node has no frame for the revolute's axis; the
+    planar motion needs none)."""
+    def pin(joint):
+        if isinstance(joint, BodyRevolute) and joint.node is not None:
+            return BodySpherical(body=joint.body, point=joint.point, node=joint.node)
+        return joint
+    return dataclasses.replace(
+        scene, bodies=tuple(dataclasses.replace(b, element="cable3d") if b.name == "rod"
+                            else b for b in scene.bodies),
+        constraints=tuple(pin(joint) for joint in scene.constraints))
+
+
+def _slider_crank_cases(quick: bool, with_peer: bool) -> list[Case]:
+    """The shipped slider-crank (rigid flywheel crank, 8 beam3d rod, point-mass slider, the
+    nonlinear joints), the same with a cable3d rod, and Exudyn's (RigidBody2D, ANCFCable2D
+    rod, MassPoint2D)."""
+    t_end = 0.05 if quick else 0.7
+    scene = _scene("slider_crank", t_end=t_end)
+    scene = dataclasses.replace(scene, sensors=tuple(s for s in scene.sensors
+                                                     if s.name == "slider_x"))
+    settings = scene.dynamic
+    table = (f"slider-crank, rigid crank, 8-element rod, slider, {t_end:g} s, "
+             f"generalized-alpha rho_inf = {settings.rho_inf:g}, h = {settings.step:g}")
+    cases = [Case(table, f"{engine} {newton} gram", _ours(scene, engine, newton,
+                                                          tip="slider_x"))
+             for engine, newton in (("compiled", "full"), ("compiled", "modified"),
+                                    ("compiled", "auto"), ("python", "full"))]
+    cables = _cable_rod(scene)
+    cases += [Case(table, f"compiled {newton} gram, cable3d rod",
+                   _ours(cables, "compiled", newton, tip="slider_x"))
+              for newton in ("full", "modified")]
+    if with_peer:
+        cases += [Case(table, f"Exudyn RigidBody2D + ANCFCable2D {newton}", _exudyn(
+            peers.exudyn_slider_crank, elements=8, t_end=t_end, step=settings.step,
+            newton=newton, integrator=settings.integrator, rho_inf=settings.rho_inf))
+            for newton in peers.NEWTON]
     return cases
 
 

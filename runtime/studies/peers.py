@@ -122,9 +122,12 @@ def _settings(size: float, every: float | None = None) -> Any:
 
 
 def _solve(mbs: Any, size: float, t_end: float, step: float, newton: str, integrator: str,
-           rho_inf: float, every: float | None = None) -> tuple[float, Any]:
-    """Run a fixed-step dynamic solve from rest (sensors recording every ``every`` s, if
-    given); returns (wall time, Exudyn solver)."""
+           rho_inf: float, every: float | None = None,
+           initial_accelerations: bool = False) -> tuple[float, Any]:
+    """Run a fixed-step dynamic solve (sensors recording every ``every`` s, if given) from
+    rest, or with ``initial_accelerations`` from its initial velocities (generalized-alpha
+    then solves for the consistent accelerations at t = 0); returns (wall time, Exudyn
+    solver)."""
     import exudyn as exu
 
     s = _settings(size, every)
@@ -135,7 +138,7 @@ def _solve(mbs: Any, size: float, t_end: float, step: float, newton: str, integr
     ti.newton.useModifiedNewton = newton == "modified"
     # both models start at rest with zero loads and hub acceleration: a(0) = 0 is exact (and
     # Exudyn cannot solve M a = F for ANCFBeam, whose section deformation modes have no mass)
-    ti.generalizedAlpha.computeInitialAccelerations = False
+    ti.generalizedAlpha.computeInitialAccelerations = initial_accelerations
     ti.generalizedAlpha.spectralRadius = rho_inf
     solver = (exu.DynamicSolverType.TrapezoidalIndex2 if integrator == "trapezoidal"
               else exu.DynamicSolverType.GeneralizedAlpha)
@@ -512,3 +515,117 @@ def exudyn_elastica(elements: int, load_steps: int = 20, newton: str = "full", *
     note = (f"Exudyn {exudyn_version()} {PEER_ELEMENT} x {elements}; static, {load_steps} load "
             f"steps; {mode} Newton; increment tolerance {TOLERANCE:g} x size; EigenSparse")
     return PeerStatic(simulate_s, iterations, (float(tip[0]), float(tip[1])), note)
+
+
+# --------------------------------------------------------------------------- slider-crank
+
+#: scenes/slider_crank.toml: a steel flywheel disc (radius 0.15 m, 50 mm thick) turning
+#: about z at 10 rad/s, crank pin on its rim at 60 degrees; a 10 mm x 10 mm aluminium rod
+#: of 0.5 m hinged at the pin; a 0.5 kg slider on the x axis hinged at the rod's end; no
+#: gravity, no motor; the rigid mechanism's velocities at t = 0
+SLIDER_CRANK = {"radius": 0.15, "thickness": 0.05, "density": 7800.0, "omega": 10.0,
+                "angle": math.pi / 3, "rod": 0.5, "side": 0.01, "E": 7.0e10, "rho": 2700.0,
+                "slider": 0.5}
+
+
+def _slider_crank_kinematics() -> dict[str, Any]:
+    """Positions and velocities of the rigid slider-crank at t = 0 (m, m/s, rad/s)."""
+    p = SLIDER_CRANK
+    r, length, phi, omega = p["radius"], p["rod"], p["angle"], p["omega"]
+    pin = np.array([r * math.cos(phi), r * math.sin(phi)])
+    pin_velocity = omega * np.array([-pin[1], pin[0]])
+    slider = np.array([pin[0] + math.sqrt(length**2 - pin[1] ** 2), 0.0])
+    direction = (slider - pin) / length
+    # the rod turns at w about the pin so that its end stays on the x axis
+    rod_rate = -pin_velocity[1] / (length * direction[0])
+    slider_velocity = pin_velocity + rod_rate * length * np.array([-direction[1],
+                                                                   direction[0]])
+    return {"pin": pin, "pin_velocity": pin_velocity, "slider": slider,
+            "direction": direction, "rod_rate": rod_rate,
+            "slider_velocity": slider_velocity}
+
+
+def _slider_crank(elements: int) -> tuple[Any, Any, dict[str, int]]:
+    """The slider-crank in Exudyn: ObjectRigidBody2D crank on a RevoluteJoint2D to the
+    ground, an ObjectANCFCable2D rod (EA, EI of the square section) hinged to the crank pin
+    and to a MassPoint2D slider held on the x axis by a coordinate constraint.  Returns
+    (container, system, {"slider": node, "crank": node}), not assembled."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+
+    p, k = SLIDER_CRANK, _slider_crank_kinematics()
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground_node = mbs.AddNode(ei.NodePointGround())
+    ground = mbs.AddObject(ei.ObjectGround())
+    disc_mass = p["density"] * math.pi * p["radius"] ** 2 * p["thickness"]
+    crank_node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, p["angle"]],
+                                                initialVelocities=[0.0, 0.0, p["omega"]]))
+    crank = mbs.AddObject(ei.ObjectRigidBody2D(
+        nodeNumber=crank_node, mass=disc_mass, inertia=disc_mass * p["radius"] ** 2 / 2,
+        visualization=ei.VObjectRigidBody2D(show=False)))
+    hidden = {"visualization": ei.VRevoluteJoint2D(show=False)}
+    mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
+        mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0])),
+        mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=crank, localPosition=[0, 0, 0]))],
+        **hidden))
+    area, side = p["side"] ** 2, p["side"]
+    h, (dx, dy), w = p["rod"] / elements, k["direction"], k["rod_rate"]
+    nodes = []
+    for i in range(elements + 1):
+        offset = i * h * k["direction"]
+        position = k["pin"] + offset
+        velocity = k["pin_velocity"] + w * np.array([-offset[1], offset[0]])
+        nodes.append(mbs.AddNode(ei.NodePoint2DSlope1(
+            referenceCoordinates=[*position, dx, dy],
+            initialVelocities=[*velocity, -w * dy, w * dx],
+            visualization=ei.VNodePoint2DSlope1(show=False))))
+    for a, b in zip(nodes, nodes[1:], strict=False):
+        mbs.AddObject(ei.ObjectANCFCable2D(
+            nodeNumbers=[a, b], length=h, massPerLength=p["rho"] * area,
+            bendingStiffness=p["E"] * side**4 / 12, axialStiffness=p["E"] * area,
+            visualization=ei.VObjectANCFCable2D(show=False)))
+    local_pin = [p["radius"], 0.0, 0.0]
+    mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
+        mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=crank, localPosition=local_pin)),
+        mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[0]))], **hidden))
+    slider_node = mbs.AddNode(ei.NodePoint2D(referenceCoordinates=list(k["slider"]),
+                                             initialVelocities=list(k["slider_velocity"])))
+    mbs.AddObject(ei.MassPoint2D(mass=p["slider"], nodeNumber=slider_node,
+                                 visualization=ei.VMassPoint2D(show=False)))
+    mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
+        mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[-1])),
+        mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=slider_node))], **hidden))
+    _hold(mbs, mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
+          slider_node, 1)
+    return container, mbs, {"slider": slider_node, "crank": crank_node}
+
+
+def exudyn_slider_crank(elements: int = 8, t_end: float = 0.7, step: float = 2.5e-4,
+                        newton: str = "modified", integrator: str = "generalized_alpha",
+                        rho_inf: float = 0.9, every: float | None = None) -> PeerRun:
+    """The slider-crank of scenes/slider_crank.toml in Exudyn (``_slider_crank``), from the
+    rigid mechanism's velocities with consistent initial accelerations;
+    ``tip_displacement`` is the slider's final x position (m), and with ``every`` (s)
+    ``history`` its time series."""
+    import exudyn as exu
+
+    _check(newton, integrator)
+    with _quiet():
+        start = time.perf_counter()
+        container, mbs, nodes = _slider_crank(elements)
+        sensor = _record(mbs, [nodes["slider"]])[0]
+        mbs.Assemble()
+        build_s = time.perf_counter() - start
+        simulate_s, solver = _solve(mbs, SLIDER_CRANK["rod"], t_end, step, newton,
+                                    integrator, rho_inf, every, initial_accelerations=True)
+        history = None
+        if every is not None:
+            t, position = _positions(mbs, nodes["slider"], sensor)
+            history = (t, position[:, 0])
+        x = (mbs.GetNodeOutput(nodes["slider"], exu.OutputVariableType.Coordinates)[0]
+             + mbs.GetNodeParameter(nodes["slider"], "referenceCoordinates")[0])
+    return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount, float(x),
+                   _note(f"RigidBody2D crank, {PEER_ELEMENT} x {elements} rod, MassPoint2D "
+                         "slider", newton, integrator, rho_inf, step), history)
