@@ -75,7 +75,7 @@ from runtime import (
 )
 from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
-from runtime.model.items.constraints import CONSTRAINTS
+from runtime.model.items.constraint_types import CONSTRAINTS
 from runtime.model.items.load_points import frame_gradients
 from runtime.model.items.loads import LOADS
 from runtime.model.items.rigid import RIGID_BODIES

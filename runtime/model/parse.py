@@ -34,7 +34,7 @@ from runtime.model.bodies import Body, Material, Spin
 from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
 from runtime.model.items.body_joints import BodyPrismatic, BodySpherical
-from runtime.model.items.constraints import CONSTRAINTS
+from runtime.model.items.constraint_types import CONSTRAINTS
 from runtime.model.items.loads import LOADS
 from runtime.model.items.rigid import RIGID_BODIES, RigidBody, RigidItem
 from runtime.model.items.sensors import SENSORS, Sensor, check_reactions

@@ -184,7 +184,7 @@ def _slider_crank_cases(quick: bool, with_peer: bool) -> list[Case]:
     cables = _cable_rod(scene)
     cases += [Case(table, f"compiled {newton} gram, cable3d rod",
                    _ours(cables, "compiled", newton, tip="slider_x"))
-              for newton in ("full", "modified")]
+              for newton in NEWTON_MODES]
     if with_peer:
         cases += [Case(table, f"Exudyn RigidBody2D + ANCFCable2D {newton}", _exudyn(
             peers.exudyn_slider_crank, elements=8, t_end=t_end, step=settings.step,

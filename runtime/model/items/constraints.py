@@ -1,10 +1,11 @@
-"""Constraints of scenes (``[[constraint]]`` tables): a typed registry, ``CONSTRAINTS``.
+"""Constraints of scenes (``[[constraint]]`` tables) on ANCF nodes.
 
 A constraint either holds coordinates of one node (``NodeConstraint``: clamp, pin, a hub
 whose rotation is prescribed) or ties two nodes together with linear joint rows
 ``A q = 0`` solved with Lagrange multipliers (``Joint``: spherical, revolute, weld).  Each
 class declares its TOML keys as fields (``runtime.model.schema.Record``) and implements its effect
-on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``.
+on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``
+(``runtime.model.items.constraint_types``, which also holds the joints of rigid bodies).
 """
 
 from __future__ import annotations
@@ -28,12 +29,11 @@ from runtime.model.schema import (
     key,
     law_key,
     node_key,
-    registry,
     unit_axis,
 )
 from runtime.model.time_laws import Law
 
-__all__ = ["CONSTRAINTS", "Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
+__all__ = ["Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
            "Pin", "Revolute", "Spherical", "Weld"]
 
 # weld coefficients below this (relative to 1: the reference frames are unit) are the
@@ -302,16 +302,3 @@ class Weld(Joint):
                        if coupling[m, k] != 0.0}
                 row[int(ib[k, c])] = -1.0
                 built.rows.append(row)
-
-
-# the joints of rigid bodies build on the classes above
-from runtime.model.items.body_joints import (  # noqa: E402
-    BodyPrismatic,
-    BodyRevolute,
-    BodySpherical,
-    BodyWeld,
-)
-
-CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
-                                                    BodySpherical, BodyRevolute, BodyPrismatic,
-                                                    BodyWeld)

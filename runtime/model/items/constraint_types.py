@@ -1,0 +1,22 @@
+"""The registry of every ``[[constraint]]`` type, ``CONSTRAINTS``: the node constraints and
+joints between ANCF nodes (``runtime.model.items.constraints``) and the joints of rigid
+bodies, which build on them (``runtime.model.items.body_joints``).  A new constraint class
+is one entry here."""
+
+from __future__ import annotations
+
+from runtime.model.items.body_joints import BodyPrismatic, BodyRevolute, BodySpherical, BodyWeld
+from runtime.model.items.constraints import (
+    Clamp,
+    Constraint,
+    Hub,
+    Pin,
+    Revolute,
+    Spherical,
+    Weld,
+)
+from runtime.model.schema import registry
+
+CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
+                                                    BodySpherical, BodyRevolute, BodyPrismatic,
+                                                    BodyWeld)
