@@ -45,6 +45,27 @@ step = 1e-3
 """
 
 
+#: a 1 m steel beam3d cantilever of 4 elements, clamped at the origin (TOML)
+CANTILEVER = """
+[material.steel]
+E = 2.1e11
+nu = 0.0
+rho = 7800.0
+[[body]]
+name = "beam"
+element = "beam3d"
+material = "steel"
+section = {height = 0.02, width = 0.02}
+elements = 4
+start = [0, 0, 0]
+end = [1, 0, 0]
+[[constraint]]
+type = "clamp"
+node = "beam:0"
+"""
+GRAVITY = '[[load]]\ntype = "gravity"\nacceleration = [0, -9.81, 0]\n'
+
+
 def scene_of(text: str):
     return parse_scene(tomllib.loads(text))
 
@@ -274,24 +295,7 @@ def test_static_rigid_body_on_a_cantilever_weighs_as_a_point_force():
     """A rigid body hanging from a cantilever's tip by a revolute joint (held about its
     axis by gravity alone: the constraints' geometric stiffness) bends the beam as its
     weight m g at the tip does."""
-    beam = """
-[material.steel]
-E = 2.1e11
-nu = 0.0
-rho = 7800.0
-[[body]]
-name = "beam"
-element = "beam3d"
-material = "steel"
-section = {height = 0.02, width = 0.02}
-elements = 4
-start = [0, 0, 0]
-end = [1, 0, 0]
-[[constraint]]
-type = "clamp"
-node = "beam:0"
-[analysis.static]
-"""
+    beam = CANTILEVER + "[analysis.static]\n"
     hanging = scene_of(beam + """
 [[body]]
 type = "rigid"
@@ -566,27 +570,7 @@ def test_undamped_springs_conserve_energy_and_the_damper_dissipates():
 def test_a_point_mass_on_a_node_weighs_as_its_point_force():
     """A 3 kg mass on a cantilever's tip under gravity bends it as 3 g N at the tip does
     (the beam's own weight in both), and adds 3 kg to the model's translational mass."""
-    beam = """
-[material.steel]
-E = 2.1e11
-nu = 0.0
-rho = 7800.0
-[[body]]
-name = "beam"
-element = "beam3d"
-material = "steel"
-section = {height = 0.02, width = 0.02}
-elements = 4
-start = [0, 0, 0]
-end = [1, 0, 0]
-[[constraint]]
-type = "clamp"
-node = "beam:0"
-[[load]]
-type = "gravity"
-acceleration = [0, -9.81, 0]
-[analysis.static]
-"""
+    beam = CANTILEVER + GRAVITY + "[analysis.static]\n"
     with_mass = scene_of(beam + '[[body]]\ntype = "point_mass"\nname = "m"\nmass = 3.0\n'
                          'node = "beam:-1"\n')
     with_force = scene_of(beam + '[[load]]\ntype = "point_force"\nnode = "beam:-1"\n'
