@@ -354,7 +354,7 @@ class CompiledEngine:
         m.af_kept = self._work(self._af_data.size)
         projection = None
         if self.integrator == "trapezoidal":
-            projection = ManifoldProjection(dae, self.linear,
+            projection = ManifoldProjection(dae, self.mass,
                                             self.settings.tolerance * dae.scale,
                                             self.settings.max_iterations)
         q_full, v_full = self._q_full, self._v_full

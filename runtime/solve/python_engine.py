@@ -254,7 +254,7 @@ class OutputDynamics:
             lam = np.zeros((len(times), dae.constraint_rows))
             for row in range(len(times)):
                 accelerations[row, dae.free], lam[row] = SchurSolver(
-                    dae.mass_band, dae.constraint_matrix(q_full[row])).solve(
+                    self.solver.factor, dae.constraint_matrix(q_full[row])).solve(
                     rhs[row], -dae.acceleration_violation(q_full[row], v_full[row],
                                                           accelerations[row]))
             return accelerations, lam, force
@@ -517,7 +517,7 @@ class Trapezoidal(Integrator):
         if dae.nonlinear:
             if self._projection is None:
                 self._projection = ManifoldProjection(
-                    dae, self.linear, self.settings.tolerance * self.scale,
+                    dae, self.mass, self.settings.tolerance * self.scale,
                     self.settings.max_iterations)
             projected = self._projection(q, v, qp, vp)
             if projected is None:
@@ -544,14 +544,14 @@ class ManifoldProjection:
     constraint rows, Phi(q) = 0 then Phi_q v = 0: q -= M^-1 C^T (C M^-1 C^T)^-1 Phi(q) with
     C = [A; Phi_q] at the current q, iterated until the correction is within ``tolerance``
     (m), at most ``max_iterations`` times; then the velocities with C at the projected q.
-    M is factorised once by a solver of the kind of ``solver``.  Both engines project
+    M is the engine's ``mass_solver`` (factorised once, apart from the iteration matrices'
+    solver, whose factorisations last only until its next one).  Both engines project
     through it (the compiled one by a callback)."""
 
-    def __init__(self, dae: DAESystem, solver, tolerance: float, max_iterations: int) -> None:
+    def __init__(self, dae: DAESystem, mass: SchurSolver, tolerance: float,
+                 max_iterations: int) -> None:
         self.dae, self.tolerance, self.max_iterations = dae, tolerance, max_iterations
-        # a solver of its own: a sparse factorisation lasts until its solver's next one
-        own = linear.make(solver.name, dae.model.pattern)
-        self.mass = own.factor(linear.pattern_values(dae.mass_ff, dae.model.pattern))
+        self.mass = mass.factor
 
     def __call__(self, q: np.ndarray, v: np.ndarray, qp: np.ndarray, vp: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray] | None:
