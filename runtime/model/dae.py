@@ -242,29 +242,20 @@ class StateLoads:
         #: (index among the scene's loads, state force, slots (m, k, k) of the Jacobian
         #: entries in the pattern, -1 where a coordinate is not free)
         self.loads = []
-        position = np.full(model.size, -1, np.int64)
-        position[model.free] = np.arange(model.free.size)
-        pattern = model.pattern
-        nf = model.free.size
-        keys = (np.repeat(np.arange(nf), np.diff(pattern.indptr)).astype(np.int64) * nf
-                + pattern.indices)
         for index, load in enumerate(model.scene.loads):
             if not load.follows:
                 continue
             evaluate = load.state_force(model)
             dofs = evaluate.dofs if hasattr(evaluate, "dofs") else evaluate.maps.dofs
-            rows, cols = position[dofs][:, :, None], position[dofs][:, None, :]
-            flat = rows * nf + cols
-            slots = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
-            inside = (rows >= 0) & (cols >= 0)
-            if keys.size and not np.all(keys[slots[inside]] == flat[inside]):
+            slots = model.slots(dofs, outside=True)
+            if (slots == -2).any():
                 if isinstance(evaluate, PythonForce):
                     raise SceneError(f"load[{index}].nodes: a Python load's nodes must share "
                                      "an element (its Jacobian couples their coordinates, "
                                      "which must lie in one element's); list the nodes of one "
                                      "element, or split the load")
                 raise AssertionError("a follower load acts outside the Jacobian pattern")
-            self.loads.append((index, evaluate, np.where(inside, slots, -1)))
+            self.loads.append((index, evaluate, slots))
 
     def __len__(self) -> int:
         return len(self.loads)

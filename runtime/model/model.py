@@ -14,6 +14,7 @@ whole body in one batched kernel call and scattered with precomputed index maps.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -310,8 +311,7 @@ class Model:
         Each element entry (i, j) with both coordinates free lands in one CSR slot; the
         slots come from one sort of all flat indices row * nf + col (canonical CSR order).
         """
-        position = np.full(self.size, -1)
-        position[self.free] = np.arange(self.free.size)
+        position = self.free_position
         nf = self.free.size
         keeps, flats = [], []
         # the element groups, then the coupled coordinates of the rigid items (mass), of
@@ -347,18 +347,29 @@ class Model:
         self._band_index = (self.bandwidth + rows[upper] - cols[upper]) * nf + cols[upper]
         self.mass_banded = self.banded(self.mass_ff[rows, cols].A1)
 
-    def slots(self, dofs: np.ndarray) -> np.ndarray:
-        """The positions (k, k) in ``pattern`` order of the entries (i, j) of the coordinates
-        ``dofs`` (k,), -1 where either is not free (the pattern must hold the others)."""
-        position = np.full(self.size, -1)
+    @functools.cached_property
+    def free_position(self) -> np.ndarray:
+        """(size,) the index of each coordinate among the free ones, -1 where it is not free
+        (read only)."""
+        position = np.full(self.size, -1, np.int64)
         position[self.free] = np.arange(self.free.size)
-        rows, cols = position[dofs][:, None], position[dofs][None, :]
-        flat = rows.astype(np.int64) * self.free.size + cols
-        found = np.minimum(np.searchsorted(self._pattern_keys, flat),
-                           max(self._pattern_keys.size - 1, 0))
+        position.flags.writeable = False
+        return position
+
+    def slots(self, dofs: np.ndarray, outside: bool = False) -> np.ndarray:
+        """The positions (..., k, k) in ``pattern`` order of the entries (i, j) of the
+        coordinates ``dofs`` (..., k), -1 where either is not free.  The pattern must hold
+        the others (AssertionError), unless ``outside``: then -2 marks those it does not."""
+        p = self.free_position[dofs]
+        rows, cols = p[..., :, None], p[..., None, :]
+        flat = rows * self.free.size + cols
+        keys = self._pattern_keys
+        found = np.minimum(np.searchsorted(keys, flat), max(keys.size - 1, 0))
         inside = (rows >= 0) & (cols >= 0)
-        assert np.all(self._pattern_keys[found[inside]] == flat[inside])
-        return np.where(inside, found, -1)
+        held = inside & (keys[found] == flat) if keys.size else np.zeros_like(inside)
+        if not outside:
+            assert np.array_equal(held, inside), "entries outside the Jacobian pattern"
+        return np.where(held, found, np.where(inside, -2, -1))
 
     def holonomic_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for

@@ -140,22 +140,6 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded") -> tuple[str
     return source, header
 
 
-def _slots(dae: DAESystem, dofs: np.ndarray) -> np.ndarray:
-    """(elements, ndof, ndof) slot in the free-free CSR pattern of every element matrix
-    entry (-1 where a coordinate is not free)."""
-    pattern, nf = dae.model.pattern, dae.free.size
-    position = np.full(dae.size, -1, np.int64)
-    position[dae.free] = np.arange(nf)
-    p = position[dofs]                                   # (elements, ndof)
-    rows, cols = p[:, :, None], p[:, None, :]
-    keys = np.repeat(np.arange(nf, dtype=np.int64), np.diff(pattern.indptr)) * nf \
-        + pattern.indices
-    flat = rows * nf + cols
-    free = (rows >= 0) & (cols >= 0)
-    slots = np.searchsorted(keys, np.where(free, flat, 0))
-    return np.where(free, slots, -1).astype(np.int32)
-
-
 class CompiledEngine:
     """Runs a dynamic analysis with the generated stepper; the interface of
     ``runtime.solve.python_engine.Integrator`` (``run``, ``counters``)."""
@@ -219,11 +203,9 @@ class CompiledEngine:
         m.size, m.nf, m.np, m.nj, m.bw = dae.size, nf, dae.prescribed.size, nj, bw
         m.nlin = dae.joints
         m.nloads = len(dae.load_laws)
-        position = np.full(dae.size, -1)
-        position[dae.free] = np.arange(nf)
         m.free_index = self._buffer(dae.free, "int")
         m.prescribed_index = self._buffer(dae.prescribed, "int")
-        m.position = self._buffer(position, "int")
+        m.position = self._buffer(dae.model.free_position, "int")
         sparse = self.linear_solver == "sparse"
         # column j: rows j - bw .. j (the sparse solver multiplies by M in the pattern)
         m.mass_band = self._buffer(np.zeros(1) if sparse else dae.mass_band.T)
@@ -431,7 +413,7 @@ class CompiledEngine:
         target.force = self._work(chunk * ndof)
         target.jacobian = self._work(chunk * ndof * ndof)
         if self.linear_solver == "sparse":
-            target.slots = self._buffer(_slots(self.dae, group.dofs), "int")
+            target.slots = self._buffer(self.dae.model.slots(group.dofs), "int")
         if element.damping > 0:
             damping = element.kind.families[element.damping_family]
             self._inputs(target, "damping_", _input_slots(damping, DAMPING),

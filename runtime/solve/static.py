@@ -258,9 +258,7 @@ def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
     iteration (from zero, a body hanging from a revolute joint has a singular matrix)."""
     if not model.holonomic or not model.rigid:
         return multipliers
-    position = np.full(model.size, -1)
-    position[model.free] = np.arange(model.free.size)
-    rigid = position[np.concatenate([r.dofs for r in model.rigid.values()])]
+    rigid = model.free_position[np.concatenate([r.dofs for r in model.rigid.values()])]
     rigid = rigid[rigid >= 0]
     rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
                                format="csc")[:, rigid].toarray()
