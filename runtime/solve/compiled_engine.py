@@ -488,8 +488,7 @@ class CompiledEngine:
                 done = self._advance(m, s, first, last, stride, steps, step, observe_block)
                 if progress is not None:
                     progress.update(done * step)
-                per_output = (s.advance_seconds - seconds) / max(1, -(-(done - first + 1)
-                                                                      // stride))
+                per_output = stride * (s.advance_seconds - seconds) / max(1, done - first + 1)
                 outputs = int(min(MAX_BLOCK_OUTPUTS, max(1.0, BLOCK_SECONDS
                                                           / max(per_output, 1e-9))))
                 first = last + 1
