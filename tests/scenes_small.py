@@ -165,11 +165,42 @@ def engine_history(model: Model, settings, engine: str):
     return states, dataclasses.asdict(runner.counters), failure
 
 
+#: with a kept Jacobian (modified, auto Newton) the corrections shrink linearly and often
+#: end within round-off of the tolerance, so one engine takes one more iteration than the
+#: other now and then (the shipped cable cantilever: 1861 against 1865 in 1000 steps); the
+#: counts agree to this fraction, the steps exactly
+COUNT_RTOL = 0.02
+
+
+def counts_agree(compiled: dict, python: dict, newton: str, rtol: float = COUNT_RTOL) -> None:
+    """Assert the two engines' counters equal (full Newton: quadratic convergence ends far
+    below the tolerance) or, with a kept Jacobian, within ``rtol`` (steps equal)."""
+    if newton == "full":
+        assert compiled == python                 # steps, Newton iterations, evaluations
+        return
+    assert compiled["steps"] == python["steps"]
+    for key, count in python.items():
+        assert abs(compiled[key] - count) <= rtol * count + 2, (key, compiled, python)
+
+
+def state_bounds(q_rtol: float, v_rtol: float, q_scale: float, v_scale: float,
+                 settings) -> tuple[float, float]:
+    """The agreement of the engines' positions and velocities: q_rtol of ``q_scale`` and
+    v_rtol of ``v_scale``, or with a kept Jacobian (the two may stop one iteration apart) at
+    least ten times the Newton tolerance, and the velocity that makes in a step (2 / h)."""
+    q_bound, v_bound = q_rtol * q_scale, v_rtol * v_scale
+    if settings.newton == "full":
+        return q_bound, v_bound
+    newton = 10 * settings.tolerance * q_scale
+    return max(q_bound, newton), max(v_bound, 2 * newton / settings.step)
+
+
 def compare_engines(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
-                    sensor_rtol: float | None = None,
+                    sensor_rtol: float | None = None, count_rtol: float = COUNT_RTOL,
                     **dynamic) -> tuple[dict, list, tuple | None]:
-    """Run both engines; assert equal counters and failures, and states equal to q_rtol of
-    the largest coordinate and velocities to v_rtol of the largest velocity; with
+    """Run both engines; assert equal counters (``counts_agree``) and failures, and states
+    equal to q_rtol of the largest coordinate and velocities to v_rtol of the largest
+    velocity (with a kept Jacobian, to the Newton tolerance at least: ``state_bounds``); with
     ``sensor_rtol``, every sensor of the scene equal to sensor_rtol of its largest value over
     the run, energies of the largest energy (a conserved total or a small strain energy is a
     difference of larger ones), a sensor that stays 0 (a constraint violation) to 1e-15 of
@@ -178,15 +209,16 @@ def compare_engines(scene_: Scene, q_rtol: float = 1e-12, v_rtol: float = 1e-9,
     model = Model(scene_)
     python = engine_history(model, settings, "python")
     compiled = engine_history(model, settings, "compiled")
-    assert compiled[1] == python[1]          # steps, Newton iterations, evaluations
+    counts_agree(compiled[1], python[1], settings.newton, count_rtol)
     assert compiled[2] == python[2]          # divergence time and cause (or none)
     assert len(compiled[0]) == len(python[0]) >= 1
     q_scale = max(np.abs(q).max() for _, q, _ in python[0])
     v_scale = max(max(np.abs(v).max() for _, _, v in python[0]), 1e-3)
+    q_bound, v_bound = state_bounds(q_rtol, v_rtol, q_scale, v_scale, settings)
     for (tp, qp, vp), (tc, qc, vc) in zip(python[0], compiled[0], strict=True):
         assert tc == tp
-        assert np.abs(qc - qp).max() <= q_rtol * q_scale
-        assert np.abs(vc - vp).max() <= v_rtol * v_scale
+        assert np.abs(qc - qp).max() <= q_bound
+        assert np.abs(vc - vp).max() <= v_bound
     if sensor_rtol is not None:
         sensors = Sensors(model)
         series = [np.array([[row[name] for name in sensors.names] for row in

@@ -139,3 +139,19 @@ def test_cholmod_factorises_in_place_and_names_the_failing_column():
 def test_the_choice_rejects_unknown_solvers_naming_the_key():
     with pytest.raises(ValueError, match=r"solver.linear_solver: expected one of banded"):
         linear.choose(_grid_pattern(3), "cholesky")
+
+
+def test_cholmod_column_counts_measure_the_factor():
+    # a chain of blocks (a beam) fills nothing under a minimum-degree ordering: L holds the
+    # upper triangle's entries exactly; a 2D grid fills in, within the dense triangle
+    chain = scipy.sparse.kron(scipy.sparse.diags_array([1.0, 1.0, 1.0], offsets=[-1, 0, 1],
+                                                        shape=(30, 30)),
+                              np.ones((4, 4)), format="csr")
+    chain.sort_indices()
+    counts = cholmod.Cholesky(chain).column_counts()
+    assert counts.shape == (120,) and counts.min() >= 1
+    assert counts.sum() == scipy.sparse.triu(chain).nnz
+    grid = _grid_pattern(12)
+    n = grid.shape[0]
+    counts = cholmod.Cholesky(grid).column_counts()
+    assert scipy.sparse.triu(grid).nnz < counts.sum() < n * (n + 1) // 2

@@ -37,7 +37,7 @@ typedef struct {
   void *x, *z;
   int xtype, dtype;
 } cholmod_dense;
-typedef struct { size_t n, minor; } cholmod_factor;
+typedef struct { size_t n, minor; void *Perm, *ColCount; } cholmod_factor;
 """
 #: the functions used
 CDEF = STRUCTS + """
@@ -172,6 +172,12 @@ class Cholesky:
             raise MemoryError("CHOLMOD: the symbolic analysis failed (out of memory)")
         #: CHOLMOD's solution buffers, allocated by the first solve and reused
         self.handles = ffi.new("cholmod_dense *[3]")
+
+    def column_counts(self) -> np.ndarray:
+        """Entries of each column of the factor L (n,), diagonal included, from the symbolic
+        analysis: ``sum(counts)`` is nnz(L), ``sum(counts**2)`` the factorisation's flops."""
+        counts = self._ffi.cast("int *", self.factor.ColCount)
+        return np.frombuffer(self._ffi.buffer(counts, 4 * self.n), np.int32).astype(np.int64)
 
     def factorize(self, values: np.ndarray | None = None) -> None:
         """Numeric factorisation of the matrix ``values`` (default: ``self.values`` as

@@ -24,7 +24,7 @@ from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.model.settings import Dynamic
 from runtime.model.time_laws import LoadFunctionError
-from runtime.solve import cholmod, lapack, linear
+from runtime.solve import cholmod, lapack, linear, newton_cost
 from runtime.solve.linear import single_threaded_blas
 from runtime.solve.python_engine import (
     CONTRACTION,
@@ -32,6 +32,7 @@ from runtime.solve.python_engine import (
     NON_FINITE,
     PROJECTION_FAILED,
     SINGULAR,
+    TALLY_WINDOW,
     Counters,
     Divergence,
     ManifoldProjection,
@@ -47,14 +48,9 @@ from runtime.solve.python_engine import (
 from runtime.solve.static import Convergence, ConvergenceError
 from templates import environment
 
-STEPPER_VERSION = "4"
+STEPPER_VERSION = "5"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
-#: bandwidths from which the band's Cholesky is LAPACK's (SciPy's dpbtrf, blocked); narrower
-#: bands take the step's own loops with the bandwidth a compile-time constant (measured:
-#: LAPACK 1.4x slower on beam3d chains, bandwidth 23; 1.1-1.3x faster on 8 x 8 and 16 x 16
-#: plates, 119 and 215)
-LAPACK_BANDWIDTH = 48
 #: a call of the compiled step covers as many output times as the previous calls' time per
 #: output says fit in this (s), up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress
 #: latency stays short, the calls few)
@@ -136,7 +132,7 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded") -> tuple[str
         banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
         bandwidth=dae.bandwidth, damped=any(g["damped"] for g in groups), follower=follower,
         sparse=solver == "sparse", cholmod_structs=cholmod.STRUCTS.strip(),
-        lapack_band=dae.bandwidth >= LAPACK_BANDWIDTH, holonomic=dae.nonlinear)
+        lapack_band=dae.bandwidth >= lapack.LAPACK_BANDWIDTH, holonomic=dae.nonlinear)
     return source, header
 
 
@@ -160,6 +156,8 @@ class CompiledEngine:
         self.linear = linear_solver(self.dae)
         #: the name of the linear solver (``runtime.catalog.LINEAR_SOLVERS``)
         self.linear_solver = self.linear.name
+        #: auto Newton: what a new Jacobian costs in iterations without one
+        self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
         source, cdef = render(self.dae, self.integrator, self.linear_solver)
         start = time.perf_counter()
         compiled = jit.compile_module("stepper", source, cdef,
@@ -230,6 +228,7 @@ class CompiledEngine:
         m.max_iterations = self.settings.max_iterations
         m.newton = NEWTON_MODES.index(self.newton)     # the template's NEWTON_* order
         m.max_full_steps = MAX_FULL_STEPS
+        m.jacobian_weight, m.tally_window = self.jacobian_weight, TALLY_WINDOW
         m.factor_kind = 0
         for index, group in enumerate(dae.groups):
             self._group(m.groups[index], group)

@@ -14,6 +14,11 @@ import scipy.linalg.cython_lapack
 #: routines the compiled step calls: LU factorisation and solve of a general matrix (the
 #: Schur complement), Cholesky factorisation and solve of a symmetric band
 FUNCTIONS = ("dgetrf", "dgetrs", "dpbtrf", "dpbtrs")
+#: bandwidths from which the compiled step's band Cholesky is LAPACK's (dpbtrf, blocked);
+#: narrower bands take the step's own loops with the bandwidth a compile-time constant
+#: (measured: LAPACK 1.4x slower on beam3d chains, bandwidth 23; 1.1-1.3x faster on 8 x 8
+#: and 16 x 16 plates, 119 and 215)
+LAPACK_BANDWIDTH = 48
 
 
 @functools.cache

@@ -12,15 +12,19 @@ through their known values, rates and accelerations.  Newton is ``full`` (the ex
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
 least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate) or
-``auto``: modified Newton, except that a step in which the kept Jacobian went stale (a
-factorisation was needed) is followed by steps of full Newton, 1 of them and doubling
-(up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale again, back
-to 1 once one does not; a modified step that fails (Newton not converged, non-finite or
-singular) is done again from its start with full Newton, as stale.  Measured on the
-shipped scenes (docs/design.md, "Newton"), modified Newton is 1.1-5x faster than full
-except where the Jacobian changes fast (the rotating beam: 1.2x slower); ``auto`` follows
-the faster of the two.  The decisions depend on counts only, so both engines take the
-same.
+``auto`` (the default): modified Newton, except that after a step in which the kept
+Jacobian went stale (a factorisation was needed) come steps of full Newton, 1 of them and
+doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale
+again, back to 1 once one does not - when full Newton pays: each mode's recent steps are
+tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps) and
+weighed by what a new Jacobian costs against an iteration without one
+(``runtime.solve.newton_cost``), and full Newton follows a stale step only while its cost
+per step is the lower (or has not been measured yet).  A modified step that fails (Newton
+not converged, non-finite or singular) is done again from its start with full Newton, as
+stale.  Measured on the shipped scenes (docs/design.md, "Newton modes by measurement"),
+modified Newton is 2-7x faster than full except where the Jacobian changes fast (the
+rotating beam: full is 1.2x faster); ``auto`` follows the faster of the two.  The decisions
+depend on counts and the model's structure only, so both engines take the same.
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.model.time_laws import LoadFunctionError
-from runtime.solve import linear
+from runtime.solve import linear, newton_cost
 from runtime.solve.linear import SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
@@ -44,6 +48,9 @@ CONTRACTION = 0.5
 #: ``auto`` Newton: at most this many steps of full Newton before modified Newton is tried
 #: again
 MAX_FULL_STEPS = 64
+#: ``auto`` Newton: each mode's tally of steps, iterations and factorisations is halved when
+#: its steps reach this (the comparison of the two modes follows the recent steps)
+TALLY_WINDOW = 32
 
 
 class Divergence(RuntimeError):
@@ -292,6 +299,10 @@ class Integrator:
         self._full_step = self.newton == "full"   # this step rebuilds at every iteration
         self._full_steps = 0       # auto: steps of full Newton still to do ...
         self._probe = 1            # ... and how many after the next stale modified step
+        #: auto: what a new Jacobian costs in iterations without one, and the tallies
+        #: [steps, iterations, factorisations] of the full (True) and modified (False) steps
+        self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
+        self._tally = {True: [0.0, 0.0, 0.0], False: [0.0, 0.0, 0.0]}
 
     # --- pieces of a Newton iteration --------------------------------------------------
 
@@ -441,9 +452,11 @@ class Integrator:
         start, kernels = time.perf_counter(), self.dae.model.kernel_seconds
         # a factorisation this step is a stale Jacobian only if there was one to keep
         factorisations = self.counters.factorisations if self._solver is not None else None
+        counts = (self.counters.newton_iterations, self.counters.factorisations)
         if self.newton == "auto":
             self._full_step = self._full_steps > 0
             self._full_steps -= self._full_step
+        started_full = self._full_step
         try:
             prescribed = tuple(x[0] for x in self.dae.prescribed_motion([t]))
             loads = self.dae.load_factors([t])[0]
@@ -453,9 +466,9 @@ class Integrator:
                 if self.newton != "auto" or self._full_step:
                     raise
                 # the kept Jacobian could not carry the step: again from its start with
-                # full Newton, and full Newton for the next steps as after a stale one
+                # full Newton, and full Newton for the next steps
                 self._full_step = True
-                self._next_steps(stale=True)
+                self._schedule_full_steps()
                 state = self.step(state, t, h, prescribed, loads)
         except LoadFunctionError as error:   # a Python load or time law failed at t
             raise Divergence(t, str(error)) from None
@@ -463,18 +476,43 @@ class Integrator:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
-        if self.newton == "auto" and not self._full_step and factorisations is not None:
-            self._next_steps(self.counters.factorisations > factorisations)
+        if self.newton == "auto" and factorisations is not None:
+            self._count(started_full, self.counters.newton_iterations - counts[0],
+                        self.counters.factorisations - counts[1])
+            if not self._full_step:
+                if self.counters.factorisations == factorisations:
+                    self._probe = 1
+                elif self._full_newton_pays():     # the kept Jacobian went stale
+                    self._schedule_full_steps()
         return state
 
-    def _next_steps(self, stale: bool) -> None:
-        """``auto`` Newton after a modified step: full Newton for the next steps when its
-        Jacobian went ``stale`` (doubling their number while that repeats)."""
-        if stale:
-            self._full_steps = self._probe
-            self._probe = min(2 * self._probe, MAX_FULL_STEPS)
-        else:
-            self._probe = 1
+    def _count(self, full: bool, iterations: int, factorisations: int) -> None:
+        """``auto``: add a step of ``iterations`` and ``factorisations`` to the tally of its
+        mode (``full`` or modified), halved when its steps reach ``TALLY_WINDOW``."""
+        tally = self._tally[full]
+        tally[0] += 1.0
+        tally[1] += iterations
+        tally[2] += factorisations
+        if tally[0] >= TALLY_WINDOW:
+            for i in range(3):
+                tally[i] *= 0.5
+
+    def _full_newton_pays(self) -> bool:
+        """``auto``: whether full Newton's cost per step (iterations plus factorisations
+        times ``jacobian_weight``) is below modified Newton's, or not measured yet."""
+        (full_steps, full_iterations, full_factorisations) = self._tally[True]
+        (steps, iterations, factorisations) = self._tally[False]
+        if full_steps == 0.0:
+            return True
+        weight = self.jacobian_weight
+        return ((full_iterations + weight * full_factorisations) * steps
+                < (iterations + weight * factorisations) * full_steps)
+
+    def _schedule_full_steps(self) -> None:
+        """``auto``: full Newton for the next steps, doubling their number while the
+        modified step after them needs a new Jacobian again."""
+        self._full_steps = self._probe
+        self._probe = min(2 * self._probe, MAX_FULL_STEPS)
 
     def step(self, state: State, t: float, h: float, prescribed, loads) -> State:
         raise NotImplementedError  # pragma: no cover - abstract
