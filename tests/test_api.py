@@ -508,9 +508,8 @@ def random_scene(rng: random.Random) -> Scene:
         if dim == 3 and rng.random() < 0.5 else []
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
         if rng.random() < 0.5 else None
-    # (no modes of models with rigid bodies yet: a scene error)
     modal = Modal(rng.randint(1, 2), rng.choice(["reference", "static"])) \
-        if rng.random() < 0.5 and not rigid else None
+        if rng.random() < 0.5 else None
     dynamic = None
     if rng.random() < 0.6:
         step = rng.choice([1e-3, 2.5e-3, 0.01, 1 / 3])

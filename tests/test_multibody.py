@@ -93,16 +93,16 @@ def test_rigid_pendulum_period_is_the_elliptic_integral_one(integrator):
     """A box pinned at one end, released horizontally (amplitude 90 degrees): its axis
     passes the vertical at T/4 and 5T/4 with T = 4 sqrt(I_p / (m g d)) K(sin^2 45 deg)."""
     scene = scene_of(PENDULUM)
-    t, q, _, stepper = run(scene, integrator=integrator)
+    t, q, _, stepper = run(scene, integrator=integrator, newton="full")
     mass, inertia = scene.rigid_bodies[0].mass_properties()
     pivot_inertia = inertia[2, 2] + mass * 0.5**2
     period = 4 * np.sqrt(pivot_inertia / (mass * G * 0.5)) * scipy.special.ellipk(0.5)
     down = crossings(t, q[:, 3])          # u_x: the bar's axis through the vertical
     assert down[0] == pytest.approx(period / 4, rel=2e-5)
-    t, q, _, _ = run(scene, integrator=integrator, t_end=2.5)
+    t, q, _, _ = run(scene, integrator=integrator, t_end=2.5, newton="full")
     down = crossings(t, q[:, 3])
     assert down[1] - down[0] == pytest.approx(period, rel=1e-5)
-    # the quadratic rows converge quadratically: a few Newton iterations per step
+    # the quadratic rows converge quadratically (full Newton): a few iterations per step
     assert stepper.counters.newton_iterations <= 2.5 * stepper.counters.steps
 
 
@@ -145,7 +145,9 @@ angular_velocity = {omega0.tolist()}
 t_end = 3.0
 step = 1e-3
 """)
-    t, q, v, _ = run(scene, integrator="trapezoidal")
+    # full Newton: a kept Jacobian stops at the tolerance, and its bias of 1e-10 per step
+    # adds up to 1.2e-4 of the energy over these 3000 steps (2e-7 at tolerance 1e-12)
+    t, q, v, _ = run(scene, integrator="trapezoidal", newton="full")
     _, inertia = scene.rigid_bodies[0].mass_properties()
     moments = np.diag(inertia)
 
@@ -593,9 +595,7 @@ def test_a_redundant_joint_is_named_when_the_model_is_built():
     Model(scene_of(PENDULUM))           # the pendulum's own joint is not
 
 
-def test_modal_and_arc_length_analyses_of_rigid_models_are_scene_errors():
-    with pytest.raises(SceneError, match=r"^analysis.modal: modes of models with rigid"):
-        scene_of(PENDULUM + "[analysis.modal]\nmodes = 2\n")
+def test_arc_length_analyses_of_rigid_models_are_scene_errors():
     with pytest.raises(SceneError, match=r"^analysis.static.method: arc_length does not"):
         scene_of(PENDULUM + '[analysis.static]\nmethod = "arc_length"\n')
 

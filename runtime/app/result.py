@@ -27,8 +27,9 @@ class States:
 @dataclass
 class Modes:
     """Modal analysis: ``frequencies_rad_s`` (k,) ascending, ``shapes`` (k, size) full
-    coordinate vectors (fixed and prescribed coordinates zero) normalised to a largest nodal
-    position component of +1, ``about`` (size,) the linearisation point."""
+    coordinate vectors (fixed and prescribed coordinates zero) normalised to a largest
+    position component (nodes, rigid origins) of +1, ``about`` (size,) the linearisation
+    point."""
 
     frequencies_rad_s: np.ndarray
     shapes: np.ndarray

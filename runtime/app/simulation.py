@@ -64,6 +64,7 @@ class Simulation:
         self.phase = "model build"
         self.model: Model | None = None
         self.static_q: np.ndarray | None = None
+        self._static_multipliers: np.ndarray | None = None
         self.modes: Modes | None = None
         self.path: dict[str, np.ndarray] = {}   # arc length: load_factor and sensors
         self.history: dict[str, list[float]] = {}
@@ -111,7 +112,7 @@ class Simulation:
             if scene.static is not None:
                 self.phase = "static analysis"
                 found = self._solve_static(scene.static)
-                self.static_q = found.q
+                self.static_q, self._static_multipliers = found.q, found.multipliers
                 if self.path:
                     for observer in self.observers:
                         observer.static_path(self.path)
@@ -205,11 +206,13 @@ class Simulation:
 
     def _modal(self) -> None:
         model, settings = self.model, self.scene.modal
-        about = model.reference
+        about, multipliers = model.reference, None
         if settings.about == "static":
-            about = self.static_q if self.static_q is not None else \
-                self._solve_static(self.scene.static or Static()).q
-        found = modal_shapes(model, about, settings.modes)
+            if self.static_q is None:
+                found = self._solve_static(self.scene.static or Static())
+                self.static_q, self._static_multipliers = found.q, found.multipliers
+            about, multipliers = self.static_q, self._static_multipliers
+        found = modal_shapes(model, about, settings.modes, multipliers)
         self.modes = Modes(found.frequencies, found.shapes, np.array(about))
         self.summary.record_modal(settings.about, found.frequencies, model.damped)
         for observer in self.observers:

@@ -497,10 +497,6 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
         check_frequency(dynamic, sensors)
     quadratic = any(isinstance(r, RigidBody) for r in rigid_bodies) or any(
         isinstance(c, BodySpherical | BodyPrismatic) for c in constraints)
-    if quadratic and modal is not None:
-        raise SceneError("analysis.modal: modes of models with rigid bodies or their joints "
-                         "(quadratic constraint rows) are not built yet; remove "
-                         "[analysis.modal]")
     if quadratic and static is not None and static.method == "arc_length":
         raise SceneError("analysis.static.method: arc_length does not take the quadratic "
                          "constraint rows of rigid bodies and their joints yet; use "

@@ -1,5 +1,14 @@
 """Modal analysis of a model: the lowest frequencies and mode shapes linearised about a
-configuration (fixed and prescribed coordinates held, joints through their null space)."""
+configuration (fixed and prescribed coordinates held, joints through their null space).
+
+With quadratic constraint rows (rigid bodies in natural coordinates and their joints) the
+linearisation is on the constraint manifold at q: the mode shapes lie in the null space of
+``C = [A_f; Phi_q,f(q)]``, and the stiffness is the tangent one of the constrained system,
+``K = -dF/dq + sum_i lambda_i H_i`` with the multipliers lambda of the rows at q (the
+static solution's, whose loads they balance: the restoring moment of a pendulum is all in
+that term, since gravity itself has no stiffness).  At an unloaded reference the rows carry
+no multipliers.
+"""
 
 from __future__ import annotations
 
@@ -18,28 +27,36 @@ from runtime.solve.linear import DENSE_LIMIT, single_threaded_blas
 class ModalResult:
     """Lowest angular frequencies (rad/s), ascending, and their mode shapes (modes, size):
     full coordinate vectors (fixed and prescribed coordinates zero), each scaled so that its
-    largest nodal position component is +1 (unitless)."""
+    largest position component (of a node, a rigid body's origin or a point mass) is +1
+    (unitless)."""
 
     frequencies: np.ndarray
     shapes: np.ndarray
 
 
-def modal(model: Model, q: np.ndarray, modes: int) -> np.ndarray:
+def modal(model: Model, q: np.ndarray, modes: int,
+          multipliers: np.ndarray | None = None) -> np.ndarray:
     """Lowest ``modes`` angular frequencies (rad/s) linearised about ``q`` (fixed and
-    prescribed coordinates held, joints enforced through their null space)."""
+    prescribed coordinates held, joints enforced through their null space); ``multipliers``
+    (joint rows then quadratic rows) those of an equilibrium at q, e.g. the static
+    solution's (None: the least-squares balance of the internal forces at q, zero at an
+    unloaded reference)."""
     with single_threaded_blas():
-        return _modal(model, q, modes, vectors=False)[0]
+        return _modal(model, q, modes, multipliers, vectors=False)[0]
 
 
-def modal_shapes(model: Model, q: np.ndarray, modes: int) -> ModalResult:
+def modal_shapes(model: Model, q: np.ndarray, modes: int,
+                 multipliers: np.ndarray | None = None) -> ModalResult:
     """Frequencies and mode shapes of the ``modes`` lowest modes about ``q`` (see
     :func:`modal`): eigenvectors mapped from the free coordinates (and the joints' null
     space) back to full coordinate vectors."""
     with single_threaded_blas():
-        omega, vectors = _modal(model, q, modes, vectors=True)
+        omega, vectors = _modal(model, q, modes, multipliers, vectors=True)
     shapes = np.zeros((omega.size, model.size))
     shapes[:, model.free] = vectors.T
-    positions = model.position_dofs().ravel()
+    # positions: the nodes', and the origins of rigid bodies and free point masses
+    positions = np.concatenate([model.position_dofs().ravel()] + [
+        rigid.dofs[:3] for rigid in model.rigid.values() if rigid.dofs.size])
     for shape in shapes:
         largest = shape[positions][np.argmax(np.abs(shape[positions]))]
         if largest != 0:
@@ -47,19 +64,35 @@ def modal_shapes(model: Model, q: np.ndarray, modes: int) -> ModalResult:
     return ModalResult(omega, shapes)
 
 
-def _modal(model: Model, q: np.ndarray, modes: int,
+def _constraint_rows(model: Model, q: np.ndarray,
+                     multipliers: np.ndarray | None) -> tuple[scipy.sparse.csr_matrix,
+                                                              np.ndarray | None]:
+    """(C (rows, nf), the multipliers of the quadratic rows or None without them) at q."""
+    if not model.holonomic:
+        return model.joints_free.tocsr(), None
+    rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
+                               format="csr")
+    if multipliers is None:         # C^T lambda = F(q): the balance of the internal forces
+        force = model.internal_forces(q, jacobian=False)[0][model.free]
+        multipliers = np.linalg.lstsq(rows.T.toarray(), force, rcond=None)[0]
+    elif multipliers.shape != (rows.shape[0],):
+        raise ValueError(f"modal: multipliers: expected {rows.shape[0]} values (joint rows, "
+                         f"then quadratic rows), got shape {multipliers.shape}")
+    return rows, multipliers[model.joints_free.shape[0]:]
+
+
+def _modal(model: Model, q: np.ndarray, modes: int, multipliers: np.ndarray | None,
            vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """(frequencies (modes,), eigenvectors over the free coordinates (nf, modes) or None)."""
-    if model.holonomic:
-        raise ValueError("analysis.modal: modes of models with rigid bodies or their joints "
-                         "(quadratic constraint rows) are not built yet; remove "
-                         "[analysis.modal]")
+    rows, quadratic = _constraint_rows(model, q, multipliers)
     _, data = model.internal_forces(q)
+    if quadratic is not None:       # the rows' geometric stiffness sum lambda_i H_i
+        data = data - model.holonomic_stiffness(quadratic)
     stiffness = -model.jacobian_matrix(data)
     mass = model.mass_ff
     basis = None
-    if model.joints_free.shape[0]:
-        basis = scipy.linalg.null_space(model.joints_free.toarray())
+    if rows.shape[0]:
+        basis = scipy.linalg.null_space(rows.toarray())
         stiffness = basis.T @ (stiffness @ basis)
         mass = basis.T @ (mass @ basis)
     n = stiffness.shape[0]
