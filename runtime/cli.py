@@ -282,7 +282,8 @@ def cmd_bench_steps(args) -> int:
         plates=tuple(args.plates if args.plates is not None else (4, 8, 16, 32)),
         chains=tuple(args.elements if args.elements is not None else (1000, 10_000)),
         solvers=tuple(args.linear_solver or (bench_steps.AUTO, *LINEAR_SOLVERS)),
-        newtons=tuple(args.newton or ("full",)), banded_limit=args.banded_limit)
+        newtons=tuple(args.newton or ("full",)), banded_limit=args.banded_limit,
+        joints=tuple(args.joints if args.joints is not None else (50, 200)))
     rows = bench_steps.measure(cases, method=args.method, repeats=args.repeats,
                                progress=not args.quiet)
     text = bench_steps.table(rows)
@@ -405,6 +406,8 @@ def parser() -> argparse.ArgumentParser:
                     convert=_positive, metavar="N")
     add_list_option(steps, "--elements", "beam3d chain elements (default 1000 10000)",
                     convert=_positive, metavar="N")
+    add_list_option(steps, "--joints", "spherical joints of the joint-chain mechanism "
+                    "(default 50 200)", convert=_positive, metavar="N")
     add_list_option(steps, "--linear-solver", "linear solvers (default auto banded sparse)",
                     choices=["auto", *LINEAR_SOLVERS])
     add_list_option(steps, "--newton", "Newton modes (default full)", choices=NEWTON_MODES)

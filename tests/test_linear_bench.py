@@ -9,7 +9,7 @@ from runtime.studies import bench_steps
 
 def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
     cases = bench_steps.plan(plates=(2,), chains=(4,), solvers=(bench_steps.AUTO, "sparse"),
-                             newtons=("full", "modified"))
+                             newtons=("full", "modified"), joints=(3,))
     rows = bench_steps.measure(cases, repeats=1, progress=False)
     assert [(r["case"], r["requested"], r["newton"]) for r in rows] == [
         (label, solver, newton) for _, _, label, solver, newton in cases]
@@ -17,6 +17,10 @@ def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
         assert r["linear_solver"] == ("sparse" if r["requested"] == "sparse" else "banded")
         shares = r["kernel_share"] + r["factorisation_share"] + r["solve_share"]
         assert 0.0 < shares <= 1.0 and r["step_ms"] > 0
+        # the joints' Schur complement is a part of the factorisations and solves
+        joints = r["case"].startswith("joint chain")
+        assert (r["constraint_share"] > 0.0) == joints
+        assert r["constraint_share"] <= r["factorisation_share"] + r["solve_share"]
         assert r["factorisations_per_step"] <= r["newton_per_step"]
     full = next(r for r in rows if r["newton"] == "full" and r["case"].startswith("plate"))
     assert full["factorisations_per_step"] == full["newton_per_step"]

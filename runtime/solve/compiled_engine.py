@@ -152,7 +152,8 @@ class CompiledEngine:
         self.dae = DAESystem(model, q_full)
         self.counters = Counters()
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0,
-                       "solve_s": 0.0}
+                       "solve_s": 0.0,
+                       "constraint_s": 0.0}
         self.linear = linear_solver(self.dae)
         #: the name of the linear solver (``runtime.catalog.LINEAR_SOLVERS``)
         self.linear_solver = self.linear.name
@@ -555,7 +556,8 @@ class CompiledEngine:
         c.force_evaluations, c.jacobian_evaluations = s.force_evaluations, s.jacobian_evaluations
         c.factorisations = s.factorisations
         self.timing = {"steps_s": s.advance_seconds, "kernel_s": s.kernel_seconds,
-                       "factorisation_s": s.factor_seconds, "solve_s": s.solve_seconds}
+                       "factorisation_s": s.factor_seconds, "solve_s": s.solve_seconds,
+                       "constraint_s": s.constraint_seconds}
 
     def _cause(self, status: int, s) -> str:
         if status == 1:

@@ -6,13 +6,18 @@ Cases (trapezoidal, h = 1e-3, gram method, C kernels, loaded from the first step
 * ``plate``: a square 1 m steel plate3d (10 mm) of N x N elements clamped on one edge under
   a line load on the opposite edge ramped up over 0.2 s (``scenes/plate_cantilever.toml``);
 * ``beam chain``: the paper's cantilever of beam3d elements of the same length (the beam
-  grows with them).
+  grows with them);
+* ``joint chain``: a mechanism of N joints, N + 1 beam3d bodies of one element each (the
+  cantilever's section and material, 0.1 m long) in a line, the first pinned to the
+  ground, each to the next by a spherical joint (3 N + 3 constraint rows), swinging under
+  gravity (generalized-alpha, as mechanisms are run).
 
 Each case runs ``repeats`` times on one model (min and median per step).  For each case and
 linear solver (``runtime.catalog.LINEAR_SOLVERS``; ``auto`` is the model's
 automatic choice) and Newton mode: milliseconds per step, microseconds per element-step,
 Newton iterations per step and the shares of the step spent in the element kernels (with
-assembly), in factorisations and in solves.  The model is built and the stepper compiled
+assembly), in factorisations and in solves, and of those two in the joints' Schur
+complement (constraint share).  The model is built and the stepper compiled
 before the timed run (``build_s``); only the steps are timed, by the engine itself.
 """
 
@@ -24,8 +29,9 @@ import time
 
 import scenes
 from runtime.catalog import LINEAR_SOLVERS, NEWTON_MODES
-from runtime.model.items.constraints import Clamp
-from runtime.model.items.loads import LineForce
+from runtime.model.bodies import Body
+from runtime.model.items.constraints import Clamp, Pin, Spherical
+from runtime.model.items.loads import Gravity, LineForce
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
 from runtime.model.time_laws import Constant, CosineRamp
@@ -58,6 +64,22 @@ def chain_scene(elements: int, steps: int) -> Scene:
     body = dataclasses.replace(body, elements=elements, end=end)
     loads = tuple(dataclasses.replace(load, time_law=Constant()) for load in scene.loads)
     return _dynamic(dataclasses.replace(scene, bodies=(body,), loads=loads), steps)
+
+
+def joint_chain_scene(joints: int, steps: int) -> Scene:
+    """The joint chain case with ``joints`` spherical joints, ``steps`` steps."""
+    scene = load_scene(scenes.path("cantilever"))
+    beam = scene.bodies[0]
+    bodies = tuple(Body(f"link{i}", "beam3d", beam.material, beam.height, beam.width, 1,
+                        start=(0.1 * i, 0.0, 0.0), end=(0.1 * (i + 1), 0.0, 0.0))
+                   for i in range(joints + 1))
+    constraints = (Pin("link0:0"),) + tuple(Spherical((f"link{i}:-1", f"link{i + 1}:0"))
+                                            for i in range(joints))
+    dynamic = _dynamic(scene, steps).dynamic
+    return dataclasses.replace(
+        scene, bodies=bodies, constraints=constraints, loads=(Gravity((0.0, -9.81, 0.0)),),
+        sensors=(), static=None, modal=None,
+        dynamic=dataclasses.replace(dynamic, integrator="generalized_alpha"))
 
 
 def _dynamic(scene: Scene, steps: int) -> Scene:
@@ -98,7 +120,8 @@ def step_cost(scene: Scene, case: str, linear_solver: str = AUTO, newton: str = 
             "factorisations_per_step": counters.factorisations / counters.steps,
             "kernel_share": timing["kernel_s"] / timing["steps_s"],
             "factorisation_share": timing["factorisation_s"] / timing["steps_s"],
-            "solve_share": timing["solve_s"] / timing["steps_s"]}
+            "solve_share": timing["solve_s"] / timing["steps_s"],
+            "constraint_share": timing.get("constraint_s", float("nan")) / timing["steps_s"]}
 
 
 def _steps(elements: int) -> int:
@@ -107,7 +130,7 @@ def _steps(elements: int) -> int:
 
 
 def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SOLVERS),
-         newtons=("full",), banded_limit: int = 32) -> list[tuple]:
+         newtons=("full",), banded_limit: int = 32, joints=(50, 200)) -> list[tuple]:
     """The cases: (scene maker, size, case label, solver, newton); banded plates up to
     ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation)."""
     cases = []
@@ -120,6 +143,9 @@ def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SO
     for elements in chains:
         cases += [(chain_scene, elements, f"beam chain {elements}", solver, newton)
                   for solver in solvers for newton in newtons]
+    for count in joints:
+        cases += [(joint_chain_scene, count, f"joint chain {count}", solver, newton)
+                  for solver in solvers for newton in newtons]
     return cases
 
 
@@ -130,7 +156,8 @@ def measure(cases: list[tuple], method: str = "gram", repeats: int = 3,
     rows = []
     with enabled(progress), Bar("bench steps", len(cases), "cases") as bar:
         for make, size, label, solver, newton in cases:
-            elements = size * size if make is plate_scene else size
+            elements = size * size if make is plate_scene else size + (
+                make is joint_chain_scene)
             rows.append(step_cost(make(size, _steps(elements)), label, solver, newton,
                                   method=method, repeats=repeats))
             bar.advance(f"{label}, {solver}, {newton}")
@@ -141,15 +168,16 @@ def table(rows: list[dict]) -> str:
     """Markdown table of measured rows."""
     lines = ["| case | elements | free coordinates | linear solver | Newton | ms per step "
              "(min) | median | us per element-step | Newton per step | factorisations per "
-             "step | kernel share | factorisation share | solve share |",
-             "|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "step | kernel share | factorisation share | solve share | constraint share |",
+             "|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         solver = r["linear_solver"] + (" (auto)" if r["requested"] == AUTO else "")
         lines.append(f"| {r['case']} | {r['elements']} | {r['coordinates']} | {solver} | "
                      f"{r['newton']} | {r['step_ms']:.4g} | {r['median_ms']:.4g} | "
                      f"{r['element_step_us']:.3g} | {r['newton_per_step']:.2f} | "
                      f"{r['factorisations_per_step']:.2f} | {r['kernel_share']:.0%} | "
-                     f"{r['factorisation_share']:.0%} | {r['solve_share']:.0%} |")
+                     f"{r['factorisation_share']:.0%} | {r['solve_share']:.0%} | "
+                     f"{r['constraint_share']:.0%} |")
     return "\n".join(lines) + "\n"
 
 
