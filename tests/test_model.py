@@ -706,7 +706,10 @@ def test_static_potential_energy_of_gravity(law, tmp_path):
 
 @pytest.fixture(scope="module")
 def rotating_reference() -> np.ndarray:
-    return simulate(shipped("rotating_beam", t_end=3.0), "gram", "c")["tip_transverse"]
+    # full Newton: the methods' round-off then stays round-off (with a kept Jacobian each
+    # run stops at the tolerance, and the auto mode's decisions can differ between them)
+    return simulate(shipped("rotating_beam", t_end=3.0, newton="full"), "gram",
+                    "c")["tip_transverse"]
 
 
 @pytest.mark.parametrize("method, backend, t_end", [
@@ -714,7 +717,8 @@ def rotating_reference() -> np.ndarray:
     ("quadrature", "numpy", 0.5)])  # numpy quadrature is ~50x slower: a shorter run
 def test_methods_and_backends_give_the_same_rotating_beam(method, backend, t_end,
                                                           rotating_reference):
-    series = simulate(shipped("rotating_beam", t_end=t_end), method, backend)["tip_transverse"]
+    series = simulate(shipped("rotating_beam", t_end=t_end, newton="full"), method,
+                      backend)["tip_transverse"]
     reference = rotating_reference[: series.size]
     assert np.abs(reference).max() > (0.1 if t_end == 3.0 else 1e-4)
     assert np.abs(series - reference).max() <= 1e-7 * np.abs(reference).max()

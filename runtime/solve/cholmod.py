@@ -59,8 +59,9 @@ COMMON_BYTES = 1 << 16
 GROW0, SUPERNODAL_SWITCH, SUPERNODAL, PRINT = 8, 40, 48, 144
 #: CHOLMOD_SUPERNODAL: always the supernodal L L^T, which stops at the first pivot that is
 #: not positive (the simplicial L D L^T of small matrices would go on through an indefinite
-#: matrix without pivoting)
-ALWAYS_SUPERNODAL = 2
+#: matrix without pivoting); CHOLMOD_SIMPLICIAL: the simplicial L D L^T, which does that on
+#: purpose for quasi-definite saddle systems (``runtime.solve.linear.KKTSystem``)
+ALWAYS_SUPERNODAL, SIMPLICIAL = 2, 0
 #: CHOLMOD_INT, CHOLMOD_REAL, CHOLMOD_DOUBLE, CHOLMOD_A (solve A x = b)
 INT, REAL, DOUBLE, SYSTEM_A = 0, 1, 0, 0
 #: functions the compiled step calls through their addresses
@@ -124,10 +125,11 @@ def address(pointer) -> int:
     return int(ffi.cast("uintptr_t", pointer))
 
 
-def _configure(common) -> None:
-    """Supernodal L L^T only, and no messages (a matrix not positive definite is reported to
-    the caller, not printed).  RuntimeError when ``common`` has not the layout these offsets
-    assume (a CHOLMOD this module does not know)."""
+def _configure(common, indefinite: bool) -> None:
+    """Supernodal L L^T only (``indefinite``: the simplicial L D L^T), and no messages (a
+    matrix not positive definite is reported to the caller, not printed).  RuntimeError when
+    ``common`` has not the layout these offsets assume (a CHOLMOD this module does not
+    know)."""
     ffi, _ = _loaded()
     doubles, ints = ffi.cast("double *", common), ffi.cast("int *", common)
     defaults = (doubles[GROW0 // 8], doubles[SUPERNODAL_SWITCH // 8], ints[SUPERNODAL // 4],
@@ -135,7 +137,7 @@ def _configure(common) -> None:
     if defaults != (1.2, 40.0, 1, 3):
         raise RuntimeError(f"CHOLMOD at {library_path()}: unknown layout of cholmod_common "
                            f"(defaults {defaults}); use linear_solver \"banded\"")
-    ints[SUPERNODAL // 4] = ALWAYS_SUPERNODAL
+    ints[SUPERNODAL // 4] = SIMPLICIAL if indefinite else ALWAYS_SUPERNODAL
     ints[PRINT // 4] = 0
 
 
@@ -144,9 +146,11 @@ class Cholesky:
     analysis (ordering, elimination tree, supernodes) once, here; ``factorize(values)`` per
     matrix, ``solve(rhs)`` per right-hand side.  ``values`` (nnz,) are in the pattern's
     order and must stay alive and unchanged between a factorisation and its solves only as
-    long as the caller reuses the buffer ``self.values`` (which it may fill instead)."""
+    long as the caller reuses the buffer ``self.values`` (which it may fill instead).
+    ``indefinite``: the simplicial L D L^T without pivoting instead, for quasi-definite
+    matrices (it stops only at a zero pivot)."""
 
-    def __init__(self, pattern) -> None:
+    def __init__(self, pattern, indefinite: bool = False) -> None:
         ffi, lib = _loaded()
         self._ffi, self._lib = ffi, lib
         self.n = pattern.shape[0]
@@ -157,7 +161,7 @@ class Cholesky:
         self._common_block = ffi.new("char[]", COMMON_BYTES)
         self.common = ffi.cast("void *", self._common_block)
         lib.cholmod_start(self.common)
-        _configure(self._common_block)
+        _configure(self._common_block, indefinite)
         self.matrix = ffi.new("cholmod_sparse *")
         a = self.matrix
         a.nrow = a.ncol = self.n

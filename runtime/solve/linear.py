@@ -148,6 +148,109 @@ class SchurSolver:
         return x - self.coupling @ y, y
 
 
+#: the constraint block of the KKT matrix is -delta I with delta this times
+#: (largest |C|)^2 / (largest S_ii): small against C S^-1 C^T, which it must not shift, and
+#: large enough that a pivot of the constraint block met before its coordinates' (the
+#: ordering does not know them apart) does not lose more digits than the refinements win back
+KKT_REGULARISATION = 1e-8
+#: refinement steps of a KKT solve against the unregularised system (each gains about
+#: -log10(KKT_REGULARISATION) digits)
+KKT_REFINEMENTS = 1
+#: the constraint rows from which joints go through the KKT system instead of the Schur
+#: complement (whose multi-column solve and dense LU grow with the rows: 92-98 % of a step
+#: at 50-200 spherical joints, ``ancf bench steps --joints``)
+KKT_ROWS = 48
+
+
+class KKTSystem:
+    """Saddle systems [[S, C^T], [C, 0]] of one structure (S of the CSR ``pattern`` (n, n),
+    C of the CSR structure ``rows`` (m, n)) by CHOLMOD's simplicial L D L^T of the
+    quasi-definite [[S, C^T], [C, -delta I]] (fill-reducing ordering and symbolic analysis
+    once, here; ``KKT_REGULARISATION``), each solve refined against the unregularised
+    system (``KKT_REFINEMENTS``).  Used instead of the Schur complement of many constraint
+    rows (``KKT_ROWS``): one sparse factorisation of n + m, no m-column solve, no dense LU."""
+
+    def __init__(self, pattern: scipy.sparse.csr_matrix, rows: scipy.sparse.csr_matrix) -> None:
+        n, m = pattern.shape[0], rows.shape[0]
+        self.n, self.m = n, m
+        self.rows_structure = rows.tocoo()
+        s_rows, s_cols = _coordinates(pattern)
+        r_rows, r_cols = self.rows_structure.row, self.rows_structure.col
+        # the KKT entries, each tagged with its source: S entry k -> k, C entry k -> below
+        # (n + row, col) and above (col, n + row), the constraint diagonal
+        sources = [(s_rows, s_cols), (n + r_rows, r_cols), (r_cols, n + r_rows),
+                   (n + np.arange(m), n + np.arange(m))]
+        tags = np.concatenate([np.arange(len(r)) + offset for (r, _), offset in zip(
+            sources, np.cumsum([0] + [len(r) for r, _ in sources[:-1]]), strict=True)])
+        kkt = scipy.sparse.csr_matrix(
+            (tags + 1.0, (np.concatenate([r for r, _ in sources]),
+                          np.concatenate([c for _, c in sources]))), shape=(n + m, n + m))
+        kkt.sort_indices()
+        self.pattern = kkt
+        slot = np.empty(kkt.nnz, np.int64)
+        slot[kkt.data.astype(np.int64) - 1] = np.arange(kkt.nnz)
+        cuts = np.cumsum([len(r) for r, _ in sources])
+        #: KKT slots (values order) of S's entries, of C's below and above, of the diagonal
+        self.s_slots, self.below_slots, self.above_slots, self.diagonal_slots = np.split(
+            slot, cuts[:-1])
+        #: S's diagonal entries (pattern order)
+        self.s_diagonal = np.flatnonzero(s_rows == s_cols)
+        self.cholesky = cholmod.Cholesky(kkt, indefinite=True)
+
+    def values(self, s_values: np.ndarray, c_values: np.ndarray) -> tuple[np.ndarray, float]:
+        """(KKT values in the pattern's order, delta) of S (``pattern`` order) and C (the
+        structure's entries, in ``rows_structure`` order)."""
+        values = np.zeros(self.pattern.nnz)
+        values[self.s_slots] = s_values
+        values[self.below_slots] = c_values
+        values[self.above_slots] = c_values
+        diagonal = s_values[self.s_diagonal] if self.n else np.ones(1)
+        largest = float(np.abs(c_values).max(initial=0.0))
+        delta = KKT_REGULARISATION * largest ** 2 / max(float(np.abs(diagonal).max()), 1e-300)
+        values[self.diagonal_slots] = -delta
+        return values, delta
+
+    def factor(self, s_values: np.ndarray, rows: scipy.sparse.spmatrix) -> KKTFactor:
+        """The factorisation of [[S, C^T], [C, 0]] with S's ``s_values`` (pattern order) and
+        the constraint rows ``rows`` (m, n; their entries within the structure).  Raises
+        LinAlgError when CHOLMOD meets a zero pivot (a singular saddle system)."""
+        structure = self.rows_structure
+        rows = scipy.sparse.csr_matrix(rows)
+        c_values = np.asarray(rows[structure.row, structure.col]).ravel()
+        if np.count_nonzero(rows.data) > np.count_nonzero(c_values):
+            raise RuntimeError("KKTSystem: constraint rows outside the structure analysed")
+        values, _ = self.values(s_values, c_values)
+        self.cholesky.values[:] = values
+        self.cholesky._lib.cholmod_factorize(self.cholesky.matrix, self.cholesky.factor,
+                                             self.cholesky.common)
+        if self.cholesky.factor.minor < self.n + self.m:
+            raise np.linalg.LinAlgError("singular saddle-point system (a zero pivot)")
+        exact = values.copy()
+        exact[self.diagonal_slots] = 0.0
+        matrix = scipy.sparse.csr_matrix((exact, self.pattern.indices, self.pattern.indptr),
+                                         shape=self.pattern.shape)
+        return KKTFactor(self, matrix)
+
+
+class KKTFactor:
+    """One factorised saddle system of a ``KKTSystem``, valid until its next factorisation:
+    ``solve`` as ``SchurSolver.solve``."""
+
+    def __init__(self, system: KKTSystem, matrix: scipy.sparse.csr_matrix) -> None:
+        self.system, self.matrix = system, matrix
+
+    def solve(self, rhs: np.ndarray, rhs_constraints: np.ndarray | None = None):
+        """(x, y) with S x + C^T y = rhs and C x = rhs_constraints (zero if None)."""
+        n, m = self.system.n, self.system.m
+        full = np.concatenate([rhs, np.zeros(m) if rhs_constraints is None
+                               else rhs_constraints])
+        cholesky = self.system.cholesky
+        solution = cholesky.solve(full)
+        for _ in range(KKT_REFINEMENTS):
+            solution += cholesky.solve(full - self.matrix @ solution)
+        return solution[:n], solution[n:]
+
+
 class SparseFactor:
     """The factorisation of one matrix by a ``SparseSolver``: CHOLMOD's Cholesky when it
     holds, else SciPy's SuperLU.  Valid until the solver factorises the next matrix."""

@@ -39,7 +39,7 @@ from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
 from runtime.model.time_laws import LoadFunctionError
-from runtime.solve import linear, newton_cost
+from runtime.solve import cholmod, linear, newton_cost
 from runtime.solve.linear import SchurSolver, single_threaded_blas
 
 #: Modified Newton rebuilds the Jacobian when a correction is larger than this fraction of
@@ -182,7 +182,27 @@ def linear_solver(dae: DAESystem):
                              "matrices; the follower loads of this scene make it "
                              "non-symmetric: use \"banded\" (its LU) or leave the key out")
         return linear.make("banded", model.pattern, symmetric=False)
+    if requested is None and dae.constraint_rows >= linear.KKT_ROWS and cholmod.available():
+        return linear.make("sparse", model.pattern)     # for the KKT system of its joints
     return linear.make(linear.choose(model.pattern, requested), model.pattern)
+
+
+def uses_kkt(dae: DAESystem, solver) -> bool:
+    """Whether the joints of ``dae`` go through the KKT system of the iteration matrices and
+    the constraint rows (``linear.KKTSystem``): when the rows are many (``linear.KKT_ROWS``)
+    and ``solver`` is the sparse one (CHOLMOD); else through the Schur complement of the
+    factorised matrix.  Both engines make the same choice."""
+    return dae.constraint_rows >= linear.KKT_ROWS and solver.name == "sparse" \
+        and dae.symmetric
+
+
+def constraint_system(dae: DAESystem, solver) -> linear.KKTSystem | None:
+    """The KKT system of ``dae``'s iteration matrices and rows when ``uses_kkt``, else
+    None."""
+    if not uses_kkt(dae, solver):
+        return None
+    rows = dae.constraint_matrix(dae.model.reference) if dae.nonlinear else dae.joints_free
+    return linear.KKTSystem(dae.model.pattern, rows)
 
 
 def mass_solver(dae: DAESystem) -> SchurSolver:
@@ -302,6 +322,8 @@ class Integrator:
         #: auto: what a new Jacobian costs in iterations without one, and the tallies
         #: [steps, iterations, factorisations] of the full (True) and modified (False) steps
         self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
+        #: the joints' KKT system when they are many (else their Schur complement)
+        self.kkt = constraint_system(self.dae, self.linear)
         self._tally = {True: [0.0, 0.0, 0.0], False: [0.0, 0.0, 0.0]}
 
     # --- pieces of a Newton iteration --------------------------------------------------
@@ -369,7 +391,8 @@ class Integrator:
                 rows = self.dae.constraint_matrix(q_full)
             start = time.perf_counter()
             try:
-                self._solver = SchurSolver(self.linear.factor(values), rows)
+                self._solver = (SchurSolver(self.linear.factor(values), rows)
+                                if self.kkt is None else self.kkt.factor(values, rows))
             except np.linalg.LinAlgError:
                 raise Divergence(t, SINGULAR) from None
             finally:
