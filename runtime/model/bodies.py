@@ -8,6 +8,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from runtime.kernels.kind import element_kind
 from runtime.model import mesh as meshing
 from runtime.model.mesh_file import FileMesh
@@ -147,6 +149,14 @@ class Body:
         """The element's (length, height, width) as ``runtime.Element`` takes them: the
         element's sides a, b and the thickness for a plate."""
         return (*self.placement.element_sides(self.counts), *self.section)
+
+    @property
+    def shapes(self) -> np.ndarray:
+        """The shape of each element (elements,): elements of one index are rigid placements
+        of one another and share one set of invariants (all 0 but in a mesh file's body)."""
+        if self.mesh_file is not None:
+            return self.mesh_file.data.shapes
+        return np.zeros(math.prod(self.counts), np.int64)
 
     @property
     def node_sets(self) -> dict:

@@ -117,7 +117,10 @@ class FileMesh(Placement):
         return (len(self.data.e0s),)
 
     def element_sides(self, counts: tuple[int, ...]) -> tuple[float, ...]:
-        return tuple(float(s) for s in self.data.sides[0])
+        """The elements' common parameter extents (m): those of every element where the
+        kind's nodes carry gradients along the mesh (``check_shapes`` makes them congruent);
+        else the mean sides (the interpolated geometry does not depend on them)."""
+        return tuple(float(s) for s in self.data.sides.mean(axis=0))
 
     def check_counts(self, counts: tuple[int, ...], path: str) -> None:
         """Element sizes are checked when the file is read."""
@@ -308,15 +311,20 @@ def _sets(mesh, used: np.ndarray, blocks: list, elements: int
 
 
 def check_shapes(mesh: FileMesh, path: str) -> None:
-    """SceneError unless every element of the file mesh has one shape (a body's elements
-    share one set of invariants, one ``runtime.Element``)."""
+    """SceneError unless the elements of a kind that carries gradients along the mesh (r_x
+    of a 2-node beam or a cable, r_x and r_y of plate3d) all have one shape: their
+    parameter extents must be the true lengths (unit r_x), one per body.  Kinds carrying
+    only the position and gradients across (3-node beams, 8-node shells) take any shapes,
+    one element group each."""
+    kind = element_kind(mesh.kind)
     shapes = mesh.data.shapes
-    if shapes.max() > 0:
+    if geometry.carries_in_plane_gradients(kind) and shapes.max() > 0:
         other = int(np.flatnonzero(shapes > 0)[0])
         raise SceneError(f"{path}.file: {show(mesh.file)}: its elements have {shapes.max() + 1} "
                          f"different shapes (element {other} is not a rigid placement of "
-                         f"element 0); the elements of a body share one set of invariants "
-                         f"today, so a mesh of distinct element shapes is not built yet "
-                         f"(expected congruent elements: a uniform mesh of a cylinder, an "
-                         f"arc, a flat grid)")
-
+                         f"element 0); {kind.name} nodes carry "
+                         f"{', '.join(kind.vectors[1:])}, derivatives along the mesh whose "
+                         f"length follows the element's, so its elements must be congruent "
+                         f"(equal lengths: a uniform line or arc, a flat grid of equal "
+                         f"rectangles); for other meshes use a kind that carries the position "
+                         f"only along the mesh (beam3d_3node, shell3d_8node, shell3d_3833)")

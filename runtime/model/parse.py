@@ -164,9 +164,10 @@ def _body(i: int, data: dict, materials: dict[str, Material], folder: str | None
         raise SceneError(f"{path}.arc: {kind} with law = {show(law)} takes straight references "
                          f"only: {meta.laws[law].curved}; expected start and end (a straight "
                          "body)")
-    if mesh_file is not None and "general" not in meta.laws[law].variants and not is_straight(
-            meta, mesh_file.data.e0s[0], (*mesh_file.data.sides[0],
-                                          *((thickness,) if height is None else (height, width)))):
+    if mesh_file is not None and "general" not in meta.laws[law].variants and not all(
+            is_straight(meta, e0, (*mesh_file.element_sides(()), *(
+                (thickness,) if height is None else (height, width))))
+            for e0 in mesh_file.data.e0s[np.unique(mesh_file.data.shapes, return_index=True)[1]]):
         raise SceneError(f"{path}.mesh: {kind} with law = {show(law)} takes straight references "
                          f"only: {meta.laws[law].curved}; expected a straight mesh")
 

@@ -5,7 +5,7 @@
   Analysis and Design 40, 1551-1569, section 3.5): radius R = 2.54 m, length L = 0.508 m
   along the axis (y), opening angle 0.2 rad (phi in [-0.1, 0.1] about the apex, x = R sin
   phi, z = R (cos phi - cos 0.1): the straight edges at z = 0), quad8 cells of the 8-node
-  shells (4 x 4 elements), counter-clockwise seen from outside (normals outward).
+  shells (8 x 8 elements), counter-clockwise seen from outside (normals outward).
 * ``hemisphere.vtu``: a hemisphere of radius 10 m (the pinched hemisphere's radius) cut by
   meridians and parallels; its elements differ from ring to ring, so a body of it is refused
   until a body's elements can have several shapes (written for that; no scene uses it).
@@ -50,7 +50,7 @@ def quad8_grid(nu: int, nv: int) -> tuple[np.ndarray, np.ndarray]:
     return renumber[np.array(cells)], uv
 
 
-def roof(nu: int = 4, nv: int = 4, radius: float = ROOF["radius"],
+def roof(nu: int = 8, nv: int = 8, radius: float = ROOF["radius"],
          length: float = ROOF["length"], angle: float = ROOF["angle"]):
     """The roof's meshio mesh (see the module docstring): nu elements around, nv along."""
     import meshio
