@@ -189,8 +189,9 @@ def _read(path: str, mtime: int, size: int, kind_name: str) -> MeshData:
     blocks = [(i, b) for i, b in enumerate(mesh.cells)
               if CELL_DIMENSION.get(b.type) == dimension and len(b.data)]
     types = sorted({b.type for _, b in blocks})
-    wanted = (f"{kind.name} takes {fit} cells (its {kind.n_nodes} nodes at "
-              f"{', '.join(map(str, CELL_NODES[fit]))} of the cell)" if fit else
+    at = ", ".join("(" + ", ".join(f"{c:g}" for c in p) + ")" for p in CELL_NODES.get(fit, ()))
+    wanted = (f"{kind.name} takes {fit} cells (its {kind.n_nodes} nodes at {at} of the cell, "
+              "in meshio's order)" if fit else
               f"no meshio cell type has the node layout of {kind.name}")
     if not types:
         found = ", ".join(sorted({b.type for b in mesh.cells})) or "none"

@@ -296,8 +296,8 @@ def _aligned_frames(kind: ElementKind, positions: np.ndarray, connectivity: np.n
     aligned = (np.abs(ex - ex[0]).max(axis=1) <= SAME) & (np.abs(ey - ey[0]).max(axis=1) <= SAME)
     bad = np.flatnonzero(~(rectangle & opposite & aligned))
     if np.abs(height).max() > SAME * scale or bad.size:
-        what = (f"element {int(bad[0])} is not a rectangle with sides parallel to element "
-                "0's" if bad.size else "the mesh is not flat")
+        what = ("the mesh is not flat" if np.abs(height).max() > SAME * scale else
+                f"element {int(bad[0])} is not a rectangle with sides parallel to element 0's")
         raise MeshGeometryError(
             f"{kind.name} nodes carry r_x and r_y, which every element sharing a node uses as "
             f"its own: elements meeting at a slope or with turned sides would need a "

@@ -225,8 +225,8 @@ def _file_shape(data: dict, path: str, kind: str, folder: str | None) -> tuple:
     meta = element_kind(kind)
     for key in ("elements", *Line.keys, *Arc.keys, *Rectangle.keys, *Box.keys):
         if key in data:
-            what = "elements" if key == "elements" else "a placement"
-            raise SceneError(f"{path}.{key}: the mesh file sets the {what} of the body; "
+            what = "elements" if key == "elements" else "placement"
+            raise SceneError(f"{path}.{key}: the mesh file sets the body's {what}; "
                              f"expected either mesh = {{file = ...}} or {key}, got both")
     if len(meta.mesh_axes) == 3:
         raise SceneError(f"{path}.mesh: {kind} is a solid element; meshes from files are "

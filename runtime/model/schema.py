@@ -314,8 +314,9 @@ class Nodes:
                              f"one of its sets: {known}")
         if not len(sets[name]):
             raise SceneError(f"{path}: set {show(name)} of body {show(body.name)} names no "
-                             f"node of the body (its points lie on none of the body's cells); "
-                             f"expected a set of the body's nodes, got {show(value)}")
+                             f"node of the body (it is empty, or its points lie on none of "
+                             f"the body's cells); expected a set of the body's nodes, got "
+                             f"{show(value)}")
         return sets[name]
 
 
