@@ -124,6 +124,40 @@ def test_flat_file_mesh_equals_the_rectangle_to_round_off(tmp_path, kind):
     assert tip_a < -1e-4
 
 
+def test_gmsh_physical_groups_name_node_sets(tmp_path):
+    """A gmsh file's physical groups (``gmsh:physical`` tags named in ``field_data``) are
+    sets: the line3 cells of the clamped edge name its nodes, the quad8 cells' group their
+    elements; the strip clamped through it bends as the rectangle body."""
+    structured = _scene(tmp_path, 'element = "shell3d_3833"\nsection = { thickness = 0.01 }\n'
+                        'rectangle = { corner = [0.0, 0.0, 0.0], size = [1.0, 0.2], '
+                        'grid = [4, 1] }\n',
+                        '[[constraint]]\ntype = "clamp"\nedge = "b:x=0"\n[[load]]\n'
+                        'type = "point_force"\nnode = "b:-1"\nforce = [0.0, 0.0, -5.0]\n',
+                        "structured.toml")
+    body = structured.bodies[0]
+    points = np.array([body.node_position(i) for i in range(body.n_nodes)])
+    edge = [int(i) for i in body.mesh.on_line(0, 0)]          # the x = 0 edge: 3 nodes
+    quads = body.mesh.connectivity
+    tags = {"gmsh:physical": [np.full(len(quads), 1), np.array([2])],
+            "gmsh:geometrical": [np.full(len(quads), 1), np.array([1])]}
+    mesh = meshio.Mesh(points, [("quad8", quads), ("line3", np.array([[edge[0], edge[2],
+                                                                       edge[1]]]))],
+                       cell_data=tags, field_data={"panel": np.array([1, 2]),
+                                                   "clamped": np.array([2, 1])})
+    meshio.write(tmp_path / "strip.msh", mesh, file_format="gmsh22")
+    read = _scene(tmp_path, 'element = "shell3d_3833"\nsection = { thickness = 0.01 }\n'
+                  'mesh = { file = "strip.msh" }\n',
+                  '[[constraint]]\ntype = "clamp"\nedge = "b:clamped"\n[[load]]\n'
+                  f'type = "point_force"\nnode = "b:{body.n_nodes - 1}"\n'
+                  'force = [0.0, 0.0, -5.0]\n', "read.toml")
+    data = read.bodies[0].mesh_file.data
+    assert data.node_sets["clamped"].tolist() == sorted(edge)
+    assert data.element_sets["panel"].tolist() == list(range(4))
+    assert "clamped" not in data.element_sets    # its cells are not the body's
+    a, b = _static(structured), _static(read)
+    np.testing.assert_allclose(b.static, a.static, rtol=0, atol=1e-12 * np.abs(a.static).max())
+
+
 # --------------------------------------------------------------------------- curved beams
 
 @pytest.mark.parametrize("kind", ["beam2d", "beam3d", "beam3d_3node"])
@@ -325,3 +359,16 @@ def test_engines_agree_on_a_body_of_several_element_shapes(tmp_path):
     assert np.abs(moved).max() > 1e-5
     np.testing.assert_allclose(runs[1].static, runs[0].static, rtol=0,
                                atol=1e-12 * np.abs(runs[0].static).max())
+
+
+def test_a_body_meshed_from_a_file_in_python():
+    from runtime import Body, Material, Pin, Scene, Static
+
+    path = scenes.path("roof").parent / "roof.vtu"
+    scene = Scene(materials=[Material("glass", 3102.75e6, 0.3, 1000.0)],
+                  bodies=[Body("roof", "shell3d_3833", "glass", thickness=0.0127,
+                               mesh_file=str(path))],
+                  constraints=[Pin(edge="roof:hinged")], static=Static())
+    assert scene.bodies[0].mesh_file.file == str(path)
+    assert scene.bodies[0].elements == 64 and scene.constraints[0].edge.set == "hinged"
+    assert len(scene.constraints[0].targets()) == 2 * 17
