@@ -188,11 +188,12 @@ def element_sides(kind: ElementKind, positions: np.ndarray, connectivity: np.nda
                      np.linalg.norm(rows[:, y] - rows[:, o], axis=1)], axis=1)
 
 
-def surface_normals(kind: ElementKind, positions: np.ndarray, connectivity: np.ndarray,
-                    sides: np.ndarray) -> np.ndarray:
+def surface_normals(kind: ElementKind, positions: np.ndarray, connectivity: np.ndarray
+                    ) -> np.ndarray:
     """Unit normals (elements, n_nodes, 3) of each element's interpolated surface at its
     nodes: r0_x x r0_y from the position shape functions (kinds without in-plane gradients;
-    with them, the normal of the corners' plane)."""
+    with them, the normal of the corners' plane).  The direction does not depend on the
+    element's parameter extents, so one table of shape gradients serves every element."""
     o, x, y = _corners(kind)
     rows = positions[connectivity]                         # (elements, n, 3)
     if carries_in_plane_gradients(kind):
@@ -200,19 +201,16 @@ def surface_normals(kind: ElementKind, positions: np.ndarray, connectivity: np.n
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
         return np.repeat(normal[:, None, :], kind.n_nodes, axis=1)
     family = kernel_family(kind.name, "invariants", "numpy")
-    out = np.zeros(rows.shape)
-    for e, (row, (a, b)) in enumerate(zip(rows, sides, strict=True)):
-        geometry = (a, b, 1.0)
-        points = kind.node_points(*geometry).copy()
-        points[:, 2] = 0.0
-        grads = invariants.full_gradients(kind, invariants.shape_gradient_table(
-            kind, family, geometry, points))              # (n, n_shape, 3)
-        q0 = np.zeros((kind.n_shape, 3))
-        q0[list(kind.position_vectors)] = row - row[0]
-        j0 = np.einsum("ka,pkb->pab", q0, grads)           # (n, 3, 3)
-        normal = np.cross(j0[:, :, 0], j0[:, :, 1])
-        out[e] = normal / np.linalg.norm(normal, axis=1, keepdims=True)
-    return out
+    unit = (1.0, 1.0, 1.0)
+    points = kind.node_points(*unit).copy()
+    points[:, 2] = 0.0
+    grads = invariants.full_gradients(kind, invariants.shape_gradient_table(
+        kind, family, unit, points))                       # (n, n_shape, 3)
+    q0 = np.zeros((len(rows), kind.n_shape, 3))
+    q0[:, list(kind.position_vectors)] = rows - rows[:, :1]
+    j0 = np.einsum("eka,pkb->epab", q0, grads)             # (elements, n, 3, 3)
+    normal = np.cross(j0[..., 0], j0[..., 1])
+    return normal / np.linalg.norm(normal, axis=-1, keepdims=True)
 
 
 def node_normals(normals: np.ndarray, connectivity: np.ndarray, nodes: int) -> np.ndarray:
@@ -251,7 +249,7 @@ def surface_references(kind: ElementKind, positions: np.ndarray, connectivity: n
     unit vectors oriented as the cells)."""
     curved_reference_check(kind, "file mesh")
     sides = element_sides(kind, positions, connectivity)
-    element_normals = surface_normals(kind, positions, connectivity, sides)
+    element_normals = surface_normals(kind, positions, connectivity)
     computed = node_normals(element_normals, connectivity, len(positions))
     if normals is not None:
         against = np.flatnonzero(np.sum(normals * computed, axis=1) <= 0)
@@ -317,22 +315,17 @@ def _far(kind: ElementKind) -> int:
 # --------------------------------------------------------------------------- shapes
 
 def shape_groups(kind: ElementKind, e0s: np.ndarray) -> np.ndarray:
-    """Index (elements,) of each element's shape: elements of one index are congruent (their
-    references are rigid placements of one another, ``SAME`` relative), so they share one
-    set of invariants.  Compared by the Gram matrices Q0 Q0^T relative to the first node."""
+    """Index (elements,) of each element's shape, numbered in order of first appearance:
+    elements of one index are congruent (their references are rigid placements of one
+    another), so they share one set of invariants.  Compared by the Gram matrices Q0 Q0^T
+    relative to the first node, on a grid of ``SAME`` times the largest entry (two elements
+    in one cell differ by less; congruent elements either side of a cell's edge only make
+    one group more)."""
     q = e0s.reshape(len(e0s), kind.n_shape, kind.dim).copy()
     positions = list(kind.position_vectors)
     q[:, positions] -= q[:, positions[:1]]
     grams = np.einsum("eka,ela->ekl", q, q)
-    scale = np.abs(grams).max()
-    groups = np.full(len(e0s), -1)
-    shapes: list[np.ndarray] = []
-    for e, gram in enumerate(grams):
-        for s, shape in enumerate(shapes):
-            if np.abs(gram - shape).max() <= SAME * scale:
-                groups[e] = s
-                break
-        else:
-            groups[e] = len(shapes)
-            shapes.append(gram)
-    return groups
+    cells = np.round(grams / (SAME * np.abs(grams).max())).astype(np.int64)
+    _, first, inverse = np.unique(cells.reshape(len(e0s), -1), axis=0, return_index=True,
+                                  return_inverse=True)
+    return np.argsort(np.argsort(first))[inverse.ravel()]
