@@ -5,6 +5,7 @@ placements that share none of its code (``Rectangle``, ``Arc``,
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import meshio
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 import scenes
-from runtime import load_scene, run_scene
+from runtime import Gravity, load_scene, run_scene
 from runtime.app.shapes import Shape, write_vtu
 from runtime.element.element import Element
 from runtime.element.reference import bent_reference
@@ -353,7 +354,9 @@ def test_engines_agree_on_a_body_of_several_element_shapes(tmp_path):
     scene = _scene(tmp_path, 'element = "shell3d_3833"\nsection = { thickness = 0.04 }\n'
                    'mesh = { file = "hemisphere.vtu" }\n',
                    '[[constraint]]\ntype = "clamp"\nedge = "b:equator"\n[[load]]\n'
-                   'type = "point_force"\nnode = "b:-1"\nforce = [0.0, 0.0, -1e4]\n')
+                   'type = "point_force"\nnode = "b:-1"\nforce = [0.0, 0.0, -1e4]\n'
+                   '[[sensor]]\nname = "w"\ntype = "displacement"\nnode = "b:-1"\n'
+                   'component = "z"\n[analysis.dynamic]\nt_end = 0.01\nstep = 1e-3\n')
     runs = [run_scene(scene, engine=engine, progress=False) for engine in ("python",
                                                                            "compiled")]
     assert [r.status for r in runs] == ["ok", "ok"]
@@ -361,6 +364,23 @@ def test_engines_agree_on_a_body_of_several_element_shapes(tmp_path):
     assert np.abs(moved).max() > 1e-5
     np.testing.assert_allclose(runs[1].static, runs[0].static, rtol=0,
                                atol=1e-12 * np.abs(runs[0].static).max())
+    final = [r.summary["dynamic"]["sensors_final"]["w"] for r in runs]
+    assert final[1] == pytest.approx(final[0], rel=1e-9) and final[0] < -1e-6
+
+
+def test_curved_shell_mass_is_the_surface_times_thickness(tmp_path):
+    """Gravity on the roof (its consistent force from the mass of the curved elements):
+    the resultant is rho t R phi L g, to the interpolation of the arc (1e-9)."""
+    shell_meshes.write(tmp_path)
+    scene = _roof_scene(tmp_path, "roof.vtu")
+    model = Model(dataclasses.replace(scene, loads=(Gravity((0.0, 0.0, -9.81)),)),
+                  backend="numpy")
+    (_, force), = model.nominal_loads()
+    resultant = force[model.position_dofs()].reshape(-1, 3).sum(axis=0)
+    radius, length, angle = (shell_meshes.ROOF[k] for k in ("radius", "length", "angle"))
+    weight = 1000.0 * 0.0127 * radius * angle * length * 9.81
+    assert resultant[2] == pytest.approx(-weight, rel=1e-8)
+    assert np.abs(resultant[:2]).max() < 1e-12 * weight
 
 
 def test_a_body_meshed_from_a_file_in_python():
