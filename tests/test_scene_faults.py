@@ -647,39 +647,40 @@ def _chain(branch: bool = False):
     return meshio.Mesh(points if branch else points + [0, 0, 0.5], [("line", np.array(cells))])
 
 
-SHELL = 'element = "shell3d_3833"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
-PLATE = 'element = "plate3d"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
-CLAMP = '[[constraint]]\ntype = "clamp"\nedge = "b:clamped"\n'
+SHELL_MESH = 'element = "shell3d_3833"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
+PLATE_MESH = 'element = "plate3d"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
+CLAMP_SET = '[[constraint]]\ntype = "clamp"\nedge = "b:clamped"\n'
 MESH_CASES = [
-    ("missing mesh file", None, SHELL, CLAMP, 'body[0].mesh.file: no mesh file "m.vtu"'),
-    ("unreadable mesh file", b"<VTKFile garbage", SHELL, CLAMP,
+    ("missing mesh file", None, SHELL_MESH, CLAMP_SET, 'body[0].mesh.file: no mesh file "m.vtu"'),
+    ("unreadable mesh file", b"<VTKFile garbage", SHELL_MESH, CLAMP_SET,
      'body[0].mesh.file: "m.vtu": cannot read the mesh'),
-    ("no cells of the kind's dimension", lambda: _chain(), SHELL, "",
+    ("no cells of the kind's dimension", lambda: _chain(), SHELL_MESH, "",
      "body[0].mesh.file: \"m.vtu\": no cells of a usable type: shell3d_3833 takes quad8 "
      "cells"),
-    ("cells of another layout", lambda: _strip("quad"), SHELL, CLAMP,
+    ("cells of another layout", lambda: _strip("quad"), SHELL_MESH, CLAMP_SET,
      'body[0].mesh.file: "m.vtu": quad cells do not fit shell3d_3833: shell3d_3833 takes '
      "quad8 cells"),
-    ("mixed cell types", lambda: _strip(extra=[("quad", np.array([[0, 1, 6, 5]]))]), SHELL,
-     CLAMP, 'body[0].mesh.file: "m.vtu": mixed cell types quad, quad8'),
-    ("cells of opposite orientations", lambda: _strip(flip=True), SHELL, CLAMP,
+    ("mixed cell types", lambda: _strip(extra=[("quad", np.array([[0, 1, 6, 5]]))]), SHELL_MESH,
+     CLAMP_SET, 'body[0].mesh.file: "m.vtu": mixed cell types quad, quad8'),
+    ("cells of opposite orientations", lambda: _strip(flip=True), SHELL_MESH, CLAMP_SET,
      'body[0].mesh.file: "m.vtu": elements 0, 1 meet at node 2 with opposite orientations'),
-    ("a curved plate3d mesh", lambda: _strip("quad", bend=0.05), PLATE, CLAMP,
+    ("a curved plate3d mesh", lambda: _strip("quad", bend=0.05), PLATE_MESH, CLAMP_SET,
      'body[0].mesh.file: "m.vtu": plate3d nodes carry r_x and r_y, which every element sharing '
      "a node uses as its own"),
-    ("unknown set", lambda: _strip(), SHELL, CLAMP.replace("b:clamped", "b:clampd"),
+    ("unknown set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace("b:clamped", "b:clampd"),
      'constraint[0].edge: body "b" (meshed from a file) has no node set "clampd"'),
-    ("a set naming no nodes", lambda: _strip(), SHELL, CLAMP.replace("b:clamped", "b:none"),
+    ("a set naming no nodes", lambda: _strip(), SHELL_MESH,
+     CLAMP_SET.replace("b:clamped", "b:none"),
      'constraint[0].edge: set "none" of body "b" names no node of the body'),
-    ("a set of several nodes as a node", lambda: _strip(), SHELL,
+    ("a set of several nodes as a node", lambda: _strip(), SHELL_MESH,
      '[[load]]\ntype = "point_force"\nnode = "b:clamped"\nforce = [0.0, 0.0, 1.0]\n',
      'load[0].node: set "clamped" of body "b" holds 3 nodes; a node reference names one'),
-    ("a line force on a set", lambda: _strip(), SHELL, CLAMP.replace('"clamp"', '"pin"')
+    ("a line force on a set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace('"clamp"', '"pin"')
      + '[[load]]\ntype = "line_force"\nedge = "b:clamped"\nforce_per_length = [0.0, 0.0, 1.0]\n',
      'load[0].edge: b:clamped is a node set of a mesh file'),
     ("a mesh and a placement", lambda: _strip(),
-     SHELL + 'rectangle = { corner = [0.0, 0.0, 0.0], size = [1.0, 1.0], grid = [1, 1] }\n',
-     CLAMP, "body[0].rectangle: the mesh file sets the body's placement"),
+     SHELL_MESH + 'rectangle = { corner = [0.0, 0.0, 0.0], size = [1.0, 1.0], grid = [1, 1] }\n',
+     CLAMP_SET, "body[0].rectangle: the mesh file sets the body's placement"),
     ("line cells for a 3-node beam", lambda: _chain(),
      'element = "beam3d_3node"\nsection = { height = 0.1, width = 0.1 }\n'
      'mesh = { file = "m.vtu" }\n', "", 'body[0].mesh.file: "m.vtu": line cells do not fit '
