@@ -615,10 +615,12 @@ def test_random_malformed_scenes_raise_only_one_line_scene_errors():
 
 # --------------------------------------------------------------------------- mesh files
 
-def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=()):
+def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=(),
+           turn: bool = False):
     """A 2 x 1 strip of ``cell`` cells (quad8 or quad) on [0, 2] x [0, 1], bent about the y
     axis by ``bend`` (z = bend x^2), its second cell numbered the other way round if
-    ``flip``; 0/1 point data sets ``clamped`` (x = 0), ``none`` (empty); ``extra`` blocks."""
+    ``flip``, from another corner if ``turn``; 0/1 point data sets ``clamped`` (x = 0),
+    ``none`` (empty); ``extra`` blocks."""
     import meshio
 
     quad8 = cell == "quad8"
@@ -630,6 +632,9 @@ def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=())
         corners = [(i, 0), (i + 1, 0), (i + 1, 1), (i, 1)]
         mids = [(i + 0.5, 0), (i + 1, 0.5), (i + 0.5, 1), (i, 0.5)]
         cells.append([index[p] for p in corners + (mids if quad8 else [])])
+    if turn:
+        c = cells[1]
+        cells[1] = c[1:4] + c[:1] + (c[5:8] + c[4:5] if quad8 else [])
     if flip:
         c = cells[1]
         cells[1] = [c[0], c[3], c[2], c[1]] + ([c[7], c[6], c[5], c[4]] if quad8 else [])
@@ -667,6 +672,12 @@ MESH_CASES = [
     ("a curved plate3d mesh", lambda: _strip("quad", bend=0.05), PLATE_MESH, CLAMP_SET,
      'body[0].mesh.file: "m.vtu": plate3d nodes carry r_x and r_y, which every element sharing '
      "a node uses as its own"),
+    ("a plate3d cell numbered from another corner", lambda: _strip("quad", turn=True),
+     PLATE_MESH, CLAMP_SET, 'body[0].mesh.file: "m.vtu": plate3d nodes carry r_x and r_y, '
+     "which every element sharing a node uses as its own: elements meeting at a slope or with "
+     "turned sides would need a transformation of the gradients between them (the slope "
+     "discontinuity of Shabana and Mikkola), so a plate3d mesh must be flat rectangles with "
+     "one common frame, and element 1 is not a rectangle with sides parallel to element 0's"),
     ("unknown set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace("b:clamped", "b:clampd"),
      'constraint[0].edge: body "b" (meshed from a file) has no node set "clampd"'),
     ("a set naming no nodes", lambda: _strip(), SHELL_MESH,
