@@ -125,6 +125,32 @@ def test_flat_file_mesh_equals_the_rectangle_to_round_off(tmp_path, kind):
     assert tip_a < -1e-4
 
 
+@pytest.mark.parametrize("kind", ["plate3d", "shell3d_3833"])
+@pytest.mark.parametrize("follower", [False, True])
+def test_line_force_along_a_set_equals_the_edge_load(tmp_path, kind, follower):
+    """A line force along a node set of the file (the far edge) is the rectangle's along its
+    grid line: the same sides, integrated from the references."""
+    grid = (3, 2)
+    load = ('[[load]]\ntype = "line_force"\nedge = "b:{edge}"\n'
+            f'force_per_length = [0.0, -20.0, -200.0]\nfollower = {str(follower).lower()}\n')
+    section = 'section = { thickness = 0.02 }\n'
+    structured = _scene(tmp_path, f'element = "{kind}"\n{section}rectangle = {{ corner = '
+                        '[0.0, 0.0, 0.0], size = [1.0, 0.3], grid = [3, 2] }\n',
+                        '[[constraint]]\ntype = "clamp"\nedge = "b:x=0"\n'
+                        + load.format(edge="x=-1"), "structured.toml")
+    body = structured.bodies[0]
+    positions = np.array([body.node_position(i) for i in range(body.n_nodes)])
+    flags = {name: np.isclose(positions[:, 0], x).astype(np.int32)
+             for name, x in (("clamped", 0.0), ("far", 1.0))}
+    _write_structured(tmp_path / "strip.vtu", kind, positions, grid, point_data=flags)
+    read = _scene(tmp_path, f'element = "{kind}"\n{section}mesh = {{ file = "strip.vtu" }}\n',
+                  '[[constraint]]\ntype = "clamp"\nedge = "b:clamped"\n'
+                  + load.format(edge="far"), "read.toml")
+    a, b = _static(structured), _static(read)
+    assert np.abs(a.static - a.model.reference).max() > 1e-4
+    np.testing.assert_allclose(b.static, a.static, rtol=0, atol=1e-12 * np.abs(a.static).max())
+
+
 def test_gmsh_physical_groups_name_node_sets(tmp_path):
     """A gmsh file's physical groups (``gmsh:physical`` tags named in ``field_data``) are
     sets: the line3 cells of the clamped edge name its nodes, the quad8 cells' group their

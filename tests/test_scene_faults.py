@@ -686,9 +686,11 @@ MESH_CASES = [
     ("a set of several nodes as a node", lambda: _strip(), SHELL_MESH,
      '[[load]]\ntype = "point_force"\nnode = "b:clamped"\nforce = [0.0, 0.0, 1.0]\n',
      'load[0].node: set "clamped" of body "b" holds 3 nodes; a node reference names one'),
-    ("a line force on a set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace('"clamp"', '"pin"')
-     + '[[load]]\ntype = "line_force"\nedge = "b:clamped"\nforce_per_length = [0.0, 0.0, 1.0]\n',
-     'load[0].edge: b:clamped is a node set of a mesh file'),
+    ("a line moment on a set", lambda: _strip("quad"), PLATE_MESH,
+     CLAMP_SET.replace('"clamp"', '"pin"') + '[[load]]\ntype = "line_moment"\n'
+     'edge = "b:clamped"\nmoment_per_length = [0.0, 1.0, 0.0]\n',
+     "load[0].edge: b:clamped is a node set of a mesh file; a line moment acts along a grid "
+     "line of a rectangle body"),
     ("a mesh and a placement", lambda: _strip(),
      SHELL_MESH + 'rectangle = { corner = [0.0, 0.0, 0.0], size = [1.0, 1.0], grid = [1, 1] }\n',
      CLAMP_SET, "body[0].rectangle: the mesh file sets the body's placement"),
