@@ -616,11 +616,11 @@ def test_random_malformed_scenes_raise_only_one_line_scene_errors():
 # --------------------------------------------------------------------------- mesh files
 
 def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=(),
-           turn: bool = False):
+           turn: bool = False, squash: bool = False):
     """A 2 x 1 strip of ``cell`` cells (quad8 or quad) on [0, 2] x [0, 1], bent about the y
     axis by ``bend`` (z = bend x^2), its second cell numbered the other way round if
-    ``flip``, from another corner if ``turn``; 0/1 point data sets ``clamped`` (x = 0),
-    ``none`` (empty); ``extra`` blocks."""
+    ``flip``, from another corner if ``turn``, squashed to a line if ``squash``; 0/1 point
+    data sets ``clamped`` (x = 0), ``none`` (empty); ``extra`` blocks."""
     import meshio
 
     quad8 = cell == "quad8"
@@ -638,16 +638,16 @@ def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=(),
     if flip:
         c = cells[1]
         cells[1] = [c[0], c[3], c[2], c[1]] + ([c[7], c[6], c[5], c[4]] if quad8 else [])
-    points = np.array([(x, y, bend * x * x) for x, y in nodes])
+    points = np.array([(x, y * (x <= 1 or not squash), bend * x * x) for x, y in nodes])
     return meshio.Mesh(points, [(cell, np.array(cells)), *extra], point_data={
         "clamped": np.isclose(points[:, 0], 0).astype(np.int32),
         "none": np.zeros(len(points), np.int32)})
 
 
-def _chain(branch: bool = False):
+def _chain(branch: bool = False, twin: bool = False):
     import meshio
 
-    points = np.array([(0, 0, 0), (1, 0, 0), (2, 0, 0), (1, 1, 0)], float)
+    points = np.array([(0, 0, 0), (1, 0, 0), (1 + (not twin), 0, 0), (1, 1, 0)], float)
     cells = [[0, 1], [1, 2]] + ([[1, 3]] if branch else [])
     return meshio.Mesh(points if branch else points + [0, 0, 0.5], [("line", np.array(cells))])
 
@@ -678,6 +678,11 @@ MESH_CASES = [
      "turned sides would need a transformation of the gradients between them (the slope "
      "discontinuity of Shabana and Mikkola), so a plate3d mesh must be flat rectangles with "
      "one common frame, and element 1 is not a rectangle with sides parallel to element 0's"),
+    ("a degenerate cell", lambda: _strip(bend=0.0, squash=True), SHELL_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": element 1 degenerates at its node'),
+    ("two nodes of a line at one point", lambda: _chain(twin=True),
+     'element = "beam3d"\nsection = { height = 0.1, width = 0.1 }\nmesh = { file = "m.vtu" }\n',
+     "", 'body[0].mesh.file: "m.vtu": nodes 1 and 2 of the chain lie at one point'),
     ("unknown set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace("b:clamped", "b:clampd"),
      'constraint[0].edge: body "b" (meshed from a file) has no node set "clampd"'),
     ("a set naming no nodes", lambda: _strip(), SHELL_MESH,

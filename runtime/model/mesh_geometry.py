@@ -122,6 +122,11 @@ def chain_tangents(positions: np.ndarray, chain: np.ndarray, closed: bool) -> np
     """Unit tangents (nodes, 3) at the chain's nodes from circles through neighbours."""
     points = positions[chain]
     n = len(chain)
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    if not (steps > 1e-12 * np.ptp(points, axis=0).max()).all():
+        k = int(np.argmin(steps))
+        raise MeshGeometryError(f"nodes {int(chain[k])} and {int(chain[k + 1])} of the chain "
+                                "lie at one point; expected distinct points along the line")
     tangents = np.zeros((len(positions), 3))
     if n == 2:
         tangents[chain] = (points[1] - points[0]) / np.linalg.norm(points[1] - points[0])
@@ -210,7 +215,20 @@ def surface_normals(kind: ElementKind, positions: np.ndarray, connectivity: np.n
     q0[:, list(kind.position_vectors)] = rows - rows[:, :1]
     j0 = np.einsum("eka,pkb->epab", q0, grads)             # (elements, n, 3, 3)
     normal = np.cross(j0[..., 0], j0[..., 1])
-    return normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    length = np.linalg.norm(normal, axis=-1, keepdims=True)
+    _check_degenerate(length[..., 0], np.linalg.norm(j0[..., :2], axis=-2).prod(axis=-1))
+    return normal / length
+
+
+def _check_degenerate(measure: np.ndarray, scale: np.ndarray) -> None:
+    """MeshGeometryError where an element's surface (or line) degenerates at a node: a
+    ``measure`` (elements, n) below 1e-12 of its ``scale``, or not finite."""
+    bad = ~(measure > 1e-12 * scale)
+    if bad.any():
+        e, k = (int(i) for i in np.argwhere(bad)[0])
+        raise MeshGeometryError(f"element {e} degenerates at its node {k} (its sides there "
+                                "are parallel or of zero length); expected cells of positive "
+                                "area with distinct points")
 
 
 def node_normals(normals: np.ndarray, connectivity: np.ndarray, nodes: int) -> np.ndarray:
