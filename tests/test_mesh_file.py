@@ -40,10 +40,11 @@ def _static(scene):
 
 
 def _write_structured(path, kind_name: str, positions, counts, permutation=None,
-                      point_data=None):
+                      point_data=None, flip: bool = False):
     """A mesh file of the structured mesh of ``counts`` elements of ``kind_name``, node
     positions ``positions`` (nodes, 3), its points numbered by ``permutation`` (file point
-    of each mesh node; default the mesh order) and its cells in reverse order."""
+    of each mesh node; default the mesh order) and its cells in reverse order (line cells
+    from their other end if ``flip``)."""
     kind = element_kind(kind_name)
     mesh = structured_mesh(kind, counts)
     cell = fitting_cell(kind)
@@ -54,6 +55,8 @@ def _write_structured(path, kind_name: str, positions, counts, permutation=None,
     points[permutation] = positions
     cells = np.empty_like(mesh.connectivity)
     cells[:, order] = permutation[mesh.connectivity]
+    if flip:
+        cells[:, [0, 1]] = cells[:, [1, 0]]
     data = {name: np.asarray(v)[np.argsort(permutation)] if np.ndim(v) else v
             for name, v in (point_data or {}).items()}
     meshio.write(path, meshio.Mesh(points, [(cell, cells[::-1])], point_data=data),
@@ -187,11 +190,14 @@ def test_gmsh_physical_groups_name_node_sets(tmp_path):
 
 # --------------------------------------------------------------------------- curved beams
 
-@pytest.mark.parametrize("kind", ["beam2d", "beam3d", "beam3d_3node"])
-def test_arc_from_a_file_equals_the_arc_placement(tmp_path, kind):
-    """A quarter circle's nodes in a file (line or line3 cells): tangents from circles through
-    neighbouring nodes and lengths from the end tangents reproduce the arc placement's
-    references, and its static response, to round-off."""
+@pytest.mark.parametrize("kind,flip", [("beam2d", False), ("beam3d", False),
+                                       ("beam3d_3node", False), ("beam3d", True),
+                                       ("beam3d_3node", True)])
+def test_arc_from_a_file_equals_the_arc_placement(tmp_path, kind, flip):
+    """A quarter circle's nodes in a file (line or line3 cells, in reverse order, each from
+    its other end if ``flip``): tangents from circles through neighbouring nodes and lengths
+    from the end tangents reproduce the arc placement's references, and its static
+    response, to round-off."""
     dim = element_kind(kind).dim
     centre = "[0.0, 1.0]" if dim == 2 else "[0.0, 1.0, 0.0]"
     force = "[0.0, -300.0]" if dim == 2 else "[0.0, 0.0, -300.0]"
@@ -204,7 +210,7 @@ def test_arc_from_a_file_equals_the_arc_placement(tmp_path, kind):
     body = arc.bodies[0]
     positions = np.zeros((body.n_nodes, 3))
     positions[:, :dim] = [body.node_position(i) for i in range(body.n_nodes)]
-    _write_structured(tmp_path / "arc.msh", kind, positions, (6,))
+    _write_structured(tmp_path / "arc.msh", kind, positions, (6,), flip=flip)
     read = _scene(tmp_path, f'element = "{kind}"\nsection = {{ height = 0.05, width = 0.05 }}\n'
                   'mesh = { file = "arc.msh" }\n', rest.format(tip=body.n_nodes - 1),
                   "read.toml")
