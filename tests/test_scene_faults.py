@@ -17,6 +17,7 @@ import math
 import random
 import tomllib
 
+import numpy as np
 import pytest
 
 from runtime import Revolute
@@ -610,3 +611,123 @@ def test_random_malformed_scenes_raise_only_one_line_scene_errors():
             errors += 1
             assert "\n" not in str(error) and len(str(error)) < 1000
     assert errors > 300
+
+
+# --------------------------------------------------------------------------- mesh files
+
+def _strip(cell: str = "quad8", bend: float = 0.0, flip: bool = False, extra=(),
+           turn: bool = False, squash: bool = False):
+    """A 2 x 1 strip of ``cell`` cells (quad8 or quad) on [0, 2] x [0, 1], bent about the y
+    axis by ``bend`` (z = bend x^2), its second cell numbered the other way round if
+    ``flip``, from another corner if ``turn``, squashed to a line if ``squash``; 0/1 point
+    data sets ``clamped`` (x = 0), ``none`` (empty); ``extra`` blocks."""
+    import meshio
+
+    quad8 = cell == "quad8"
+    nodes = [(x / 2, y / 2) for y in range(3) for x in range(5)] if quad8 else \
+        [(x, y) for y in range(2) for x in range(3)]
+    index = {p: k for k, p in enumerate(nodes)}
+    cells = []
+    for i in range(2):
+        corners = [(i, 0), (i + 1, 0), (i + 1, 1), (i, 1)]
+        mids = [(i + 0.5, 0), (i + 1, 0.5), (i + 0.5, 1), (i, 0.5)]
+        cells.append([index[p] for p in corners + (mids if quad8 else [])])
+    if turn:
+        c = cells[1]
+        cells[1] = c[1:4] + c[:1] + (c[5:8] + c[4:5] if quad8 else [])
+    if flip:
+        c = cells[1]
+        cells[1] = [c[0], c[3], c[2], c[1]] + ([c[7], c[6], c[5], c[4]] if quad8 else [])
+    points = np.array([(x, y * (x <= 1 or not squash), bend * x * x) for x, y in nodes])
+    return meshio.Mesh(points, [(cell, np.array(cells)), *extra], point_data={
+        "clamped": np.isclose(points[:, 0], 0).astype(np.int32),
+        "none": np.zeros(len(points), np.int32)})
+
+
+def _chain(branch: bool = False, twin: bool = False):
+    import meshio
+
+    points = np.array([(0, 0, 0), (1, 0, 0), (1 + (not twin), 0, 0), (1, 1, 0)], float)
+    cells = [[0, 1], [1, 2]] + ([[1, 3]] if branch else [])
+    return meshio.Mesh(points if branch else points + [0, 0, 0.5], [("line", np.array(cells))])
+
+
+SHELL_MESH = 'element = "shell3d_3833"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
+PLATE_MESH = 'element = "plate3d"\nsection = { thickness = 0.01 }\nmesh = { file = "m.vtu" }\n'
+CLAMP_SET = '[[constraint]]\ntype = "clamp"\nedge = "b:clamped"\n'
+MESH_CASES = [
+    ("missing mesh file", None, SHELL_MESH, CLAMP_SET, 'body[0].mesh.file: no mesh file "m.vtu"'),
+    ("unreadable mesh file", b"<VTKFile garbage", SHELL_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": cannot read the mesh'),
+    ("no cells of the kind's dimension", lambda: _chain(), SHELL_MESH, "",
+     "body[0].mesh.file: \"m.vtu\": no cells of a usable type: shell3d_3833 takes quad8 "
+     "cells"),
+    ("cells of another layout", lambda: _strip("quad"), SHELL_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": quad cells do not fit shell3d_3833: shell3d_3833 takes '
+     "quad8 cells"),
+    ("mixed cell types", lambda: _strip(extra=[("quad", np.array([[0, 1, 6, 5]]))]), SHELL_MESH,
+     CLAMP_SET, 'body[0].mesh.file: "m.vtu": mixed cell types quad, quad8'),
+    ("cells of opposite orientations", lambda: _strip(flip=True), SHELL_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": elements 0, 1 meet at node 2 with opposite orientations'),
+    ("a curved plate3d mesh", lambda: _strip("quad", bend=0.05), PLATE_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": plate3d nodes carry r_x and r_y, which every element sharing '
+     "a node uses as its own"),
+    ("a plate3d cell numbered from another corner", lambda: _strip("quad", turn=True),
+     PLATE_MESH, CLAMP_SET, 'body[0].mesh.file: "m.vtu": plate3d nodes carry r_x and r_y, '
+     "which every element sharing a node uses as its own: elements meeting at a slope or with "
+     "turned sides would need a transformation of the gradients between them (the slope "
+     "discontinuity of Shabana and Mikkola), so a plate3d mesh must be flat rectangles with "
+     "one common frame, and element 1 is not a rectangle with sides parallel to element 0's"),
+    ("a degenerate cell", lambda: _strip(bend=0.0, squash=True), SHELL_MESH, CLAMP_SET,
+     'body[0].mesh.file: "m.vtu": element 1 degenerates at its node'),
+    ("two nodes of a line at one point", lambda: _chain(twin=True),
+     'element = "beam3d"\nsection = { height = 0.1, width = 0.1 }\nmesh = { file = "m.vtu" }\n',
+     "", 'body[0].mesh.file: "m.vtu": nodes 1 and 2 of the chain lie at one point'),
+    ("unknown set", lambda: _strip(), SHELL_MESH, CLAMP_SET.replace("b:clamped", "b:clampd"),
+     'constraint[0].edge: body "b" (meshed from a file) has no node set "clampd"'),
+    ("a set naming no nodes", lambda: _strip(), SHELL_MESH,
+     CLAMP_SET.replace("b:clamped", "b:none"),
+     'constraint[0].edge: set "none" of body "b" names no node of the body'),
+    ("a set of several nodes as a node", lambda: _strip(), SHELL_MESH,
+     '[[load]]\ntype = "point_force"\nnode = "b:clamped"\nforce = [0.0, 0.0, 1.0]\n',
+     'load[0].node: set "clamped" of body "b" holds 3 nodes; a node reference names one'),
+    ("a line moment on a set", lambda: _strip("quad"), PLATE_MESH,
+     CLAMP_SET.replace('"clamp"', '"pin"') + '[[load]]\ntype = "line_moment"\n'
+     'edge = "b:clamped"\nmoment_per_length = [0.0, 1.0, 0.0]\n',
+     "load[0].edge: b:clamped is a node set of a mesh file; a line moment acts along a grid "
+     "line of a rectangle body"),
+    ("a mesh and a placement", lambda: _strip(),
+     SHELL_MESH + 'rectangle = { corner = [0.0, 0.0, 0.0], size = [1.0, 1.0], grid = [1, 1] }\n',
+     CLAMP_SET, "body[0].rectangle: the mesh file sets the body's placement"),
+    ("line cells for a 3-node beam", lambda: _chain(),
+     'element = "beam3d_3node"\nsection = { height = 0.1, width = 0.1 }\n'
+     'mesh = { file = "m.vtu" }\n', "", 'body[0].mesh.file: "m.vtu": line cells do not fit '
+     "beam3d_3node: beam3d_3node takes line3 cells (its 3 nodes at (0), (1), (0.5) of the "
+     "cell, in meshio's order)"),
+    ("a 2D beam off the plane", lambda: _chain(),
+     'element = "beam2d"\nsection = { height = 0.1, width = 0.1 }\nmesh = { file = "m.vtu" }\n',
+     "", 'body[0].mesh.file: "m.vtu": beam2d is 2D; expected points at z = 0'),
+    ("a branching chain of beams", lambda: _chain(branch=True),
+     'element = "beam3d"\nsection = { height = 0.1, width = 0.1 }\nmesh = { file = "m.vtu" }\n',
+     "", 'body[0].mesh.file: "m.vtu": node 1 joins 3 elements; a line body is one chain'),
+]
+
+
+@pytest.mark.parametrize("description, mesh, body, rest, message", MESH_CASES,
+                         ids=[c[0] for c in MESH_CASES])
+def test_bad_mesh_file_is_a_scene_error_naming_the_key(tmp_path, description, mesh, body,
+                                                       rest, message):
+    import meshio
+
+    if callable(mesh):
+        meshio.write(tmp_path / "m.vtu", mesh())
+    elif mesh is not None:
+        (tmp_path / "m.vtu").write_bytes(mesh)
+    path = _write(tmp_path, '[material.steel]\nE = 2.1e11\nnu = 0.3\nrho = 7800.0\n'
+                  f'[[body]]\nname = "b"\nmaterial = "steel"\n{body}\n{rest}\n'
+                  "[analysis.static]\n")
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    text = str(info.value)
+    assert text.startswith(message.split(":")[0] + ":"), text
+    assert message in text, text

@@ -94,7 +94,9 @@ class Shape:
             local = _grid(fractions)                                # (samples, axes)
             coordinates = _local_points(body, axes, local)
             values = _shape_values(body, coordinates)
-            count, points, nodes = _sample_points(body, axes, local)
+            count, points, nodes = (_sample_points(body, axes, local) if body.mesh.lattice.size
+                                    or not len(body.mesh.points)
+                                    else _matched_points(body, values))
             self._bodies.append((body.element_dofs, values, first + points))
             self._fields.append((body, coordinates, first + points))
             corners = _grid_cells(fractions)                        # (cells, corners)
@@ -288,6 +290,30 @@ def _sample_points(body: BodyMesh, axes: list[int],
     nodes = np.round(mesh.points[:, ::-1] * _KEY).astype(np.int64)
     return (len(keys), inverse.reshape(samples.shape[:2]),
             np.array([where[tuple(key)] for key in nodes]))
+
+
+def _matched_points(body: BodyMesh, values: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """``_sample_points`` of a mesh read from a file (no node lattice): samples at the same
+    reference position (within 1e-9 of the body's size) are one point, numbered in order of
+    first appearance; each node is the point at its position."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    kind = body.kind
+    e0 = body.element_e0.reshape(body.elements, kind.n_shape, kind.dim)
+    samples = np.einsum("pk,mkd->mpd", values, e0).reshape(-1, kind.dim)
+    tolerance = 1e-9 * max(float(np.ptp(samples, axis=0).max()), 1e-300)
+    tree = cKDTree(samples)
+    pairs = tree.query_pairs(tolerance, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                       shape=(len(samples), len(samples)))
+    _, labels = connected_components(graph, directed=False)
+    _, first, inverse = np.unique(labels, return_index=True, return_inverse=True)
+    order = np.argsort(np.argsort(first))          # points in order of first appearance
+    points = order[inverse]
+    _, nearest = tree.query(np.asarray(body.mesh.points, float))
+    return len(first), points.reshape(body.elements, -1), points[nearest]
 
 
 def write_vtu(path: str | Path, shape: Shape, q: np.ndarray,

@@ -8,8 +8,11 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from runtime.kernels.kind import element_kind
 from runtime.model import mesh as meshing
+from runtime.model.mesh_file import FileMesh
 from runtime.model.placements import Arc, Box, Line, Placement, Rectangle
 from runtime.model.schema import plain, table
 
@@ -59,10 +62,13 @@ class Body:
     ``section = {height, width}``), either ``start``/``end`` (dim,) in m (straight) or
     ``arc``.  Plate kinds: ``rectangle`` (its grid sets ``elements``) and ``thickness`` (m;
     TOML ``section = {thickness}``).  Solid kinds (meshing three axes): ``box`` (its grid sets
-    ``elements``; no section).  material: the name of a material of the scene;
-    quadrature: Gauss orders (dim,) or None for the kind's default.  Initial conditions
-    (velocities at t = 0, zero where absent): ``initial_velocity`` (dim,) in m/s, a uniform
-    translation, plus ``initial_angular_velocity``, a rigid ``Spin``.
+    ``elements``; no section).  Beam and plate kinds may instead be meshed from a file,
+    ``mesh_file`` (TOML ``mesh = {file = "part.msh"}``, in Python the path or a
+    ``FileMesh``: ``runtime.model.mesh_file``; its cells set ``elements``).  material: the
+    name of a material of the scene; quadrature: Gauss orders (dim,) or None for the kind's
+    default.  Initial conditions (velocities at t = 0, zero where absent):
+    ``initial_velocity`` (dim,) in m/s, a uniform translation, plus
+    ``initial_angular_velocity``, a rigid ``Spin``.
     """
 
     name: str
@@ -80,6 +86,7 @@ class Body:
     rectangle: Rectangle | None = None
     thickness: float | None = None
     box: Box | None = None
+    mesh_file: FileMesh | str | None = None
 
     @property
     def dim(self) -> int:
@@ -89,7 +96,9 @@ class Body:
     @property
     def placement(self) -> Placement:
         """Where the body lies: its rectangle, its box, its arc, or the line from start to end
-        (the one place that tells them apart)."""
+        (the one place that tells them apart), or the mesh file."""
+        if self.mesh_file is not None:
+            return self.mesh_file
         if self.rectangle is not None:
             return self.rectangle
         if self.box is not None:
@@ -105,19 +114,26 @@ class Body:
     def grid_shape(self) -> tuple[int, ...]:
         """Points of the node lattice along each meshed axis (``runtime.model.mesh``): (nodes,)
         for a line, (columns along x, rows along y) for a rectangle; with mid-side nodes the
-        lattice has two steps per element."""
+        lattice has two steps per element; none for a mesh from a file."""
+        if self.mesh_file is not None:
+            return ()
         return meshing.lattice_shape(element_kind(self.element), self.counts)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes: elements + 1 for 2-node beams, 2 elements + 1 for 3-node beams,
         (nx + 1)(ny + 1) for 4-node plates, what the layout places for others (computed
-        without meshing)."""
+        without meshing; those a mesh file's cells use)."""
+        if self.mesh_file is not None:
+            return len(self.mesh_file.data.positions)
         return meshing.node_count(element_kind(self.element), self.counts)
 
     @property
     def mesh(self) -> meshing.Mesh:
-        """The body's structured mesh (built once per kind and counts)."""
+        """The body's mesh: structured (built once per kind and counts) or read from its file
+        (``points`` are then the node positions in m, with no lattice)."""
+        if self.mesh_file is not None:
+            return self.mesh_file.data.mesh
         return meshing.structured_mesh(element_kind(self.element), self.counts)
 
     @property
@@ -134,6 +150,19 @@ class Body:
         element's sides a, b and the thickness for a plate."""
         return (*self.placement.element_sides(self.counts), *self.section)
 
+    @property
+    def shapes(self) -> np.ndarray:
+        """The shape of each element (elements,): elements of one index are rigid placements
+        of one another and share one set of invariants (all 0 but in a mesh file's body)."""
+        if self.mesh_file is not None:
+            return self.mesh_file.data.shapes
+        return np.zeros(math.prod(self.counts), np.int64)
+
+    @property
+    def node_sets(self) -> dict:
+        """The named node sets of a mesh file, {name: node indices}; none otherwise."""
+        return self.mesh_file.data.node_sets if self.mesh_file is not None else {}
+
     def node_position(self, index: int) -> tuple[float, ...]:
         """Reference position (m) of node ``index``, as the model meshes the body."""
         return self.placement.node_position(tuple(self.mesh.points[index]), self.counts)
@@ -148,7 +177,11 @@ class Body:
                 **({"section": given} if given or self.box is None else {})}
         # a grid sets its elements (written only when they disagree: an error)
         grid = getattr(self.rectangle or self.box, "grid", None)
-        if self.elements is not None and (grid is None or self.elements != math.prod(grid)):
+        if self.elements is not None and (grid is None or self.elements != math.prod(grid)) \
+                and self.mesh_file is None:
             head["elements"] = self.elements
+        if self.mesh_file is not None:   # a path given in Python: its table
+            head["mesh"] = (self.mesh_file.to_dict() if isinstance(self.mesh_file, FileMesh)
+                            else {"file": self.mesh_file})
         return {**plain(head),
-                **table(self, skip=(*head, *section, "elements"))}
+                **table(self, skip=(*head, *section, "elements", "mesh_file"))}

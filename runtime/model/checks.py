@@ -8,7 +8,8 @@
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
 * loads: a point force acts on a node whose position is free, a point moment on a node whose
-  section can turn, a line force on a grid line of a rectangle (not on a box's face);
+  section can turn, a line force on a grid line of a rectangle or a node set of a mesh file
+  (not on a box's face; a line moment not on a set);
 * the frequency estimate of a dynamic analysis has a sensor and enough output samples.
 """
 
@@ -157,6 +158,11 @@ def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
     boxes = {b.name for b in bodies if b.box is not None}
     for i, load in enumerate(loads):
         edge = getattr(load, "edge", None)
+        if edge is not None and edge.set is not None and load.on_gradients:
+            raise SceneError(f"load[{i}].edge: {edge} is a node set of a mesh file; a "
+                             f"{load.noun} acts along a grid line of a rectangle body (along "
+                             f"the sides of a file's cells it is not built yet; a line force "
+                             f"is)")
         if edge is not None and edge.body in boxes:
             raise SceneError(f"load[{i}].edge: {edge} is a face of the box body "
                              f"{show(edge.body)}; a {load.noun} acts along a grid line of a "

@@ -31,7 +31,8 @@ from runtime.model.model import Model
 
 @dataclass(frozen=True)
 class ElementGroup:
-    """Elements that share one set of invariants (a body): kernels, maps, references."""
+    """Elements that share one set of invariants (a body, or the elements of one shape of a
+    body meshed from a file: ``Model.groups``): kernels, maps, references."""
 
     name: str
     kind: str                 # element kind, e.g. "beam3d"
@@ -77,7 +78,7 @@ class DAESystem:
                                            @ self.fixed_values[self.fixed]).ravel()
         self.groups = [ElementGroup(b.name, b.element.kind.name, b.element.family,
                                     b.element_dofs.astype(np.int32), b.element_e0, b.element)
-                       for b in model.bodies.values()]
+                       for b in model.groups]
         loads = model.nominal_loads()
         self.load_laws = [law for law, _ in loads]
         self.load_vectors = (np.array([vector[self.free] for _, vector in loads])

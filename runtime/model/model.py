@@ -14,6 +14,7 @@ whole body in one batched kernel call and scattered with precomputed index maps.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Sequence
@@ -36,7 +37,8 @@ from runtime.model.schema import NodeRef
 
 @dataclass
 class BodyMesh:
-    """One body: its element group, mesh, reference coordinates and index maps."""
+    """One body: its element group (or groups: ``groups``), mesh, reference coordinates and
+    index maps."""
 
     name: str
     element: Element
@@ -48,6 +50,9 @@ class BodyMesh:
     element_e0: np.ndarray   # (elements, ndof) reference coordinates of every element
 
     _kernels: dict = field(default_factory=dict, repr=False)
+    #: the body's element groups, one per element shape, each a BodyMesh of those elements
+    #: with its own Element (``[self]`` when every element has one shape)
+    groups: list = field(default_factory=list, repr=False)
 
     @property
     def kind(self) -> ElementKind:
@@ -125,20 +130,33 @@ class Model:
         for body in scene.bodies:
             material = scene.materials[body.material]
             kind = element_kind(body.element)
-            e0s = body.placement.element_references(kind, body.counts)
-            element = Element(kind.name, *body.geometry, material.E, material.nu,
-                              material.rho, e0=e0s[0], method=self.method,
-                              backend=self.backend, quadrature=body.quadrature,
-                              law=material.law, shear_correction=material.shear_correction,
-                              damping=material.damping)
+            e0s = np.ascontiguousarray(body.placement.element_references(kind, body.counts))
+            groups = []   # (element rows, Element) per element shape of the body
+            shapes = body.shapes
+            for shape in range(int(shapes.max(initial=0)) + 1):
+                rows = np.flatnonzero(shapes == shape)
+                element = Element(kind.name, *body.geometry, material.E, material.nu,
+                                  material.rho, e0=e0s[rows[0]], method=self.method,
+                                  backend=self.backend, quadrature=body.quadrature,
+                                  law=material.law, shear_correction=material.shear_correction,
+                                  damping=material.damping)
+                groups.append((rows, element))
+                self.timing["compile_s"] += element.timing["compile_s"]
             mesh = body.mesh
-            self.bodies[body.name] = BodyMesh(
-                body.name, element, mesh, nodes, coordinates,
-                node_references(kind, mesh, e0s), coordinates + mesh.dofs(kind),
-                np.ascontiguousarray(e0s))
-            self.timing["compile_s"] += element.timing["compile_s"]
+            dofs = coordinates + mesh.dofs(kind)
+            whole = BodyMesh(body.name, groups[0][1], mesh, nodes, coordinates,
+                             node_references(kind, mesh, e0s), dofs, e0s)
+            whole.groups = [whole] if len(groups) == 1 else [
+                dataclasses.replace(whole, element=element, element_dofs=dofs[rows],
+                                    element_e0=np.ascontiguousarray(e0s[rows]), _kernels={})
+                for rows, element in groups]
+            self.bodies[body.name] = whole
             nodes += len(mesh.points)
             coordinates += len(mesh.points) * kind.per_node
+        #: the element groups of every body, one per element shape (a body placed
+        #: structurally is one group; a mesh file's body one per shape of its elements):
+        #: each shares one Element's invariants and kernels
+        self.groups = [group for body in self.bodies.values() for group in body.groups]
         self.n_nodes = nodes
         self._body_list = list(self.bodies.values())
         self._first_nodes = np.array([b.first_node for b in self._body_list])
@@ -207,7 +225,7 @@ class Model:
 
     def _build_mass(self) -> None:
         rows, cols, vals = [], [], []
-        for body in self.bodies.values():
+        for body in self.groups:
             mass = body.element.mass_matrix()
             ndof = mass.shape[0]
             dofs = body.element_dofs
@@ -316,7 +334,7 @@ class Model:
         keeps, flats = [], []
         # the element groups, then the coupled coordinates of the rigid items (mass), of
         # the quadratic constraint rows (their geometric stiffness) and of force elements
-        groups = [body.element_dofs for body in self.bodies.values()] + [
+        groups = [body.element_dofs for body in self.groups] + [
             rigid.dofs[None, :] for rigid in self.rigid.values() if rigid.dofs.size] + [
             block.dofs[None, :] for block in self.holonomic.blocks] + [
             load.coupled_dofs(self)[None, :] for load in self.scene.loads
@@ -337,7 +355,7 @@ class Model:
             shape=(nf, nf))
         bounds = np.cumsum([0] + [f.size for f in flats])
         self._jac_targets = [(keep, slots[bounds[i]:bounds[i + 1]])
-                             for i, keep in enumerate(keeps)][:len(self.bodies)]
+                             for i, keep in enumerate(keeps)][:len(self.groups)]
         #: slots (k, k) of every quadratic block's geometric stiffness (-1: not free)
         self.holonomic_slots = [self.slots(block.dofs) for block in self.holonomic.blocks]
         # banded (upper) storage of LAPACK: entry (i, j), i <= j, at [u + i - j, j]
@@ -415,7 +433,7 @@ class Model:
         force = np.zeros(self.size)
         data = np.zeros(self.pattern.nnz) if jacobian else None
         data_dot = np.zeros(self.pattern.nnz) if jacobian and v is not None else None
-        for body, (keep, slots) in zip(self.bodies.values(), self._jac_targets, strict=True):
+        for body, (keep, slots) in zip(self.groups, self._jac_targets, strict=True):
             dofs = body.element_dofs
             damped = body.damped and v is not None
             inputs = {"e": np.ascontiguousarray(q[dofs]), "e0": body.element_e0}
@@ -442,7 +460,7 @@ class Model:
         """Power (W) dissipated by Kelvin-Voigt damping at coordinates q, velocities v
         (size,): -v . F_damping (>= 0)."""
         total = 0.0
-        for body in self.bodies.values():
+        for body in self.groups:
             if body.damped:
                 dofs = body.element_dofs
                 force = body.kernel("damping_force")({
@@ -461,7 +479,7 @@ class Model:
         gives a float, a block (k, size) an array (k,) (one batched kernel call per body)."""
         rows = np.atleast_2d(q)
         total = np.zeros(rows.shape[0])
-        for mesh in self.bodies.values():
+        for mesh in self.groups:
             if body is None or mesh.name == body:
                 elements, ndof = mesh.element_dofs.shape
                 e = np.ascontiguousarray(rows[:, mesh.element_dofs].reshape(-1, ndof))

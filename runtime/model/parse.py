@@ -29,6 +29,7 @@ from runtime.catalog import (
     generated_kinds,
     material_laws,
 )
+from runtime.element.invariants import is_straight
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.checks import check_constraints, check_frequency, check_loads
@@ -38,6 +39,7 @@ from runtime.model.items.constraint_types import CONSTRAINTS
 from runtime.model.items.loads import LOADS
 from runtime.model.items.rigid import RIGID_BODIES, RigidBody, RigidItem
 from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
+from runtime.model.mesh_file import FileMesh, check_shapes
 from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
     HINTS,
@@ -117,11 +119,11 @@ def _material(name: str, data: Any) -> Material:
     return Material(name, E, nu, rho, law, shear, damping)
 
 
-def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
+def _body(i: int, data: dict, materials: dict[str, Material], folder: str | None) -> Body:
     path = f"body[{i}]"
     keys(data, path, ("name", "element", "material"),
          ("section", "elements", *(key for placement in PLACEMENTS for key in placement.keys),
-          "quadrature", "initial_velocity", "initial_angular_velocity"))
+          *FileMesh.keys, "quadrature", "initial_velocity", "initial_angular_velocity"))
     name = checked_name(data["name"], f"{path}.name", "a body name")
     if ":" in name:
         raise SceneError(f'{path}.name: expected a name without ":", got {show(name)}')
@@ -151,12 +153,23 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
         if "section" not in data:
             raise SceneError(f"{path}.section: missing required key; expected "
                              f"{HINTS['section']}")
-    height, width, thickness, elements, start, end, arc, rectangle, box = shape(
-        data, path, kind, dim)
+    mesh_file = None
+    if "mesh" in data:
+        height, width, thickness, elements, mesh_file = _file_shape(data, path, kind, folder)
+        start = end = arc = rectangle = box = None
+    else:
+        height, width, thickness, elements, start, end, arc, rectangle, box = shape(
+            data, path, kind, dim)
     if arc is not None and "general" not in meta.laws[law].variants:
         raise SceneError(f"{path}.arc: {kind} with law = {show(law)} takes straight references "
                          f"only: {meta.laws[law].curved}; expected start and end (a straight "
                          "body)")
+    if mesh_file is not None and "general" not in meta.laws[law].variants and not all(
+            is_straight(meta, e0, (*mesh_file.element_sides(()), *(
+                (thickness,) if height is None else (height, width))))
+            for e0 in mesh_file.data.e0s[np.unique(mesh_file.data.shapes, return_index=True)[1]]):
+        raise SceneError(f"{path}.mesh: {kind} with law = {show(law)} takes straight references "
+                         f"only: {meta.laws[law].curved}; expected a straight mesh")
 
     quadrature = None
     if "quadrature" in data:
@@ -180,7 +193,7 @@ def _body(i: int, data: dict, materials: dict[str, Material]) -> Body:
                                     "in rad/s"),
                     vector(s["about"], f"{spath}.about", dim, f"a point in m; {why}"))
     return Body(name, kind, material, height, width, elements, start, end, arc, quadrature,
-                velocity, spin, rectangle, thickness, box)
+                velocity, spin, rectangle, thickness, box, mesh_file)
 
 
 def _check_initial_motion(body: Body, path: str, rho: float) -> None:
@@ -204,6 +217,32 @@ def _check_initial_motion(body: Body, path: str, rho: float) -> None:
                              f"kinetic energy of at most {KINETIC_ENERGY_LIMIT:g} J, what double "
                              f"precision carries through a run), got speeds up to {speed:.3g} "
                              f"m/s")
+
+
+def _file_shape(data: dict, path: str, kind: str, folder: str | None) -> tuple:
+    """Section, element count and mesh (a ``FileMesh``) of a body meshed from a file (beam
+    and plate kinds)."""
+    meta = element_kind(kind)
+    for key in ("elements", *Line.keys, *Arc.keys, *Rectangle.keys, *Box.keys):
+        if key in data:
+            what = "elements" if key == "elements" else "placement"
+            raise SceneError(f"{path}.{key}: the mesh file sets the body's {what}; "
+                             f"expected either mesh = {{file = ...}} or {key}, got both")
+    if len(meta.mesh_axes) == 3:
+        raise SceneError(f"{path}.mesh: {kind} is a solid element; meshes from files are "
+                         "built for beam, cable, plate and shell kinds (lines and surfaces)")
+    mesh = FileMesh.parse(data["mesh"], f"{path}.mesh", kind, folder)
+    check_shapes(mesh, f"{path}.mesh")
+    if len(meta.mesh_axes) == 1:
+        section = keys(data["section"], f"{path}.section", ("height", "width"), (),
+                       "a table {height = H, width = W}")
+        height = size(section["height"], f"{path}.section.height", "a section height in m")
+        width = size(section["width"], f"{path}.section.width", "a section width in m")
+        return height, width, None, len(mesh.data.e0s), mesh
+    section = keys(data["section"], f"{path}.section", ("thickness",), (),
+                   "a table {thickness = T}")
+    thickness = size(section["thickness"], f"{path}.section.thickness", "a thickness in m")
+    return None, None, thickness, len(mesh.data.e0s), mesh
 
 
 def _line_shape(data: dict, path: str, kind: str, dim: int) -> tuple:
@@ -443,7 +482,8 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     for i, raw in enumerate(raw_bodies):
         if isinstance(raw, dict) and "type" in raw:
             continue
-        body = _body(i, raw, materials)
+        body = _body(i, raw, materials, None if source == "<scene>"
+                     else str(Path(source).resolve().parent))
         if any(b.name == body.name for b in bodies):
             raise SceneError(f"body[{i}].name: duplicate body name {show(body.name)}")
         if bodies and body.dim != bodies[0].dim:

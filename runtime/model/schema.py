@@ -84,20 +84,27 @@ class EdgeRef:
     """The grid line ``axis = line`` of a rectangle body (``"BODY:x=0"``: the nodes of grid
     column 0, the edge at the rectangle's corner; ``"BODY:y=-1"``: the last grid row), or the
     lattice plane of a box body (a face: ``"BODY:z=0"`` its bottom), with
-    ``line`` non-negative in a validated scene; ``nodes`` are the body's node indices on it
-    (from x = 0 to the end along the other axis; not compared); ``written`` as for NodeRef."""
+    ``line`` non-negative in a validated scene; or the named node set ``set`` of a body meshed
+    from a file (``"BODY:NAME"``; axis "" and line 0).  ``nodes`` are the body's node indices
+    on it (from x = 0 to the end along the other axis; a set's in node order; not compared);
+    ``written`` as for NodeRef."""
 
     body: str
     axis: str
     line: int
     nodes: tuple[int, ...] = dataclasses.field(default=(), compare=False, repr=False)
     written: str | None = dataclasses.field(default=None, compare=False, repr=False)
+    set: str | None = None
 
     def __str__(self) -> str:
+        if self.set is not None:
+            return f"{self.body}:{self.set}"
         return f"{self.body}:{self.axis}={self.line}"
 
     def spelled(self) -> str:
-        """``"BODY:AXIS=LINE"`` as the scene wrote it."""
+        """``"BODY:AXIS=LINE"`` (or ``"BODY:NAME"``) as the scene wrote it."""
+        if self.set is not None:
+            return str(self)
         return f"{self.body}:{self.axis}={self.line if self.written is None else self.written}"
 
     def refs(self) -> list[NodeRef]:
@@ -205,11 +212,16 @@ class MeshedBody(Protocol):
     @property
     def mesh(self) -> Mesh: ...
 
+    @property
+    def node_sets(self) -> dict[str, np.ndarray]: ...
+
 
 class Nodes:
     """Resolves node references ``"BODY:INDEX"`` (``"BODY:I,J"`` on rectangle bodies: the node
     at point (I, J) of the node lattice, ``runtime.model.mesh``) and edges ``"BODY:x=I"`` /
-    ``"BODY:y=J"`` (the nodes on that lattice line) against the bodies of a scene."""
+    ``"BODY:y=J"`` (the nodes on that lattice line) against the bodies of a scene; on a body
+    meshed from a file, ``"BODY:NAME"`` names one of its node sets (a node where the set
+    holds one node)."""
 
     def __init__(self, bodies: tuple[MeshedBody, ...]) -> None:
         self.bodies = {b.name: b for b in bodies}
@@ -226,6 +238,14 @@ class Nodes:
     def __call__(self, value: Any, path: str) -> NodeRef:
         body, text = self._body(value, path, 'a node reference "BODY:INDEX"')
         shape = body.grid_shape
+        if not shape and not NODE_INDEX.fullmatch(text):
+            nodes = self._set(body, text, path, value)
+            if len(nodes) != 1:
+                raise SceneError(f"{path}: set {show(text)} of body {show(body.name)} holds "
+                                 f"{len(nodes)} nodes; a node reference names one (sets of "
+                                 f"several nodes go where an edge is taken, e.g. the edge of "
+                                 f"a clamp), got {show(value)}")
+            return NodeRef(body.name, int(nodes[0]), text)
         if "," in text and len(shape) >= 2:
             parts = text.split(",")
             if len(parts) != len(shape):
@@ -259,6 +279,9 @@ class Nodes:
         form = 'an edge "BODY:x=I" or "BODY:y=J" (a grid line of a rectangle body)'
         body, text = self._body(value, path, form)
         shape = body.grid_shape
+        if not shape:
+            nodes = self._set(body, text, path, value)
+            return EdgeRef(body.name, "", 0, tuple(int(i) for i in nodes), set=text)
         if len(shape) == 1:
             raise SceneError(f"{path}: body {show(body.name)} is a line of {body.element} "
                              f"elements; edges are grid lines of rectangle bodies (use node "
@@ -276,6 +299,25 @@ class Nodes:
                       f"{('columns', 'rows', 'layers')[a]}")
         nodes = tuple(int(i) for i in body.mesh.on_line(a, line))
         return EdgeRef(body.name, axis, line, nodes, None if text[2:] == str(line) else text[2:])
+
+
+    @staticmethod
+    def _set(body: MeshedBody, name: str, path: str, value: str) -> np.ndarray:
+        """The nodes of set ``name`` of a body meshed from a file (SceneError at ``path``
+        listing its sets when it has none of that name, or when the set holds none of the
+        body's nodes)."""
+        sets = body.node_sets
+        if name not in sets:
+            known = ", ".join(sorted(sets)) or "none"
+            raise SceneError(f"{path}: body {show(body.name)} (meshed from a file) has no node "
+                             f"set {show(name)} in {show(value)}; expected a node index or "
+                             f"one of its sets: {known}")
+        if not len(sets[name]):
+            raise SceneError(f"{path}: set {show(name)} of body {show(body.name)} names no "
+                             f"node of the body (it is empty, or its points lie on none of "
+                             f"the body's cells); expected a set of the body's nodes, got "
+                             f"{show(value)}")
+        return sets[name]
 
 
 def _index(text: str, n: int, path: str, value: str, noun: str, owner: str,

@@ -41,31 +41,43 @@ def field_map(values: np.ndarray, dim: int) -> np.ndarray:
     return np.einsum("pk,de->pdke", values, np.eye(dim)).reshape(p, dim, n * dim)
 
 
-def edge_sides(body: BodyView, edge: EdgeRef):
-    """The element sides on a grid line (each once: an interior line's sides belong to two
-    elements): per side (element index, local points (p, dim) on the mid-surface, length
-    elements ds (p,) in m: Gauss weight times |dr0/ds|)."""
-    kind, element = body.kind, body.element
-    axis = "xy".index(edge.axis)     # the side lies at fixed local x (or y) ...
-    along = 1 - axis                  # ... and runs along local y (or x)
-    size = element.geometry[along]
-    t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
+def _element_sides(kind: ElementKind, on_edge: np.ndarray, edge: EdgeRef
+                   ) -> list[tuple[int, float]]:
+    """The sides (local axis held fixed, its fraction) of an element whose nodes
+    ``on_edge`` (n_nodes,) bool lie on ``edge``: on a grid line, the side at fixed local x
+    (``x=I``) or y; on a node set of a mesh file, every side all of whose nodes are in it."""
     fractions = kind.node_fractions
+    if edge.set is None:
+        axis = "xy".index(edge.axis)
+        return [(axis, float(fractions[np.flatnonzero(on_edge)[0], axis]))]
+    return [(axis, value) for axis in (0, 1) for value in (0.0, 1.0)
+            if on_edge[np.isclose(fractions[:, axis], value)].all()]
+
+
+def edge_sides(body: BodyView, edge: EdgeRef):
+    """The element sides on a grid line or a node set (each once: an interior line's sides
+    belong to two elements): per side (element index, local points (p, dim) on the
+    mid-surface, length elements ds (p,) in m: Gauss weight times |dr0/ds|)."""
+    kind, element = body.kind, body.element
+    t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
     on_edge = np.isin(body.mesh.connectivity, edge.nodes)
     sides: set[frozenset] = set()
     for e in np.flatnonzero(on_edge.sum(axis=1) > 1):
-        side = frozenset(body.mesh.connectivity[e][on_edge[e]].tolist())
-        if side in sides:
-            continue
-        sides.add(side)
-        points = np.zeros((t.size, kind.dim))   # mid-surface (z = 0) of the side
-        points[:, axis] = fractions[np.flatnonzero(on_edge[e])[0], axis] * \
-            element.geometry[axis]
-        points[:, along] = (t + 1) / 2 * size
-        values, grads = shape_tables(body, points)
-        q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
-        ds = np.linalg.norm(grads[:, :, along] @ q0, axis=1) * w * size / 2
-        yield e, points, ds, values, grads
+        for axis, fraction in _element_sides(kind, on_edge[e], edge):
+            along = 1 - axis          # the side lies at fixed local x (or y), along y (or x)
+            local = np.isclose(kind.node_fractions[:, axis], fraction)
+            side = frozenset(body.mesh.connectivity[e][local & on_edge[e]].tolist())
+            if side in sides:
+                continue
+            sides.add(side)
+            size = element.geometry[along]
+            points = np.zeros((t.size, kind.dim))   # mid-surface (z = 0) of the side
+            points[:, axis] = fraction * element.geometry[axis]
+            points[:, along] = (t + 1) / 2 * size
+            values, grads = shape_tables(body, points)
+            q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
+            ds = np.linalg.norm(grads[:, :, along] @ q0, axis=1) * w * size / 2
+            yield e, points, ds, values, grads
 
 
 def _frame_maps(grads: np.ndarray, dim: int,
