@@ -77,21 +77,20 @@ def test_engines_agree_on_the_shipped_scenes(name):
     # rotating beam after the spin-up by about 5x per 2 s.  Positions still agree to 1e-11
     # of their scale (worst seen: 4e-13), velocities to 1e-6 of theirs (worst: 1.5e-7, the
     # quasi-static cantilever, where they are 1e-4 m/s), the Newton counters exactly: with
-    # full Newton (with a kept Jacobian, the default auto mode, the two agree only to the
-    # Newton tolerance: the next test).
+    # full Newton (with a kept Jacobian the two agree only to the Newton tolerance: the next
+    # test).
     compare_engines(_shipped(name), q_rtol=1e-11, v_rtol=1e-6, newton="full")
 
 
 @pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "double_pendulum",
                                   "spinning_beam", "plate_cantilever"])
 def test_engines_agree_with_auto_newton_on_the_shipped_scenes(name):
-    # The default mode: the same decisions from the same counts, which differ only where an
-    # engine stops one iteration apart at the tolerance; the rotating beam (full and modified
-    # Newton cost about the same there, so every such tie can change a decision) ends 7 %
-    # apart in iterations with positions within 1.3e-9 of their scale.
-    dynamic = _shipped(name).dynamic
-    assert dynamic.newton == "auto"
-    compare_engines(_shipped(name), q_rtol=1e-8, v_rtol=1e-4, count_rtol=0.1)
+    # The same decisions from the same counts, which differ only where an engine stops one
+    # iteration apart at the tolerance; the rotating beam (full and modified Newton cost
+    # about the same there, so every such tie can change a decision) ends 7 % apart in
+    # iterations with positions within 1.3e-9 of their scale.
+    compare_engines(_shipped(name), q_rtol=1e-8, v_rtol=1e-4, count_rtol=0.1,
+                    newton="auto")
 
 
 @pytest.mark.parametrize("name", ["rotating_beam", "double_pendulum", "cantilever",

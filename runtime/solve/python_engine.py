@@ -12,7 +12,7 @@ through their known values, rates and accelerations.  Newton is ``full`` (the ex
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
 least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate) or
-``auto`` (the default): modified Newton, except that after a step in which the kept
+``auto``: modified Newton, except that after a step in which the kept
 Jacobian went stale (a factorisation was needed) come steps of full Newton, 1 of them and
 doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale
 again, back to 1 once one does not - when full Newton pays: each mode's recent steps are
