@@ -3,35 +3,44 @@ structural beam energy of strain measures on the centre line, no continuum strai
 
 After the elastic-line approach of Gerstmayr and Shabana (2006) and the structural-mechanics
 3D beam of Gerstmayr, Matikainen and Mikkola (2008): every strain is a dot product of two
-*directions* of the centre line (y = z = 0), derivatives of the position field
-``r = sum_k s_k q_k``,
+*directions*, derivatives of the position field ``r = sum_k s_k q_k`` on the centre line
+(y = z = 0) at the point or at a node (``DIRECTIONS``: r_x, r_y, r_xx, ..., and the nodal
+frames r_x, r_y[, r_z] at x = 0 and x = l), so each is linear in the gram matrix G = Q Q^T
+(``u_a^T G u_b`` with ``u_a`` the shape derivatives of direction a) and the energy
+``U = sum_i K_i/2 int eps_i^2 dx`` is the gram form: quadratic in DeltaG, pre-integrated once
+(constant invariants, exact: the integrands are polynomials).  The strains (``_strains``),
+each with its section stiffness ``K_i`` and where along x it is sampled:
 
-    2D: r_x, r_y, r_xx;   3D: r_x, r_y, r_z, r_xx, r_xz   (r_xz = d r_z / dx),
-
-so each is linear in the gram matrix G = Q Q^T (``u_a^T G u_b`` with ``u_a`` the shape
-derivatives along direction a) and the energy ``U = sum_i K_i/2 int eps_i^2 dx`` is the gram
-form: quadratic in DeltaG, pre-integrated once (constant invariants).  The strains
-(``STRAINS``), each with its section stiffness ``K_i`` and where along x it is sampled:
-
-* on the centre line, integrated exactly (``axis``, Gauss order ``quadrature[0]``):
-  axial ``(r_x.r_x - 1)/2`` (EA), bending ``r_xx . r_y`` (EI_z) and, in 3D, ``r_xx . r_z``
-  (EI_y) and the torsion ``r_xz . r_y`` (GJ);
+* along the centre line, integrated exactly (``axis``, Gauss order ``quadrature[0]``):
+  the axial strain ``(r_x.r_x - 1)/2`` (EA); the bending, r_xx projected on the frame
+  {r_x, r_y[, r_z]} of each node with weight 1/2: ``EI_z (r_xx . r_y@j)^2 + EI_y (r_xx .
+  r_z@j)^2 + EI_x (r_xx . r_x@j)^2`` (EI_x = EI in 2D, the mean (EI_y + EI_z)/2 in 3D); in 3D
+  the torsion ``(r_xz . r_y)^2 + (r_xy . r_z)^2`` with GJ/2 each (the two section vectors
+  twist alike);
 * at the nodes (``axis_lobatto2``, the 2-point Lobatto rule x = 0, l): the transverse shear
-  ``r_x . r_y`` (k GA; 3D also ``r_x . r_z``), the cross-section stretches ``(r_y.r_y - 1)/2``
-  (EA; 3D also ``r_z``) and, in 3D, the section shear ``r_y . r_z`` (GA).  ``r_y``, ``r_z`` are
-  linear in x while the slope of the cubic centre line is quadratic: sampled over the
-  element, ``r_x . r_y = 0`` would force a linear slope (constant curvature: shear locking
-  returns), and the linearly interpolated section vectors of a rotating element shrink
-  between the nodes (cross-section locking, docs/laws.md ``ecm_sri``).  At the nodes they
-  only keep the section unit and normal to the centre line there.
+  ``r_x . r_y`` (k GA; 3D also ``r_x . r_z`` with k1), the section stretches
+  ``(r_y.r_y - 1)/2`` (EA; 3D also r_z) and, in 3D, the section shear ``r_y . r_z`` (GA).
 
-Bending comes from the centre line (``r_xx``) projected on the section vectors, so the
-element is an Euler-Bernoulli beam with cubic Hermite bending (shear does not enter the
-deflection: at equilibrium the section follows the slope at the nodes).  The strains are
-dot products, so the energy is invariant under rigid motions; they are measured from the
-straight reference (unit, orthogonal directions, ``r_xx = 0``), the only reference the law
-takes (``CURVED_REFUSED``).  Section of height h (along y) and width w (along z; the
-thickness in 2D): A = h w, I_z = w h^3/12, I_y = h w^3/12 and the torsion constant
+Why these choices (docs/laws.md, ``elastic_line``, has the measurements):
+
+* r_y, r_z are linear in x while the slope of the cubic centre line is quadratic: sampled
+  along the element, ``r_x . r_y = 0`` would force a linear slope (constant curvature: shear
+  locking returns) and the linearly interpolated section vectors of a rotating element, which
+  shrink between the nodes, would resist the rotation (cross-section locking).  At the nodes
+  they only keep each nodal frame unit and orthogonal;
+* projected on the interpolated r_y, r_xx . r_y(x) loses the shrink of r_y: the bending is
+  too soft by dphi^2/6 in an element that turns by dphi (+8e-3 on the elastica with 8
+  elements).  Projected on the orthonormal nodal frames, the sum of the squares is
+  |r_xx|^2 exactly, whatever the rotation inside the element, and the square section
+  gets Berzeri and Shabana's bending EI/2 int r_xx . r_xx of the cable, without its linear
+  term (every strain vanishes at the straight reference).
+
+The element is an Euler-Bernoulli beam with cubic Hermite bending: the section follows the
+slope at the nodes, and the shear does not enter the deflection.  The strains are dot
+products, so the energy is invariant under rigid motions; they are measured from the
+straight reference (unit, orthogonal directions, r_xx = 0), the only reference the law takes
+(``CURVED_REFUSED``).  Section of height h (along y) and width w (along z; the thickness in
+2D): A = h w, I_z = w h^3/12, I_y = h w^3/12 and the torsion constant
 ``J = h^3 w^3 / (3.6 (h^2 + w^2))`` (an approximation of Saint-Venant's constant of the
 rectangle: -1.2 % for a square, -12 % at h/w = 10; tests/test_elastic_line.py).
 """
@@ -50,7 +59,7 @@ from symgen.element import AXIS_LETTERS, ElementSpec
 #: derivatives of r (``r_<name>``) at the point, or ``<name>@<node>`` at a node's x (``@0``:
 #: x = 0, ``@1``: x = l: the nodal frames), in the order of the structural tables.
 DIRECTIONS = {2: ("x", "y", "xx", "x@0", "x@1", "y@0", "y@1"),
-              3: ("x", "y", "z", "xx", "xz", "x@0", "x@1", "y@0", "y@1", "z@0", "z@1")}
+              3: ("x", "y", "z", "xx", "xy", "xz", "x@0", "x@1", "y@0", "y@1", "z@0", "z@1")}
 
 #: The nodal vectors of the elements the law applies to (cubic Hermite centre line, linear
 #: section vectors), per dimension.
@@ -112,7 +121,10 @@ def _strains(dim: int) -> tuple[Strain, ...]:
         Strain("axial", "x", "x", E * area, "axis", "(r_x.r_x - 1)/2, EA"),
         *_bending({"y": (ei_z, "EI_z"), "z": (ei_y, "EI_y"),
                    "x": ((ei_y + ei_z) / 2, "(EI_y + EI_z) / 2")}),
-        Strain("torsion", "xz", "y", G * torsion_constant(h, w), "axis", "r_xz . r_y, GJ"),
+        Strain("torsion_y", "xz", "y", G * torsion_constant(h, w) / 2, "axis",
+               "r_xz . r_y, GJ / 2"),
+        Strain("torsion_z", "xy", "z", G * torsion_constant(h, w) / 2, "axis",
+               "r_xy . r_z, GJ / 2"),
         Strain("shear_y", "x", "y", k2 * G * area, "axis_lobatto2", "r_x . r_y, k2 GA"),
         Strain("shear_z", "x", "z", k1 * G * area, "axis_lobatto2", "r_x . r_z, k1 GA"),
         Strain("section_y", "y", "y", E * area, "axis_lobatto2", "(r_y.r_y - 1)/2, EA"),
