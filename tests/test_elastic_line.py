@@ -299,3 +299,25 @@ def test_rigid_rotation_gives_zero_force_in_every_method(rng):
         e = rigid_motion("beam3d", el.e0, random_rotation(3, rng), rng.normal(size=3))
         assert np.abs(el.elastic_force(e)).max() <= 1e-9 * E_MODULUS * HEIGHT * WIDTH
         assert abs(el.strain_energy(e)) <= 1e-12 * E_MODULUS * HEIGHT * WIDTH * LENGTH
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("method", ["gram", "quadrature"])
+def test_damping_jacobians_are_the_damping_force_derivatives(kind, method, rng):
+    """Kelvin-Voigt damping of the structural strains (alpha/2 sum K int eps_dot^2): its
+    Jacobians against central differences, d/de_dot symmetric, zero at rest."""
+    el = Element(kind, LENGTH, HEIGHT, WIDTH, E_MODULUS, NU, RHO, law=LAW, method=method,
+                 backend="numpy", damping=0.01)
+    e = el.e0 + 1e-2 * rng.standard_normal(el.ndof)
+    e_dot = rng.standard_normal(el.ndof)
+    de, de_dot = el.damping_jacobians(e, e_dot)
+    step = 1e-6
+    shifts = step * np.eye(el.ndof)
+    by_e = (el.damping_force(e + shifts, e_dot[None, :])
+            - el.damping_force(e - shifts, e_dot[None, :])).T / (2 * step)
+    by_e_dot = (el.damping_force(e[None, :], e_dot + shifts)
+                - el.damping_force(e[None, :], e_dot - shifts)).T / (2 * step)
+    assert np.abs(de - by_e).max() <= 1e-6 * np.abs(de).max()
+    assert np.abs(de_dot - by_e_dot).max() <= 1e-8 * np.abs(de_dot).max()
+    assert np.abs(de_dot - de_dot.T).max() <= 1e-12 * np.abs(de_dot).max()
+    assert np.abs(el.damping_force(e, np.zeros(el.ndof))).max() == 0.0
