@@ -58,9 +58,10 @@ class Element:
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
     Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
     of slender 2-node beams in large rotations; general invariants, straight or not) |
-    ``elastic_line`` (2-node beams: a structural beam of the centre line, axial strain and
-    bending r_xx . r_y, shear and section strains at the nodes; straight references only;
-    ``section_stiffness`` gives its stiffnesses); for
+    ``elastic_line`` (2-node beams: a structural Euler-Bernoulli beam of the centre line,
+    axial strain, bending r_xx on the nodal frames and torsion along x, shear and section
+    strains at the nodes; straight references only; ``section_stiffness`` gives its
+    stiffnesses); for
     cables ``svk`` (simple bending) | ``svk_exact_curvature`` (exact curvature bending by
     Gauss quadrature of order ``quadrature[0]`` along the axis);
     shear_correction: the ECM shear-correction factors, one number for every
