@@ -62,7 +62,7 @@ def material_laws() -> tuple[str, ...]:
 
 
 def family_name(method: str, law: str, variant: str, damped: bool = False,
-                bending: str | None = None) -> str:
+                bending: str | None = None, structural: bool = False) -> str:
     """The kernel family that evaluates ``method`` for material law ``law`` on elements of
     reference ``variant`` (``VARIANTS``): the elastic kernels, or with ``damped`` the
     Kelvin-Voigt damping kernels; ``bending`` is the law's bending model on a cable
@@ -72,7 +72,9 @@ def family_name(method: str, law: str, variant: str, damped: bool = False,
     the gram invariant, ``damping_<variant>``); quadrature: ``quadrature`` for the default
     law, ``quadrature_law`` for any other law and for damping.  The exact-curvature bending:
     ``gram_curvature_<variant>``, ``cij_curvature``, ``quadrature_curvature`` (damping
-    ``damping_curvature_<variant>``, in ``quadrature_curvature`` for quadrature).
+    ``damping_curvature_<variant>``, in ``quadrature_curvature`` for quadrature).  A
+    ``structural`` law (strains of the centre line, ``LawInfo.structural``): gram and cij as
+    any law, ``quadrature_structural`` (elastic and damping) for quadrature.
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
@@ -85,6 +87,8 @@ def family_name(method: str, law: str, variant: str, damped: bool = False,
         if method == "quadrature" or (method == "cij" and not damped):
             return f"{method}_curvature"
         return f"{'damping' if damped else method}_curvature_{variant}"
+    if method == "quadrature" and structural:
+        return "quadrature_structural"
     if method == "quadrature":
         return "quadrature" if law == DEFAULT_LAW and not damped else "quadrature_law"
     if damped:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from symgen import derive, energies, laws, methods
+from symgen import derive, energies, laws, methods, structural
 from symgen.element import ElementSpec
 from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
 from symgen.methods.cij import cij_sizes
@@ -314,7 +314,9 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
                        **({"bending": energies.bending_model(spec, law),
                            "variants": energies.law_variants(spec, law),
                            "curved": energies.curved_refused(spec, law)}
-                          if energies.is_cable(spec) else {})}
+                          if energies.is_cable(spec) else {}),
+                       **(structural.metadata(spec, law) if structural.is_structural(law)
+                          else {})}
             for law in derive.applicable_laws(spec).values()
         },
         "laws_not_applicable": energies.not_applicable(spec),

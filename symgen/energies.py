@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from symgen import laws
+from symgen import laws, structural
 from symgen.domains import x
 
 #: The strain energies an element file may declare.
@@ -131,26 +131,38 @@ def is_cable(spec) -> bool:
 
 
 def offered_laws(spec) -> dict[str, laws.Law]:
-    """The laws of the element's energy, before domain applicability."""
-    return CABLE_LAWS if is_cable(spec) else laws.LAWS
+    """The laws of the element's energy, before domain applicability: a continuum's material
+    laws and the structural laws of the 2-node beams (``symgen.structural``)."""
+    return CABLE_LAWS if is_cable(spec) else {**laws.LAWS, **structural.STRUCTURAL_LAWS}
+
+
+def _law_refused(spec, law: laws.Law) -> str | None:
+    """Why ``law`` (of the element's energy) does not apply to ``spec``, or None."""
+    if structural.is_structural(law):
+        reason = structural.not_applicable(spec)
+        if reason is not None:
+            return f"law {law.name!r} does not apply: {reason}"
+    return laws.not_applicable(law, spec.domain, spec.nodes)
 
 
 def not_applicable(spec) -> dict[str, str]:
     """{law: why it does not apply to ``spec``} over every known law name."""
     out = {}
-    for name, law in laws.LAWS.items():
-        if is_cable(spec) and name not in CABLE_LAWS:
+    for name, law in {**laws.LAWS, **structural.STRUCTURAL_LAWS}.items():
+        if is_cable(spec) and structural.is_structural(law):
+            out[name] = _law_refused(spec, law)
+        elif is_cable(spec) and name not in CABLE_LAWS:
             out[name] = _CABLE_REFUSES.format(name=name)
-        elif not is_cable(spec) and laws.not_applicable(law, spec.domain, spec.nodes) \
-                is not None:
-            out[name] = laws.not_applicable(law, spec.domain, spec.nodes)
+        elif not is_cable(spec) and _law_refused(spec, law) is not None:
+            out[name] = _law_refused(spec, law)
     return out
 
 
 def applicable_laws(spec) -> dict[str, laws.Law]:
-    """The laws of the element's energy whose every part has its subdomain in the domain."""
+    """The laws of the element's energy that apply to ``spec`` (every part's subdomain in
+    the domain; a structural law's element layout, ``symgen.structural.not_applicable``)."""
     return {name: law for name, law in offered_laws(spec).items()
-            if laws.not_applicable(law, spec.domain, spec.nodes) is None}
+            if _law_refused(spec, law) is None}
 
 
 def second_moment(spec) -> sp.Expr:

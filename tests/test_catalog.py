@@ -75,7 +75,8 @@ def test_every_family_the_catalog_names_is_generated(kind):
         for law, info in element_kind(kind).laws.items():
             for variant in info.variants:  # cables: straight only but the planar exact curvature
                 for damped in (False, True):
-                    assert family_name(method, law, variant, damped, info.bending) in families
+                    assert family_name(method, law, variant, damped, info.bending,
+                                       info.structural) in families
 
 
 def test_family_name_rejects_unknown_names():

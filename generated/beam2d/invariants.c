@@ -81,6 +81,81 @@ void beam2d_invariants_shape_gradients(long m, const double *point_in, long poin
   }
 }
 
+/* Shape derivatives of the centre-line directions at local points.
+   point (batch, 2): local coordinates (x, y[, z]) in m
+   geometry (shared, 3): length, height, width in m
+   directions (output, 42): d s_k / d(x), d(y), d(xx), d(x@0), d(x@1), d(y@0), d(y@1) on the centre line (direction-major, n each; 1/m, 1/m^2)
+   Operations per element: 30. */
+void beam2d_invariants_structural_directions(long m, const double *point_in, long point_stride, const double *geometry, double *directions_out)
+{
+  vd point[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || point_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
+    vd directions[42];
+    for (int i = 0; i < 42; i++) directions[i] = (vd){0};
+    const double t0 = (1.0/(geometry[0]*geometry[0]*geometry[0]));
+    const vd t1 = (point[0]*point[0]);
+    const double t2 = (1.0/(geometry[0]*geometry[0]));
+    const double t3 = 6.0*t2;
+    const vd t4 = point[0]*t3;
+    const vd t5 = t4 - 6.0*t0*t1;
+    const double t6 = (1.0/(geometry[0]));
+    const vd t7 = point[0]*t6;
+    const vd t8 = t3 - 12.0*point[0]*t0;
+    const vd t9 = -t4;
+    directions[0] = -t5;
+    directions[1] = 1.0 - 4.0*t7 + 3.0*t1*t2;
+    directions[2] = SPLAT(0.0);
+    directions[3] = t5;
+    directions[4] = -2.0*t7 + 3.0*t1*t2;
+    directions[5] = SPLAT(0.0);
+    directions[6] = SPLAT(0.0);
+    directions[7] = SPLAT(0.0);
+    directions[8] = 1.0 - t7;
+    directions[9] = SPLAT(0.0);
+    directions[10] = SPLAT(0.0);
+    directions[11] = t7;
+    directions[12] = -t8;
+    directions[13] = -t9 - 4.0*t6;
+    directions[14] = SPLAT(0.0);
+    directions[15] = t8;
+    directions[16] = -t9 - 2.0*t6;
+    directions[17] = SPLAT(0.0);
+    directions[18] = SPLAT(0.0);
+    directions[19] = SPLAT(1.0);
+    directions[20] = SPLAT(0.0);
+    directions[21] = SPLAT(0.0);
+    directions[22] = SPLAT(0.0);
+    directions[23] = SPLAT(0.0);
+    directions[24] = SPLAT(0.0);
+    directions[25] = SPLAT(0.0);
+    directions[26] = SPLAT(0.0);
+    directions[27] = SPLAT(0.0);
+    directions[28] = SPLAT(1.0);
+    directions[29] = SPLAT(0.0);
+    directions[30] = SPLAT(0.0);
+    directions[31] = SPLAT(0.0);
+    directions[32] = SPLAT(1.0);
+    directions[33] = SPLAT(0.0);
+    directions[34] = SPLAT(0.0);
+    directions[35] = SPLAT(0.0);
+    directions[36] = SPLAT(0.0);
+    directions[37] = SPLAT(0.0);
+    directions[38] = SPLAT(0.0);
+    directions[39] = SPLAT(0.0);
+    directions[40] = SPLAT(0.0);
+    directions[41] = SPLAT(1.0);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 42; i++) directions_out[(first + j) * 42 + i] = directions[i][j];
+    }
+  }
+}
+
 /* Closed-form integrals of the straight element (exact polynomial integration).
    geometry (batch, 3): length, height, width in m
    i4 (output, 120): int P_kl P_mn dV0 in i4-pattern order

@@ -61,6 +61,73 @@ def shape_gradients(point_in, geometry):
     return gradients.T
 
 
+def structural_directions(point_in, geometry):
+    """Shape derivatives of the centre-line directions at local points.
+
+    point (batch, 2): local coordinates (x, y[, z]) in m
+    geometry (shared, 3): length, height, width in m
+    directions (output, 42): d s_k / d(x), d(y), d(xx), d(x@0), d(x@1), d(y@0), d(y@1) on the centre line (direction-major, n each; 1/m, 1/m^2)
+    Operations per element: 30.
+    """
+    point = np.ascontiguousarray(point_in.T)
+    m = point.shape[1]
+    directions = np.zeros((42, m))
+    t0 = (1.0/(geometry[0]*geometry[0]*geometry[0]))
+    t1 = (point[0]*point[0])
+    t2 = (1.0/(geometry[0]*geometry[0]))
+    t3 = 6.0*t2
+    t4 = point[0]*t3
+    t5 = t4 - 6.0*t0*t1
+    t6 = (1.0/(geometry[0]))
+    t7 = point[0]*t6
+    t8 = t3 - 12.0*point[0]*t0
+    t9 = -t4
+    directions[0] = -t5
+    directions[1] = 1.0 - 4.0*t7 + 3.0*t1*t2
+    directions[2] = 0.0
+    directions[3] = t5
+    directions[4] = -2.0*t7 + 3.0*t1*t2
+    directions[5] = 0.0
+    directions[6] = 0.0
+    directions[7] = 0.0
+    directions[8] = 1.0 - t7
+    directions[9] = 0.0
+    directions[10] = 0.0
+    directions[11] = t7
+    directions[12] = -t8
+    directions[13] = -t9 - 4.0*t6
+    directions[14] = 0.0
+    directions[15] = t8
+    directions[16] = -t9 - 2.0*t6
+    directions[17] = 0.0
+    directions[18] = 0.0
+    directions[19] = 1.0
+    directions[20] = 0.0
+    directions[21] = 0.0
+    directions[22] = 0.0
+    directions[23] = 0.0
+    directions[24] = 0.0
+    directions[25] = 0.0
+    directions[26] = 0.0
+    directions[27] = 0.0
+    directions[28] = 1.0
+    directions[29] = 0.0
+    directions[30] = 0.0
+    directions[31] = 0.0
+    directions[32] = 1.0
+    directions[33] = 0.0
+    directions[34] = 0.0
+    directions[35] = 0.0
+    directions[36] = 0.0
+    directions[37] = 0.0
+    directions[38] = 0.0
+    directions[39] = 0.0
+    directions[40] = 0.0
+    directions[41] = 1.0
+
+    return directions.T
+
+
 def integrals_straight(geometry_in):
     """Closed-form integrals of the straight element (exact polynomial integration).
 

@@ -201,6 +201,44 @@ void beam2d_laws_law_ecm_sri(long m, const double *material_in, long material_st
   }
 }
 
+/* Section stiffnesses of the strains of elastic_line: structural beam of the centre line (Gerstmayr and Shabana's elastic line): axial strain and bending r_xx . r_y (and r_xx . r_z, torsion) along the axis, transverse shear and cross-section strains at the nodes.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   geometry (shared, 3): length, height, width in m
+   correction (batch, 1): shear correction factors k
+   stiffness (output, 7): section stiffness per strain (axial: (r_x.r_x - 1)/2, EA; bending_y@0: r_xx . r_y of node 0, EI / 2; bending_x@0: r_xx . r_x of node 0, EI / 2; bending_y@1: r_xx . r_y of node 1, EI / 2; bending_x@1: r_xx . r_x of node 1, EI / 2; shear: r_x . r_y, k GA; section: (r_y.r_y - 1)/2, EA; N, N m^2)
+   Operations per element: 11. */
+void beam2d_laws_law_elastic_line(long m, const double *material_in, long material_stride, const double *geometry, const double *correction_in, long correction_stride, double *stiffness_out)
+{
+  vd material[2];
+  vd correction[1];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    if (first == 0 || correction_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 1; i++)
+        for (int j = 0; j < ANCF_LANES; j++) correction[i][j] = correction_in[lane[j] * correction_stride + i];
+    vd stiffness[7];
+    for (int i = 0; i < 7; i++) stiffness[i] = (vd){0};
+    const vd t0 = geometry[2]*material[0];
+    const vd t1 = geometry[1]*t0;
+    const vd t2 = 0.041666666666666664*t0*(geometry[1]*geometry[1]*geometry[1]);
+    stiffness[0] = t1;
+    stiffness[1] = t2;
+    stiffness[2] = t2;
+    stiffness[3] = t2;
+    stiffness[4] = t2;
+    stiffness[5] = correction[0]*t1*(1.0/((2.0 + 2.0*material[1])));
+    stiffness[6] = t1;
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 7; i++) stiffness_out[(first + j) * 7 + i] = stiffness[i][j];
+    }
+  }
+}
+
 /* Default shear correction factors of ecm.
    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
    correction (output, 1): default shear correction factors k
@@ -229,6 +267,29 @@ void beam2d_laws_law_ecm_correction(long m, const double *material_in, long mate
    correction (output, 1): default shear correction factors k
    Operations per element: 6. */
 void beam2d_laws_law_ecm_sri_correction(long m, const double *material_in, long material_stride, double *correction_out)
+{
+  vd material[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    vd correction[1];
+    for (int i = 0; i < 1; i++) correction[i] = (vd){0};
+    correction[0] = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1]);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 1; i++) correction_out[(first + j) * 1 + i] = correction[i][j];
+    }
+  }
+}
+
+/* Default shear correction factors of elastic_line.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (output, 1): default shear correction factors k
+   Operations per element: 6. */
+void beam2d_laws_law_elastic_line_correction(long m, const double *material_in, long material_stride, double *correction_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {

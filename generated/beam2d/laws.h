@@ -2,6 +2,8 @@
 void beam2d_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out);
 void beam2d_laws_law_ecm(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out);
 void beam2d_laws_law_ecm_sri(long m, const double *material_in, long material_stride, const double *correction_in, long correction_stride, double *volume_out, double *axis_out, double *volume_gauss2_out, double *volume_lobatto2_out, double *axis_lobatto2_out);
+void beam2d_laws_law_elastic_line(long m, const double *material_in, long material_stride, const double *geometry, const double *correction_in, long correction_stride, double *stiffness_out);
 void beam2d_laws_law_ecm_correction(long m, const double *material_in, long material_stride, double *correction_out);
 void beam2d_laws_law_ecm_sri_correction(long m, const double *material_in, long material_stride, double *correction_out);
+void beam2d_laws_law_elastic_line_correction(long m, const double *material_in, long material_stride, double *correction_out);
 void beam2d_laws_law_invariants_straight(long m, const double *geometry_in, long geometry_stride, const double *volume, const double *axis, const double *density, double *mass_out, double *k1_out, double *gram_out, double *cij_out, double *u0_out);

@@ -143,6 +143,33 @@ def law_ecm_sri(material_in, correction_in):
     return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
+def law_elastic_line(material_in, geometry, correction_in):
+    """Section stiffnesses of the strains of elastic_line: structural beam of the centre line (Gerstmayr and Shabana's elastic line): axial strain and bending r_xx . r_y (and r_xx . r_z, torsion) along the axis, transverse shear and cross-section strains at the nodes.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    geometry (shared, 3): length, height, width in m
+    correction (batch, 1): shear correction factors k
+    stiffness (output, 7): section stiffness per strain (axial: (r_x.r_x - 1)/2, EA; bending_y@0: r_xx . r_y of node 0, EI / 2; bending_x@0: r_xx . r_x of node 0, EI / 2; bending_y@1: r_xx . r_y of node 1, EI / 2; bending_x@1: r_xx . r_x of node 1, EI / 2; shear: r_x . r_y, k GA; section: (r_y.r_y - 1)/2, EA; N, N m^2)
+    Operations per element: 11.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    correction = np.ascontiguousarray(correction_in.T)
+    m = material.shape[1]
+    stiffness = np.zeros((7, m))
+    t0 = geometry[2]*material[0]
+    t1 = geometry[1]*t0
+    t2 = 0.041666666666666664*t0*(geometry[1]*geometry[1]*geometry[1])
+    stiffness[0] = t1
+    stiffness[1] = t2
+    stiffness[2] = t2
+    stiffness[3] = t2
+    stiffness[4] = t2
+    stiffness[5] = correction[0]*t1*(1.0/((2.0 + 2.0*material[1])))
+    stiffness[6] = t1
+
+    return stiffness.T
+
+
 def law_ecm_correction(material_in):
     """Default shear correction factors of ecm.
 
@@ -160,6 +187,21 @@ def law_ecm_correction(material_in):
 
 def law_ecm_sri_correction(material_in):
     """Default shear correction factors of ecm_sri.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (output, 1): default shear correction factors k
+    Operations per element: 6.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    m = material.shape[1]
+    correction = np.zeros((1, m))
+    correction[0] = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1])
+
+    return correction.T
+
+
+def law_elastic_line_correction(material_in):
+    """Default shear correction factors of elastic_line.
 
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     correction (output, 1): default shear correction factors k

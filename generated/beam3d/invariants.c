@@ -90,6 +90,137 @@ void beam3d_invariants_shape_gradients(long m, const double *point_in, long poin
   }
 }
 
+/* Shape derivatives of the centre-line directions at local points.
+   point (batch, 3): local coordinates (x, y[, z]) in m
+   geometry (shared, 3): length, height, width in m
+   directions (output, 96): d s_k / d(x), d(y), d(z), d(xx), d(xy), d(xz), d(x@0), d(x@1), d(y@0), d(y@1), d(z@0), d(z@1) on the centre line (direction-major, n each; 1/m, 1/m^2)
+   Operations per element: 30. */
+void beam3d_invariants_structural_directions(long m, const double *point_in, long point_stride, const double *geometry, double *directions_out)
+{
+  vd point[3];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || point_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < ANCF_LANES; j++) point[i][j] = point_in[lane[j] * point_stride + i];
+    vd directions[96];
+    for (int i = 0; i < 96; i++) directions[i] = (vd){0};
+    const double t0 = (1.0/(geometry[0]*geometry[0]*geometry[0]));
+    const vd t1 = (point[0]*point[0]);
+    const double t2 = (1.0/(geometry[0]*geometry[0]));
+    const double t3 = 6.0*t2;
+    const vd t4 = point[0]*t3;
+    const vd t5 = t4 - 6.0*t0*t1;
+    const double t6 = (1.0/(geometry[0]));
+    const vd t7 = point[0]*t6;
+    const vd t8 = 1.0 - t7;
+    const vd t9 = t3 - 12.0*point[0]*t0;
+    const vd t10 = -t4;
+    const double t11 = -t6;
+    directions[0] = -t5;
+    directions[1] = 1.0 - 4.0*t7 + 3.0*t1*t2;
+    directions[2] = SPLAT(0.0);
+    directions[3] = SPLAT(0.0);
+    directions[4] = t5;
+    directions[5] = -2.0*t7 + 3.0*t1*t2;
+    directions[6] = SPLAT(0.0);
+    directions[7] = SPLAT(0.0);
+    directions[8] = SPLAT(0.0);
+    directions[9] = SPLAT(0.0);
+    directions[10] = t8;
+    directions[11] = SPLAT(0.0);
+    directions[12] = SPLAT(0.0);
+    directions[13] = SPLAT(0.0);
+    directions[14] = t7;
+    directions[15] = SPLAT(0.0);
+    directions[16] = SPLAT(0.0);
+    directions[17] = SPLAT(0.0);
+    directions[18] = SPLAT(0.0);
+    directions[19] = t8;
+    directions[20] = SPLAT(0.0);
+    directions[21] = SPLAT(0.0);
+    directions[22] = SPLAT(0.0);
+    directions[23] = t7;
+    directions[24] = -t9;
+    directions[25] = -t10 - 4.0*t6;
+    directions[26] = SPLAT(0.0);
+    directions[27] = SPLAT(0.0);
+    directions[28] = t9;
+    directions[29] = -t10 - 2.0*t6;
+    directions[30] = SPLAT(0.0);
+    directions[31] = SPLAT(0.0);
+    directions[32] = SPLAT(0.0);
+    directions[33] = SPLAT(0.0);
+    directions[34] = SPLAT(t11);
+    directions[35] = SPLAT(0.0);
+    directions[36] = SPLAT(0.0);
+    directions[37] = SPLAT(0.0);
+    directions[38] = SPLAT(t6);
+    directions[39] = SPLAT(0.0);
+    directions[40] = SPLAT(0.0);
+    directions[41] = SPLAT(0.0);
+    directions[42] = SPLAT(0.0);
+    directions[43] = SPLAT(t11);
+    directions[44] = SPLAT(0.0);
+    directions[45] = SPLAT(0.0);
+    directions[46] = SPLAT(0.0);
+    directions[47] = SPLAT(t6);
+    directions[48] = SPLAT(0.0);
+    directions[49] = SPLAT(1.0);
+    directions[50] = SPLAT(0.0);
+    directions[51] = SPLAT(0.0);
+    directions[52] = SPLAT(0.0);
+    directions[53] = SPLAT(0.0);
+    directions[54] = SPLAT(0.0);
+    directions[55] = SPLAT(0.0);
+    directions[56] = SPLAT(0.0);
+    directions[57] = SPLAT(0.0);
+    directions[58] = SPLAT(0.0);
+    directions[59] = SPLAT(0.0);
+    directions[60] = SPLAT(0.0);
+    directions[61] = SPLAT(1.0);
+    directions[62] = SPLAT(0.0);
+    directions[63] = SPLAT(0.0);
+    directions[64] = SPLAT(0.0);
+    directions[65] = SPLAT(0.0);
+    directions[66] = SPLAT(1.0);
+    directions[67] = SPLAT(0.0);
+    directions[68] = SPLAT(0.0);
+    directions[69] = SPLAT(0.0);
+    directions[70] = SPLAT(0.0);
+    directions[71] = SPLAT(0.0);
+    directions[72] = SPLAT(0.0);
+    directions[73] = SPLAT(0.0);
+    directions[74] = SPLAT(0.0);
+    directions[75] = SPLAT(0.0);
+    directions[76] = SPLAT(0.0);
+    directions[77] = SPLAT(0.0);
+    directions[78] = SPLAT(1.0);
+    directions[79] = SPLAT(0.0);
+    directions[80] = SPLAT(0.0);
+    directions[81] = SPLAT(0.0);
+    directions[82] = SPLAT(0.0);
+    directions[83] = SPLAT(1.0);
+    directions[84] = SPLAT(0.0);
+    directions[85] = SPLAT(0.0);
+    directions[86] = SPLAT(0.0);
+    directions[87] = SPLAT(0.0);
+    directions[88] = SPLAT(0.0);
+    directions[89] = SPLAT(0.0);
+    directions[90] = SPLAT(0.0);
+    directions[91] = SPLAT(0.0);
+    directions[92] = SPLAT(0.0);
+    directions[93] = SPLAT(0.0);
+    directions[94] = SPLAT(0.0);
+    directions[95] = SPLAT(1.0);
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 96; i++) directions_out[(first + j) * 96 + i] = directions[i][j];
+    }
+  }
+}
+
 /* Closed-form integrals of the straight element (exact polynomial integration).
    geometry (batch, 3): length, height, width in m
    i4 (output, 211): int P_kl P_mn dV0 in i4-pattern order

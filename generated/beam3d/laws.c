@@ -282,6 +282,60 @@ void beam3d_laws_law_ecm_sri(long m, const double *material_in, long material_st
   }
 }
 
+/* Section stiffnesses of the strains of elastic_line: structural beam of the centre line (Gerstmayr and Shabana's elastic line): axial strain and bending r_xx . r_y (and r_xx . r_z, torsion) along the axis, transverse shear and cross-section strains at the nodes.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   geometry (shared, 3): length, height, width in m
+   correction (batch, 2): shear correction factors k1, k2
+   stiffness (output, 14): section stiffness per strain (axial: (r_x.r_x - 1)/2, EA; bending_y@0: r_xx . r_y of node 0, EI_z / 2; bending_z@0: r_xx . r_z of node 0, EI_y / 2; bending_x@0: r_xx . r_x of node 0, (EI_y + EI_z) / 2 / 2; bending_y@1: r_xx . r_y of node 1, EI_z / 2; bending_z@1: r_xx . r_z of node 1, EI_y / 2; bending_x@1: r_xx . r_x of node 1, (EI_y + EI_z) / 2 / 2; torsion_y: r_xz . r_y, GJ / 2; torsion_z: r_xy . r_z, GJ / 2; shear_y: r_x . r_y, k2 GA; shear_z: r_x . r_z, k1 GA; section_y: (r_y.r_y - 1)/2, EA; section_z: (r_z.r_z - 1)/2, EA; section_shear: r_y . r_z, GA; N, N m^2)
+   Operations per element: 30. */
+void beam3d_laws_law_elastic_line(long m, const double *material_in, long material_stride, const double *geometry, const double *correction_in, long correction_stride, double *stiffness_out)
+{
+  vd material[2];
+  vd correction[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    if (first == 0 || correction_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) correction[i][j] = correction_in[lane[j] * correction_stride + i];
+    vd stiffness[14];
+    for (int i = 0; i < 14; i++) stiffness[i] = (vd){0};
+    const vd t0 = geometry[2]*material[0];
+    const vd t1 = geometry[1]*t0;
+    const double t2 = (geometry[1]*geometry[1]*geometry[1]);
+    const vd t3 = t0*t2;
+    const vd t4 = 0.041666666666666664*t3;
+    const vd t5 = material[0]*(geometry[2]*geometry[2]*geometry[2]);
+    const vd t6 = geometry[1]*t5;
+    const vd t7 = 0.041666666666666664*t6;
+    const vd t8 = 0.020833333333333332*t3 + 0.020833333333333332*t6;
+    const vd t9 = (1.0/((2.0 + 2.0*material[1])));
+    const vd t10 = 2.5*t2*t5*t9*(1.0/((18.0*(geometry[1]*geometry[1]) + 18.0*(geometry[2]*geometry[2]))));
+    const vd t11 = t1*t9;
+    stiffness[0] = t1;
+    stiffness[1] = t4;
+    stiffness[2] = t7;
+    stiffness[3] = t8;
+    stiffness[4] = t4;
+    stiffness[5] = t7;
+    stiffness[6] = t8;
+    stiffness[7] = t10;
+    stiffness[8] = t10;
+    stiffness[9] = correction[1]*t11;
+    stiffness[10] = correction[0]*t11;
+    stiffness[11] = t1;
+    stiffness[12] = t1;
+    stiffness[13] = t11;
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 14; i++) stiffness_out[(first + j) * 14 + i] = stiffness[i][j];
+    }
+  }
+}
+
 /* Default shear correction factors of ecm.
    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
    correction (output, 2): default shear correction factors k1, k2
@@ -312,6 +366,31 @@ void beam3d_laws_law_ecm_correction(long m, const double *material_in, long mate
    correction (output, 2): default shear correction factors k1, k2
    Operations per element: 6. */
 void beam3d_laws_law_ecm_sri_correction(long m, const double *material_in, long material_stride, double *correction_out)
+{
+  vd material[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    vd correction[2];
+    for (int i = 0; i < 2; i++) correction[i] = (vd){0};
+    const vd t0 = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1]);
+    correction[0] = t0;
+    correction[1] = t0;
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 2; i++) correction_out[(first + j) * 2 + i] = correction[i][j];
+    }
+  }
+}
+
+/* Default shear correction factors of elastic_line.
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   correction (output, 2): default shear correction factors k1, k2
+   Operations per element: 6. */
+void beam3d_laws_law_elastic_line_correction(long m, const double *material_in, long material_stride, double *correction_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {

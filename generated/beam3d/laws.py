@@ -224,6 +224,49 @@ def law_ecm_sri(material_in, correction_in):
     return volume.T, axis.T, volume_gauss2.T, volume_lobatto2.T, axis_lobatto2.T
 
 
+def law_elastic_line(material_in, geometry, correction_in):
+    """Section stiffnesses of the strains of elastic_line: structural beam of the centre line (Gerstmayr and Shabana's elastic line): axial strain and bending r_xx . r_y (and r_xx . r_z, torsion) along the axis, transverse shear and cross-section strains at the nodes.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    geometry (shared, 3): length, height, width in m
+    correction (batch, 2): shear correction factors k1, k2
+    stiffness (output, 14): section stiffness per strain (axial: (r_x.r_x - 1)/2, EA; bending_y@0: r_xx . r_y of node 0, EI_z / 2; bending_z@0: r_xx . r_z of node 0, EI_y / 2; bending_x@0: r_xx . r_x of node 0, (EI_y + EI_z) / 2 / 2; bending_y@1: r_xx . r_y of node 1, EI_z / 2; bending_z@1: r_xx . r_z of node 1, EI_y / 2; bending_x@1: r_xx . r_x of node 1, (EI_y + EI_z) / 2 / 2; torsion_y: r_xz . r_y, GJ / 2; torsion_z: r_xy . r_z, GJ / 2; shear_y: r_x . r_y, k2 GA; shear_z: r_x . r_z, k1 GA; section_y: (r_y.r_y - 1)/2, EA; section_z: (r_z.r_z - 1)/2, EA; section_shear: r_y . r_z, GA; N, N m^2)
+    Operations per element: 30.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    correction = np.ascontiguousarray(correction_in.T)
+    m = material.shape[1]
+    stiffness = np.zeros((14, m))
+    t0 = geometry[2]*material[0]
+    t1 = geometry[1]*t0
+    t2 = (geometry[1]*geometry[1]*geometry[1])
+    t3 = t0*t2
+    t4 = 0.041666666666666664*t3
+    t5 = material[0]*(geometry[2]*geometry[2]*geometry[2])
+    t6 = geometry[1]*t5
+    t7 = 0.041666666666666664*t6
+    t8 = 0.020833333333333332*t3 + 0.020833333333333332*t6
+    t9 = (1.0/((2.0 + 2.0*material[1])))
+    t10 = 2.5*t2*t5*t9*(1.0/((18.0*(geometry[1]*geometry[1]) + 18.0*(geometry[2]*geometry[2]))))
+    t11 = t1*t9
+    stiffness[0] = t1
+    stiffness[1] = t4
+    stiffness[2] = t7
+    stiffness[3] = t8
+    stiffness[4] = t4
+    stiffness[5] = t7
+    stiffness[6] = t8
+    stiffness[7] = t10
+    stiffness[8] = t10
+    stiffness[9] = correction[1]*t11
+    stiffness[10] = correction[0]*t11
+    stiffness[11] = t1
+    stiffness[12] = t1
+    stiffness[13] = t11
+
+    return stiffness.T
+
+
 def law_ecm_correction(material_in):
     """Default shear correction factors of ecm.
 
@@ -243,6 +286,23 @@ def law_ecm_correction(material_in):
 
 def law_ecm_sri_correction(material_in):
     """Default shear correction factors of ecm_sri.
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    correction (output, 2): default shear correction factors k1, k2
+    Operations per element: 6.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    m = material.shape[1]
+    correction = np.zeros((2, m))
+    t0 = (1.0/((12.0 + 11.0*material[1])))*(10.0 + 10.0*material[1])
+    correction[0] = t0
+    correction[1] = t0
+
+    return correction.T
+
+
+def law_elastic_line_correction(material_in):
+    """Default shear correction factors of elastic_line.
 
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     correction (output, 2): default shear correction factors k1, k2

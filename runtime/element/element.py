@@ -57,7 +57,11 @@ class Element:
     method: ``gram`` | ``cij`` | ``quadrature``; backend: ``c`` | ``numpy``.
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
     Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
-    of slender 2-node beams in large rotations; general invariants, straight or not); for
+    of slender 2-node beams in large rotations; general invariants, straight or not) |
+    ``elastic_line`` (2-node beams: a structural Euler-Bernoulli beam of the centre line,
+    axial strain, bending r_xx on the nodal frames and torsion along x, shear and section
+    strains at the nodes; straight references only; ``section_stiffness`` gives its
+    stiffnesses); for
     cables ``svk`` (simple bending) | ``svk_exact_curvature`` (exact curvature bending by
     Gauss quadrature of order ``quadrature[0]`` along the axis);
     shear_correction: the ECM shear-correction factors, one number for every
@@ -107,6 +111,7 @@ class Element:
                              f"{law_info.curved}")
         self.lam, self.shear = lame(self.E, self.nu)
         self.timing = {"compile_s": 0.0, "load_s": 0.0, "preprocess_s": 0.0}
+        self._structural_table: np.ndarray | None = None
         #: kernel families loaded (compiled on first use with backend c), in load order
         self.loaded_families: list[str] = []
         builders = self._family("invariants")
@@ -123,7 +128,8 @@ class Element:
         self._inputs = self._method_inputs(builders)
         self._check_finite(e0 is not None)
         self.timing["preprocess_s"] += time.perf_counter() - start
-        family = family_name(self.method, self.law, self.variant, bending=self.bending)
+        family = family_name(self.method, self.law, self.variant, bending=self.bending,
+                             structural=law_info.structural)
         kernels = self._family(family)
         self.family = family
         self._method_kernels = kernels
@@ -182,6 +188,11 @@ class Element:
                                      (self.lam, self.shear, self.rho))
 
     def _law_invariants(self, builders) -> dict:
+        if self.kind.laws[self.law].structural:  # strains of the centre line, by quadrature
+            inv.checked_reference(self.kind, builders, self.geometry, self.e0, self.quadrature)
+            return inv.structural_invariants(self.kind, builders, self.law, self.variant,
+                                             self.geometry, self.quadrature,
+                                             self._law_table(builders), self.rho)
         laws = self._family("laws")
         coefficients = self.law_coefficients()
         if self.variant == "straight":
@@ -211,14 +222,38 @@ class Element:
 
     def law_coefficients(self) -> dict[str, np.ndarray]:
         """The law's coefficients (Pa) per domain (``volume``, ``axis``): the upper triangle
-        of the normal block of its Voigt matrix, then the shear diagonal (docs/laws.md)."""
+        of the normal block of its Voigt matrix, then the shear diagonal (docs/laws.md).
+        A structural law has none (``section_stiffness``): ValueError."""
+        if self.kind.laws[self.law].structural:
+            raise ValueError(f"law {self.law!r} has no Voigt coefficients: its strains are "
+                             "structural strains of the centre line (section_stiffness "
+                             "gives their stiffnesses; docs/laws.md)")
         return inv.law_coefficients(self.kind, self._family("laws"), self.law, self.E,
                                     self.nu, self.shear_correction)
+
+    def section_stiffness(self) -> dict[str, float]:
+        """The section stiffness of each strain of a structural law, by strain name (N for
+        the stretches and shears, N m^2 for bending and torsion; docs/laws.md); ValueError
+        for a law of the Green-Lagrange strain (``law_coefficients``)."""
+        info = self.kind.laws[self.law]
+        if not info.structural:
+            raise ValueError(f"law {self.law!r} has no structural strains (law_coefficients "
+                             "gives its Voigt coefficients)")
+        values = inv.structural_stiffness(self.kind, self._family("laws"), self.law, self.E,
+                                          self.nu, self.shear_correction, self.geometry)
+        return {strain["name"]: float(v) for strain, v in zip(info.strains, values,
+                                                                strict=True)}
 
     def _law_rules(self, builders) -> dict:
         return inv.law_rules(self.kind, builders, self.geometry, self.e0, self.quadrature)
 
     def _law_table(self, builders) -> np.ndarray:
+        if self.kind.laws[self.law].structural:
+            if self._structural_table is None:
+                self._structural_table = inv.structural_table(
+                    self.kind, builders, self.law, self.geometry, self.quadrature,
+                    np.array(list(self.section_stiffness().values())))
+            return self._structural_table
         if self.kind.energy.structural:  # the law that takes curved references has kappa0
             return inv.cable_table(self.kind, builders, self.geometry, self.quadrature[0],
                                    self.law_coefficients(), self.e0,
@@ -310,7 +345,7 @@ class Element:
     def damping_family(self) -> str:
         """Name of the kernel family of this element's damping kernels."""
         return family_name(self.method, self.law, self.variant, damped=True,
-                           bending=self.bending)
+                           bending=self.bending, structural=self.kind.laws[self.law].structural)
 
     @property
     def damping_kernel_family(self):

@@ -467,7 +467,14 @@ def law_algebra(kind: ElementKind, variant: str, parts, mass: np.ndarray,
             cfull += value * np.einsum("kqmp->kpmq", both)
         k1 -= np.einsum("a,akl->kl", normal.sum(axis=1), pi) / 2
         u0 += normal.sum() * measure / 8
-    mass = mass * density
+    return _stored(kind, variant, dsym, cfull, k1, u0, mass * density)
+
+
+def _stored(kind: ElementKind, variant: str, dsym: np.ndarray, cfull: np.ndarray,
+            k1: np.ndarray, u0: float, mass: np.ndarray) -> dict[str, np.ndarray]:
+    """The stored invariants (as ``stored_invariants``) of storage ``variant`` from the full
+    tensors: Dsym (n, n, n, n), c[k, p, m, q], K1 and the mass (n, n), U0."""
+    n = kind.n_shape
     rows, cols = np.triu_indices(n)
     gram = kind.pattern(variant, "gram")
     a_k, a_m = rows[gram[:, 0]], cols[gram[:, 0]]
@@ -478,6 +485,77 @@ def law_algebra(kind: ElementKind, variant: str, parts, mass: np.ndarray,
             "gram": mu * dsym[a_k, a_m, b_k, b_m],
             "cij": cfull[cij[:, 0], cij[:, 1], cij[:, 2], cij[:, 3]],
             "u0": np.array([u0])}
+
+
+# --- structural laws (symgen/structural.py): strains of the centre line ----------------------
+
+
+def structural_stiffness(kind: ElementKind, laws: KernelFamily, law: str, E: float,
+                         nu: float, corrections, geometry) -> np.ndarray:
+    """The section stiffness (N, N m^2) of each strain of the structural law ``law``
+    (``LawInfo.strains`` order) for E (Pa), nu, the shear corrections and the geometry."""
+    inputs = {"material": np.array([[E, nu]], dtype=float),
+              "geometry": np.asarray(geometry, float)}
+    if kind.laws[law].corrections:
+        inputs["correction"] = np.asarray(corrections, dtype=float)[None, :]
+    return laws(f"law_{law}", inputs)["stiffness"][0]
+
+
+def structural_table(kind: ElementKind, family: KernelFamily, law: str, geometry,
+                     orders: tuple[int, ...], stiffness: np.ndarray) -> np.ndarray:
+    """Per-point table of a structural law (``quadrature_structural`` kernels, and the
+    source of its invariants): at the points of each domain its strains are sampled on (the
+    axis rule of order ``orders[0]``, the nodes), the shape derivatives of the law's
+    directions on the centre line, then per strain its stiffness times the point's weight
+    along x (m) where the strain is sampled on that domain, zero elsewhere."""
+    info = kind.laws[law]
+    shared = np.asarray(geometry, float)
+    area = shared[1] * shared[2]      # the axis rules' weights hold the section h w
+    blocks = []
+    for domain in dict.fromkeys(strain["domain"] for strain in info.strains):
+        points, weights = subdomain_rule(kind, geometry, orders, domain)
+        directions = family("structural_directions", {"point": points,
+                                                      "geometry": shared})["directions"]
+        on = np.array([strain["domain"] == domain for strain in info.strains])
+        blocks.append(np.column_stack([directions, (weights / area)[:, None]
+                                       * np.where(on, stiffness, 0.0)[None, :]]))
+    return np.ascontiguousarray(np.concatenate(blocks))
+
+
+def structural_invariants(kind: ElementKind, family: KernelFamily, law: str, variant: str,
+                          geometry, orders: tuple[int, ...], table: np.ndarray,
+                          density: float) -> dict[str, np.ndarray]:
+    """Mass, K1, gram, cij and U0 of a structural law from its ``structural_table``: each
+    strain of directions (a, b) with weights W is the law algebra's normal strain of
+    P^a = u_a u_a^T (a = b: (r_a.r_a - 1)/2) or its shear between P^a and P^b (r_a . r_b),
+    with T^ab_klmn = sum_p W P^a_kl P^b_mn (``law_algebra``); the mass int rho s s^T dV0 on
+    the volume rule of ``orders`` (a straight reference: det J0 = 1)."""
+    info, n = kind.laws[law], kind.n_shape
+    count = len(info.directions)
+    u = table[:, :count * n].reshape(-1, count, n)
+    dsym = np.zeros((n, n, n, n))
+    cfull = np.zeros((n, n, n, n))
+    k1 = np.zeros((n, n))
+    u0 = 0.0
+    for i, strain in enumerate(info.strains):
+        weight = table[:, count * n + i]
+        a, b = strain["directions"]
+        pa, pb = (np.einsum("pk,pl->pkl", u[:, c], u[:, c]) for c in (a, b))
+        t = np.einsum("p,pkl,pmq->klmq", weight, pa, pb)
+        if a == b:
+            dsym += t / 8
+            cfull += np.einsum("kmpq->kpmq", t) / 2
+            k1 -= np.einsum("p,pkl->kl", weight, pa) / 2
+            u0 += weight.sum() / 8
+            continue
+        dsym += (np.einsum("kmln->klmn", t) + np.einsum("knlm->klmn", t)
+                 + np.einsum("lmkn->klmn", t) + np.einsum("lnkm->klmn", t)) / 8
+        cfull += np.einsum("kqmp->kpmq", t + np.einsum("klmq->mqkl", t))
+    points, weights = domain_rule(kind, geometry, orders)
+    values = family("shape_values", {"point": points,
+                                     "geometry": np.asarray(geometry, float)})["values"]
+    mass = np.einsum("p,pk,pl->kl", weights, values, values)
+    return _stored(kind, variant, dsym, cfull, k1, u0, mass * density)
 
 
 # --- closed forms as data (elements with closed.json, symgen.emit.closed_tables) ------------

@@ -113,6 +113,17 @@ class LawInfo:
     #: it refuses curved references, why
     variants: tuple[str, ...] = VARIANTS
     curved: str | None = None
+    #: a structural law's strains of the centre line (``symgen/structural.py``): each
+    #: {name, directions: [a, b] (indices into ``directions``), domain, doc}; empty for a law
+    #: of the Green-Lagrange strain
+    strains: tuple[dict, ...] = ()
+    #: the centre-line directions the strains dot (``r_<name>``), in table order
+    directions: tuple[str, ...] = ()
+
+    @property
+    def structural(self) -> bool:
+        """Whether the law evaluates structural strains of the centre line."""
+        return bool(self.strains)
 
 
 @dataclass(frozen=True)
@@ -184,7 +195,8 @@ class ElementKind:
                         d["subdomains"], d["thickness"])
         laws = {name: LawInfo(name, tuple(law["corrections"]), law["description"],
                               tuple(law["parts"]), law["storage"], law.get("bending"),
-                              tuple(law.get("variants", VARIANTS)), law.get("curved"))
+                              tuple(law.get("variants", VARIANTS)), law.get("curved"),
+                              tuple(law.get("strains", ())), tuple(law.get("directions", ())))
                 for name, law in meta["laws"].items()}
         return cls(meta["name"], meta["description"], meta["dim"], meta["n_shape"],
                    meta["ndof"], tuple(meta["position_vectors"]), tuple(meta["quadrature"]),

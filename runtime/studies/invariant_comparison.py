@@ -111,6 +111,10 @@ def compare(kind: str, reference: str = "straight", orders=None, backend: str = 
         raise ValueError(f"--reference: expected straight or curved, got {reference!r}")
     if law not in meta.laws:
         raise ValueError(f"--law: expected one of {', '.join(meta.laws)}, got {law!r}")
+    if meta.laws[law].structural:
+        raise ValueError(f"--law: {law} is a structural law: its invariants are the exact "
+                         "quadrature of its strains along the centre line, with no closed "
+                         "form or Voigt coefficients to compare (docs/laws.md)")
     if meta.energy.structural:
         return _compare_cable(meta, reference, orders, backend, law)
     if law != "svk" or inv.has_closed_tables(meta) or (

@@ -12,7 +12,9 @@ Two cases, each for 2, 4, 8, 16 and 32 elements:
 
 ``python -m runtime.studies.locking [--kinds K,...] [--laws L,...] [--cases C,...]`` prints
 the markdown table of the relative errors of the tip deflection (default: every law of the
-kinds the remedy applies to, the 2-node beams).
+kinds the remedies apply to, the 2-node beams: svk, ecm, ecm_sri and the elastic line).
+``--cable`` adds the rows of the gradient-deficient cable of the same dimension (law svk,
+its simple bending), the element the elastic line is compared with.
 """
 
 from __future__ import annotations
@@ -58,23 +60,65 @@ def reference(case: str) -> float:
 
 def tip_deflection(kind: str, law: str, case: str, elements: int) -> float:
     """Tip deflection over L of the cantilever of ``case`` (square section, clamped at
-    x = 0, transverse tip load along -y) with ``elements`` elements of ``kind`` and ``law``."""
-    from runtime.model.bodies import Material
+    x = 0, transverse tip load along -y) with ``elements`` elements of ``kind`` and ``law``
+    (any kind: the 2-node beams, their 3-node relatives, the cables)."""
+    from runtime.kernels.kind import element_kind
+    from runtime.model.bodies import Body, Material
+    from runtime.model.items.constraints import Clamp
     from runtime.model.items.loads import PointForce
     from runtime.model.model import Model
+    from runtime.model.scene import Scene
     from runtime.model.settings import Static
     from runtime.solve.static import solve_static
-    from runtime.studies.stability.plan import cantilever_scene
 
     slenderness, nu, alpha, steps = CASES[case]
     height = LENGTH / slenderness
     load = alpha * E_MODULUS * height**4 / 12 / LENGTH**2
-    force = (0.0, -load) + ((0.0,) if kind != "beam2d" else ())
-    scene = cantilever_scene(kind, Material("steel", E=E_MODULUS, nu=nu, rho=RHO, law=law),
-                             elements, LENGTH, height, height, [PointForce("beam:-1", force)])
+    origin = (0.0,) * element_kind(kind).dim
+    force = (0.0, -load) + origin[2:]
+    scene = Scene(title=f"locking study cantilever, {kind}, {law}",
+                  materials=[Material("steel", E=E_MODULUS, nu=nu, rho=RHO, law=law)],
+                  bodies=[Body("beam", kind, "steel", height, height, elements, origin,
+                               (LENGTH, *origin[1:]))],
+                  constraints=[Clamp("beam:0")], loads=[PointForce("beam:-1", force)])
     model = Model(scene)
     result = solve_static(model, Static(load_steps=steps))
     return -float(result.q[model.node_dofs(elements, "r")][1]) / LENGTH
+
+
+#: the dynamic check: the paper's cantilever (scenes/cantilever.toml, 4 s, tip load ramped
+#: over 3.5 s), its element counts and the converged reference (kind, law, elements)
+DYNAMIC_ELEMENTS = (2, 5, 10)
+DYNAMIC_REFERENCE = ("cable3d", "svk", 40)
+
+
+def paper_cantilever(kind: str, law: str, elements: int) -> tuple[np.ndarray, np.ndarray]:
+    """(t, tip_y) in s and m of the paper's cantilever (scenes/cantilever.toml, dynamic
+    analysis only, the compiled engine) with ``elements`` elements of ``kind`` and ``law``."""
+    import dataclasses
+    from importlib import resources
+
+    from runtime.app.simulation import run_scene
+    from runtime.model.scene import load_scene
+
+    scene = load_scene(resources.files("scenes") / "cantilever.toml")
+    body = dataclasses.replace(scene.bodies[0], element=kind, elements=elements)
+    materials = [dataclasses.replace(m, law=law) for m in scene.materials.values()]
+    scene = dataclasses.replace(scene, bodies=(body,), materials=materials, static=None,
+                                modal=None, sensors=tuple(s for s in scene.sensors
+                                                          if s.name == "tip_y"))
+    result = run_scene(scene, engine="compiled", progress=False)
+    return result.sensors["t"], result.sensors["tip_y"]
+
+
+def dynamic_errors(cases, elements=DYNAMIC_ELEMENTS) -> dict[tuple[str, str, int], float]:
+    """{(kind, law, elements): max |tip_y - reference| / max |reference|} over the paper
+    cantilever's 4 s for ``cases`` (kind, law) against ``DYNAMIC_REFERENCE``."""
+    _, reference = paper_cantilever(*DYNAMIC_REFERENCE)
+    scale = np.abs(reference).max()
+    return {(kind, law, n): float(np.abs(paper_cantilever(kind, law, n)[1] - reference).max()
+                                  / scale)
+            for kind, law in cases for n in elements}
 
 
 @dataclass(frozen=True)
@@ -102,6 +146,14 @@ def default_laws() -> list[str]:
 
     return [law for law in material_laws()
             if all(law in element_kind(kind).laws for kind in default_kinds())]
+
+
+def cable_kinds() -> list[str]:
+    """The generated kinds of the cable energy (the gradient-deficient beams)."""
+    from runtime.catalog import generated_kinds
+    from runtime.kernels.kind import element_kind
+
+    return [kind for kind in generated_kinds() if element_kind(kind).energy.structural]
 
 
 def measure(kinds=None, laws=None, cases=tuple(CASES), elements=ELEMENTS) -> list[Row]:
@@ -138,9 +190,26 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--kinds", default="", help="comma list (default: default_kinds)")
     parser.add_argument("--laws", default="", help="comma list (default: default_laws)")
     parser.add_argument("--cases", default=",".join(CASES))
+    parser.add_argument("--cable", action="store_true",
+                        help="add the rows of the cable kinds (law svk)")
+    parser.add_argument("--dynamic", action="store_true",
+                        help="instead: the paper's cantilever (scenes/cantilever.toml) with "
+                        "beam3d svk and elastic_line and cable3d, against cable3d x 40")
     args = parser.parse_args(argv)
+    if args.dynamic:
+        errors = dynamic_errors([("beam3d", "svk"), ("beam3d", "elastic_line"),
+                                 ("cable3d", "svk")])
+        print("| kind | law | " + " | ".join(f"{n} el." for n in DYNAMIC_ELEMENTS) + " |")
+        print("| --- | --- |" + " ---: |" * len(DYNAMIC_ELEMENTS))
+        for kind, law in dict.fromkeys((k, a) for k, a, _ in errors):
+            print(f"| {kind} | {law} | " + " | ".join(
+                f"{errors[(kind, law, n)]:.2e}" for n in DYNAMIC_ELEMENTS) + " |")
+        return
+    cases = args.cases.split(",")
     rows = measure([k for k in args.kinds.split(",") if k], [a for a in args.laws.split(",") if a],
-                   args.cases.split(","))
+                   cases)
+    if args.cable:
+        rows += measure(cable_kinds(), ["svk"], cases)
     print(report(rows))
 
 

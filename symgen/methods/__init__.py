@@ -14,6 +14,9 @@ Families (one generated module each, so a scene compiles only what it uses):
                          invariants of any law from its coefficients;
 * ``quadrature_law``   - Gauss quadrature of any material law (symgen/laws.py) at every call,
                          with Kelvin-Voigt damping;
+* ``quadrature_structural`` - Gauss quadrature of the structural (elastic-line) law of the
+                         2-node beams (symgen/structural.py) along the centre line at every
+                         call, with Kelvin-Voigt damping;
 * ``damping_<variant>``   - Kelvin-Voigt damping through the gram tensor Dm (its own family,
                          so undamped models never compile it);
 * ``<method>_curvature[_<variant>]`` - cable elements with the exact-curvature bending:
@@ -93,6 +96,13 @@ def _curved_cable(spec: ElementSpec) -> bool:
         if law.bending == "exact_curvature")
 
 
+def _structural(spec: ElementSpec) -> bool:
+    """The structural laws' quadrature family where one applies (the 2-node beams)."""
+    from symgen import energies, structural
+
+    return any(structural.is_structural(law) for law in energies.applicable_laws(spec).values())
+
+
 def _small_general_map(spec: ElementSpec) -> bool:
     """The general (curved) svk map only where it is small (unrolled, it is the i4 -> stored
     map of the whole general pattern); otherwise curved references take the law path."""
@@ -114,6 +124,7 @@ FAMILIES: tuple[Family, ...] = (
     Family("gram_general", "gram", "gram", variant="general", when=_curved),
     Family("laws", "laws", "laws", optimization=PREPROCESSING),
     Family("quadrature_law", "quadrature_law", "quadrature", builder="build_law"),
+    Family("quadrature_structural", "quadrature", "structural", when=_structural),
     Family("damping_straight", "damping", "damping", variant="straight"),
     Family("damping_general", "damping", "damping", variant="general", when=_curved),
     Family("gram_curvature_straight", "gram", "curvature", builder="build_gram",

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive, energies
+from symgen import derive, energies, structural
 from symgen.element import ElementSpec
 from symgen.ir import Array, Kernel, Temporaries, emit_cse, ref, refs
 from symgen.methods.common import closed_as_data, geometry_doc, geometry_subs, invariant_outputs
@@ -22,10 +22,12 @@ def build(spec: ElementSpec, variant: str) -> list[Kernel]:
     if energies.is_cable(spec):  # invariants through the law path, quadrature tables
         return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
                 _shape_curvatures_kernel(spec), _section_kernel(spec)]
+    tables = [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
+    if any(structural.is_structural(law) for law in derive.applicable_laws(spec).values()):
+        tables.append(_structural_directions_kernel(spec))
     if closed_as_data(spec):
-        return [_shape_values_kernel(spec), _shape_gradients_kernel(spec)]
-    return [_shape_values_kernel(spec), _shape_gradients_kernel(spec),
-            _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
+        return tables
+    return [*tables, _straight_integrals_kernel(spec), _invariants_kernel(spec, "straight")]
 
 
 def _point_kernel(spec: ElementSpec, name: str, doc: str, output: str, output_doc: str,
@@ -62,6 +64,17 @@ def _shape_curvatures_kernel(spec: ElementSpec) -> Kernel:
                          "Second shape-function derivatives along x at local points.",
                          "curvatures", "d2 s_k / dx2 (1/m^2)",
                          [sp.diff(s, spec.coordinates[0], 2) for s in spec.shape_functions])
+
+
+def _structural_directions_kernel(spec: ElementSpec) -> Kernel:
+    """The shape derivatives of the directions of the structural laws on the centre line
+    (``symgen.structural.DIRECTIONS``) at axial positions (the point's y, z are ignored)."""
+    names = structural.DIRECTIONS[spec.dim]
+    values = [v for row in structural.direction_values(spec) for v in row]
+    return _point_kernel(spec, "structural_directions",
+                         "Shape derivatives of the centre-line directions at local points.",
+                         "directions", f"d s_k / d({'), d('.join(names)}) on the centre line "
+                         "(direction-major, n each; 1/m, 1/m^2)", values)
 
 
 def _section_kernel(spec: ElementSpec) -> Kernel:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symgen import derive, energies, laws
+from symgen import derive, energies, laws, structural
 from symgen.element import ElementSpec
 from symgen.ir import Array, Kernel, Temporaries, emit_cse, ref, refs
 from symgen.methods.common import closed_as_data, geometry_doc, geometry_subs, invariant_outputs
@@ -16,7 +16,8 @@ def build(spec: ElementSpec) -> list[Kernel]:
     """Per law its coefficients per domain (and default shear corrections), and the closed-form
     straight invariants of any law from its coefficients."""
     applicable = derive.applicable_laws(spec).values()
-    built = [_law_coefficients_kernel(spec, law) for law in applicable]
+    built = [_structural_stiffness_kernel(spec, law) if structural.is_structural(law)
+             else _law_coefficients_kernel(spec, law) for law in applicable]
     built += [_law_correction_kernel(spec, law) for law in applicable
               if law.default_corrections is not None]
     if closed_as_data(spec):  # closed forms as data (closed.json), for the runtime
@@ -49,6 +50,22 @@ def _law_coefficients_kernel(spec: ElementSpec, law: laws.Law) -> Kernel:
                     for domain in derive.law_domains(spec)
                     for i, value in enumerate(coefficients[domain])], Temporaries())
     return Kernel(f"law_{law.name}", f"Law coefficients per domain of {law.name}: "
+                  f"{law.description}.", arrays, body)
+
+
+def _structural_stiffness_kernel(spec: ElementSpec, law: structural.StructuralLaw) -> Kernel:
+    """The section stiffness of each strain of a structural law (``symgen.structural``) from
+    E, nu, the shear corrections and the section."""
+    arrays, subs = _law_material(spec, law)
+    strains = law.strains(spec.dim)
+    subs.update(geometry_subs(spec, "geometry"))
+    arrays = [arrays[0], Array("geometry", 3, "shared", geometry_doc(spec)), *arrays[1:],
+              Array("stiffness", len(strains), "output", "section stiffness per strain ("
+                    + "; ".join(f"{s.name}: {s.doc}" for s in strains) + "; N, N m^2)")]
+    body: list = []
+    emit_cse(body, [(f"stiffness[{i}]", sp.sympify(s.stiffness).subs(subs), False)
+                    for i, s in enumerate(strains)], Temporaries())
+    return Kernel(f"law_{law.name}", f"Section stiffnesses of the strains of {law.name}: "
                   f"{law.description}.", arrays, body)
 
 
