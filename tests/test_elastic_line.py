@@ -349,3 +349,38 @@ def test_first_frequencies_are_euler_bernoulli():
         errors[law] = frequencies / theory - 1
     assert np.abs(errors[LAW]).max() < 1e-3
     assert errors["svk"][0] > 1e-2 and errors["svk"][2] > 5e-2
+
+
+@pytest.mark.parametrize("sensor", [
+    'type = "stress"\nbody = "beam"\nelement = 0\npoint = [0.0, 0.0, 0.0]\ncomponent = "xx"',
+    'type = "strain"\nbody = "beam"\nelement = 0\npoint = [0.0, 0.0, 0.0]\ncomponent = "xx"',
+    'type = "section"\nbody = "beam"\nelement = 0\nx = 0.0\ncomponent = "M3"'])
+def test_material_point_and_section_sensors_on_an_elastic_line_body_are_scene_errors(sensor):
+    # no strains at material points, no section forces: a scene error naming the sensor,
+    # not an internal error after the analysis
+    import tomllib
+
+    from runtime.model.errors import SceneError
+    from runtime.model.scene import parse_scene
+
+    text = f"""
+[material.steel]
+E = 2.1e11
+nu = 0.3
+rho = 7800.0
+law = "elastic_line"
+[[body]]
+name = "beam"
+element = "beam3d"
+material = "steel"
+section = {{ height = 0.02, width = 0.02 }}
+elements = 2
+start = [0.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.0]
+[[sensor]]
+name = "probe"
+{sensor}
+"""
+    with pytest.raises(SceneError, match=r"^sensor\[0\]\.type: body \"beam\" has the "
+                                         r"elastic_line law"):
+        parse_scene(tomllib.loads(text))

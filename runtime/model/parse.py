@@ -38,7 +38,13 @@ from runtime.model.items.body_joints import BodyPrismatic, BodySpherical
 from runtime.model.items.constraint_types import CONSTRAINTS
 from runtime.model.items.loads import LOADS
 from runtime.model.items.rigid import RIGID_BODIES, RigidBody, RigidItem
-from runtime.model.items.sensors import SENSORS, Sensor, check_reactions
+from runtime.model.items.sensors import (
+    SENSORS,
+    MaterialPointSensor,
+    SectionForce,
+    Sensor,
+    check_reactions,
+)
 from runtime.model.mesh_file import FileMesh, check_shapes
 from runtime.model.placements import PLACEMENTS, Arc, Box, Line, Rectangle
 from runtime.model.schema import (
@@ -450,6 +456,27 @@ def _rigid_bodies(tables: list[tuple[int, dict]], bodies: list[Body],
     return tuple(items)
 
 
+def _check_material_points(sensors: list[Sensor], bodies: list[Body],
+                           materials: dict[str, Material]) -> None:
+    """SceneError for a strain, stress or section sensor on a body whose law is a structural
+    energy of the centre line (``elastic_line``: no Green strain at material points, and its
+    section forces are not built)."""
+    by_name = {body.name: body for body in bodies}
+    for i, sensor in enumerate(sensors):
+        if not isinstance(sensor, MaterialPointSensor | SectionForce):
+            continue
+        body = by_name[sensor.body]
+        law = materials[body.material].law
+        info = element_kind(body.element).laws.get(law)
+        if info is not None and info.structural:
+            raise SceneError(f"sensor[{i}].type: body {show(body.name)} has the {law} law "
+                             f"of material {show(body.material)}, a structural energy of "
+                             f"the centre line: its {sensor.type} sensors are not built "
+                             f"(no strains at material points); expected a displacement, "
+                             f"position, velocity or energy sensor for this body, or a "
+                             f"continuum law (ecm, ecm_sri)")
+
+
 def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     """The validated fields of the ``Scene`` of the parsed TOML ``data`` (``source`` names
     it: a file path).
@@ -520,6 +547,7 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
                              f"{case}; sensor names name files, unique ignoring case")
         sensors.append(sensor)
     check_reactions(tuple(sensors), constraints)
+    _check_material_points(sensors, bodies, materials)
     for i, sensor in enumerate(sensors):
         index = getattr(sensor, "constraint", None)
         if index is not None and (index >= len(constraints) or sensor.body not in (
