@@ -20,6 +20,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from runtime.model.model import Model
+from runtime.solve import cholmod
 from runtime.solve.linear import DENSE_LIMIT, single_threaded_blas
 
 
@@ -81,6 +82,26 @@ def _constraint_rows(model: Model, q: np.ndarray,
     return rows, multipliers[model.joints_free.shape[0]:]
 
 
+def _inverse(stiffness) -> scipy.sparse.linalg.LinearOperator | None:
+    """K^-1 for the shift-invert iterations (sigma = 0) by CHOLMOD's Cholesky of a sparse,
+    positive definite K (a held structure), instead of the SuperLU that eigsh takes
+    otherwise: 4 modes of a clamped plate3d 16 x 16 (3264 coordinates) in 75 ms against 210,
+    32 x 32 (12672) in 0.21 s against 2.2 s, frequencies equal to 4e-10; None (SuperLU) for
+    a dense K (the joints' null space), without CHOLMOD, or when K is not positive definite
+    (a mechanism, a buckled state)."""
+    if not scipy.sparse.issparse(stiffness) or not cholmod.available():
+        return None
+    symmetric = ((stiffness + stiffness.T) / 2).tocsr()
+    symmetric.sort_indices()
+    cholesky = cholmod.Cholesky(symmetric)
+    try:
+        cholesky.factorize(symmetric.data)
+    except cholmod.NotPositiveDefinite:
+        return None
+    return scipy.sparse.linalg.LinearOperator(symmetric.shape, matvec=cholesky.solve,
+                                              dtype=float)
+
+
 def _modal(model: Model, q: np.ndarray, modes: int, multipliers: np.ndarray | None,
            vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """(frequencies (modes,), eigenvectors over the free coordinates (nf, modes) or None)."""
@@ -104,6 +125,7 @@ def _modal(model: Model, q: np.ndarray, modes: int, multipliers: np.ndarray | No
                                   subset_by_index=[0, modes - 1])
     else:
         found = scipy.sparse.linalg.eigsh(stiffness, k=modes, M=mass, sigma=0.0,
+                                          OPinv=_inverse(stiffness),
                                           return_eigenvectors=vectors)
     values, eigenvectors = found if vectors else (found, None)
     order = np.argsort(values)
