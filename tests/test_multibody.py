@@ -204,14 +204,14 @@ def _finite_difference_check(block, rng):
     numeric = np.array([(block.value(x + step * e) - block.value(x - step * e)) / (2 * step)
                         for e in identity]).T
     assert np.abs(block.jacobian(x) - numeric).max() <= 1e-8
-    stiffness = np.tensordot(lam, block.hessians, 1)
+    stiffness = np.tensordot(lam, block.hessian(x), 1)
     numeric = np.array([(block.jacobian(x + step * e).T @ lam - block.jacobian(x - step * e).T
                          @ lam) / (2 * step) for e in identity]).T
     assert np.abs(stiffness - numeric).max() <= 1e-8
     velocity = rng.normal(size=x.size)
     numeric = (block.jacobian(x + step * velocity) @ velocity
                - block.jacobian(x - step * velocity) @ velocity) / (2 * step)
-    assert np.abs(block.curvature(velocity) - numeric).max() <= 1e-8
+    assert np.abs(block.curvature(x, velocity) - numeric).max() <= 1e-8
 
 
 def test_every_constraint_jacobian_matches_finite_differences():

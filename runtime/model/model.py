@@ -27,7 +27,7 @@ from runtime.element.element import Element
 from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
 from runtime.model.errors import SceneError
-from runtime.model.holonomic import HolonomicConstraints
+from runtime.model.holonomic import Driver, HolonomicConstraints
 from runtime.model.items.constraints import Built
 from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
@@ -148,10 +148,22 @@ class Model:
         for item in scene.rigid_bodies:
             self.rigid[item.name] = RigidCoordinates(item, coordinates)
             coordinates += item.coordinates
+        #: the driver coordinates of the rheonomic joints (``runtime.model.holonomic``:
+        #: prescribed, without mass) after the rigid items': (coordinate, Driver), and the
+        #: coordinates of each scene constraint's drivers
+        self.drivers: list[tuple[int, Driver]] = []
+        self._constraint_drivers: list[np.ndarray] = []
+        for constraint in scene.constraints:
+            own = constraint.drivers()
+            self._constraint_drivers.append(np.arange(coordinates, coordinates + len(own)))
+            self.drivers += [(coordinates + k, driver) for k, driver in enumerate(own)]
+            coordinates += len(own)
         self.size = coordinates
         self.reference = np.concatenate([b.reference for b in self.bodies.values()]
                                         + [r.item.initial_coordinates()
-                                           for r in self.rigid.values()])
+                                           for r in self.rigid.values()]
+                                        + [driver.sample(0.0)[0]
+                                           for _, driver in self.drivers])
         self._build_mass()
         self._build_constraints()
         self._build_maps()
@@ -237,6 +249,7 @@ class Model:
         for index, constraint in enumerate(self.scene.constraints):
             rows = len(built.rows)
             quadratic = sum(block.rows for block in built.blocks)
+            built.drivers = self._constraint_drivers[index]
             try:
                 constraint.apply(self, built)
             except SceneError as error:   # what only the model can check (gradients' span)
@@ -249,6 +262,7 @@ class Model:
         prescribed = np.zeros(self.size, bool)
         for node, _, _ in self.hubs:
             prescribed[self.node_dofs(node)] = True
+        prescribed[[coordinate for coordinate, _ in self.drivers]] = True
         fixed &= ~prescribed
         self.fixed = np.flatnonzero(fixed)
         self.prescribed = np.flatnonzero(prescribed)
@@ -371,12 +385,13 @@ class Model:
             assert np.array_equal(held, inside), "entries outside the Jacobian pattern"
         return np.where(held, found, np.where(inside, -2, -1))
 
-    def holonomic_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
+    def holonomic_stiffness(self, multipliers: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for
-        their multipliers (rows,) as data in ``pattern`` order (nnz,)."""
+        their multipliers (rows,) at the coordinates q (size,; the driver coordinates of
+        rheonomic rows scale their Hessians) as data in ``pattern`` order (nnz,)."""
         data = np.zeros(self.pattern.nnz)
         for slots, block in zip(self.holonomic_slots,
-                                self.holonomic.stiffness_blocks(multipliers), strict=True):
+                                self.holonomic.stiffness_blocks(multipliers, q), strict=True):
             keep = slots >= 0
             data += np.bincount(slots[keep], block[keep], self.pattern.nnz)
         return data

@@ -21,16 +21,28 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.model.errors import SceneError, show
-from runtime.model.holonomic import QuadraticBlock
+from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
-from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
+from runtime.model.schema import (
+    Context,
+    NodeRef,
+    Record,
+    key,
+    law_key,
+    node_key,
+    unit_axis,
+    vector,
+)
+from runtime.model.time_laws import Law
 
 __all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
+#: a prescribed joint motion starts at 0 to this (rad or m)
+MOTION_START = 1e-12
 
 
 def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -135,15 +147,94 @@ class BodySpherical(Constraint):
             built.rows.append(row)
 
 
+def _motion_key(what: str):
+    """A time law of prescribed joint motion (``what``: its unit), zero at t = 0: the
+    motion is measured from the joint's pose at t = 0."""
+    def parse(value: Any, path: str, context: Context) -> Law:
+        law = law_key(value, path, context)
+        start = law.value(0.0)
+        if abs(start) > MOTION_START:
+            raise SceneError(f"{path}: expected a law that is 0 at t = 0 ({what}, measured "
+                             f"from the joint's pose at t = 0), got {start:.6g} at t = 0")
+        return law
+    return parse
+
+
+def _direction_map(direction: np.ndarray) -> np.ndarray:
+    """The map (3, 12) from a body's natural coordinates to its vector ``direction``
+    (body coordinates): [0, d_1 I, d_2 I, d_3 I]."""
+    return natural_map(direction) - natural_map(np.zeros(3))
+
+
+def _bilinear(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """The Hessian (k1 + k2, k1 + k2) of (A y_1) . (B y_2) for the maps first = A (3, k1)
+    and second = B (3, k2) over y = [y_1, y_2]."""
+    n = first.shape[1]
+    coupling = first.T @ second
+    hessian = np.zeros((n + second.shape[1],) * 2)
+    hessian[:n, n:] = coupling
+    hessian[n:, :n] = coupling.T
+    return hessian
+
+
 @dataclass(frozen=True)
 class BodyRevolute(BodySpherical):
     """A spherical joint that also keeps the body's ``axis`` (body coordinates) aligned with
-    the other side's (module docstring): one relative rotation, about the axis."""
+    the other side's (module docstring): one relative rotation, about the axis.  With an
+    ``angle`` law theta(t) (rad) that rotation is prescribed (a rheonomic row, module
+    docstring)."""
 
     type: ClassVar[str] = "body_revolute"
     axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0))
+    angle: Law | None = key(_motion_key("an angle in rad"), None)
+
+    def drivers(self) -> tuple[Driver, ...]:
+        if self.angle is None:
+            return ()
+        return Driver(self.angle, "cos"), Driver(self.angle, "sin")
 
     def apply(self, model: ModelView, built: Built) -> None:
+        self._align(model, built)
+        if self.angle is not None:
+            self._drive(model, built)
+
+    def _drive(self, model: ModelView, built: Built) -> None:
+        """The row sin(theta) (e . e') - cos(theta) (e . f') = sin(theta - phi): e a body
+        vector normal to the axis, e' and f' = a x e' the other side's vectors that are e
+        and a x e at t = 0 (fixed on the ground, fixed combinations of the other body's
+        axes or of the node's gradients), phi the body's rotation about the axis relative
+        to the other side."""
+        body = model.rigid[self.body]
+        frame = body.item.frame
+        axis_world = frame @ np.asarray(self.axis)
+        reference = normals_of(axis_world)                # e' and f' at t = 0 (2, 3)
+        mine = _direction_map(frame.T @ reference[0])     # e = E y_body (3, 12)
+        if self.node is None and self.other is None:      # e' and f' fixed: linear terms
+            dofs = body.dofs
+            parts = [QuadraticBlock(f"{self.type} of {self.body}", dofs,
+                                    np.zeros((1, dofs.size, dofs.size)),
+                                    sign * (vector @ mine)[None, :], np.zeros(1))
+                     for sign, vector in ((1.0, reference[0]), (-1.0, reference[1]))]
+        else:
+            if self.other is not None:
+                other = model.rigid[self.other]
+                other_dofs = other.dofs
+                maps = [_direction_map(other.item.frame.T @ vector) for vector in reference]
+            else:
+                node = model.node_index(self.node)
+                found = [gradient_map(model, node, vector, f"{self.type}: the angle's "
+                                      "reference direction") for vector in reference]
+                other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
+            dofs = np.concatenate([body.dofs, other_dofs])
+            parts = [QuadraticBlock(f"{self.type} of {self.body}", dofs,
+                                    sign * _bilinear(mine, other_map)[None],
+                                    np.zeros((1, dofs.size)), np.zeros(1))
+                     for sign, other_map in ((1.0, maps[0]), (-1.0, maps[1]))]
+        cosine, sine = built.drivers
+        built.blocks.append(DrivenBlock(f"{self.type} of {self.body} (angle)",
+                                        (parts[0], parts[1]), (int(sine), int(cosine))))
+
+    def _align(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
         body = model.rigid[self.body]
         dofs = body.dofs
@@ -151,7 +242,7 @@ class BodyRevolute(BodySpherical):
         axis_world = frame @ np.asarray(self.axis)
         normals = normals_of(axis_world)
         # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
-        axis_map = natural_map(np.asarray(self.axis)) - natural_map(np.zeros(3))
+        axis_map = _direction_map(np.asarray(self.axis))
         if self.node is None and self.other is None:      # normals fixed: linear rows
             for normal in normals:
                 coefficients = normal @ axis_map
@@ -162,21 +253,16 @@ class BodyRevolute(BodySpherical):
             other = model.rigid[self.other]
             other_dofs = other.dofs
             local = other.item.frame.T @ normals.T          # (3, 2) body components
-            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            maps = [_direction_map(local[:, k]) for k in range(2)]
             first_map, first_dofs = axis_map, dofs
         else:                           # the node's axis a = G c, the body's normals
             first_dofs, first_map = gradient_map(model, model.node_index(self.node),
                                                  axis_world, f"{self.type}: the axis")
             local = frame.T @ normals.T
-            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            maps = [_direction_map(local[:, k]) for k in range(2)]
             other_dofs = dofs
         joined = np.concatenate([first_dofs, other_dofs])
-        n = first_dofs.size
-        hessians = np.zeros((2, joined.size, joined.size))
-        for k, normal_map in enumerate(maps):
-            coupling = first_map.T @ normal_map        # a . b = q_1^T (A^T B) q_2
-            hessians[k, :n, n:] = coupling
-            hessians[k, n:, :n] = coupling.T
+        hessians = np.array([_bilinear(first_map, normal_map) for normal_map in maps])
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
                                            np.zeros((2, joined.size)), np.zeros(2)))
 
@@ -199,6 +285,10 @@ class BodyPrismatic(Constraint):
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
+    displacement: Law | None = key(_motion_key("a displacement in m"), None)
+
+    def drivers(self) -> tuple[Driver, ...]:
+        return () if self.displacement is None else (Driver(self.displacement),)
 
     def targets(self) -> list[NodeRef]:
         return []
@@ -214,6 +304,15 @@ class BodyPrismatic(Constraint):
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
                                            np.zeros((2, dofs.size, dofs.size)), rows,
                                            -rows @ model.reference[dofs]))
+        if self.displacement is not None:   # a . (r_P - r_P0) - d(t) = 0
+            along = np.asarray(self.axis) @ point
+            zero = np.zeros((1, dofs.size, dofs.size))
+            owner = f"{self.type} of {self.body} (displacement)"
+            built.blocks.append(DrivenBlock(owner, (
+                QuadraticBlock(owner, dofs, zero, along[None, :],
+                               np.array([-along @ model.reference[dofs]])),
+                QuadraticBlock(owner, dofs, zero, np.zeros((1, dofs.size)), -np.ones(1))),
+                (-1, int(built.drivers[0]))))
         rigid = model.rigid[self.body]
         if rigid.dofs.size != 12:
             return
