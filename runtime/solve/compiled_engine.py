@@ -398,9 +398,12 @@ class CompiledEngine:
             block[:] = lu["factor"].solve(np.ascontiguousarray(block.T)).T
             return 0
 
-        m.lu_factor = ffi.callback("int(void)", lu_factor, error=-1)
-        m.lu_solve = ffi.callback("int(double *, long)", lu_solve, error=-1)
-        self._keep += [m.lu_factor, m.lu_solve]
+        # the callback objects themselves are kept alive (what the struct's fields read
+        # back is a bare pointer to them)
+        callbacks = [ffi.callback("int(void)", lu_factor, error=-1),
+                     ffi.callback("int(double *, long)", lu_solve, error=-1)]
+        m.lu_factor, m.lu_solve = callbacks
+        self._keep += callbacks
 
     def _group(self, target, group) -> None:
         element = group.element
