@@ -519,10 +519,10 @@ def exudyn_elastica(elements: int, load_steps: int = 20, newton: str = "full", *
 
 # --------------------------------------------------------------------------- slider-crank
 
-#: scenes/slider_crank.toml: a steel flywheel disc (radius 0.15 m, 50 mm thick) turning
-#: about z at 10 rad/s, crank pin on its rim at 60 degrees; a 10 mm x 10 mm aluminium rod
-#: of 0.5 m hinged at the pin; a 0.5 kg slider on the x axis hinged at the rod's end; no
-#: gravity, no motor; the rigid mechanism's velocities at t = 0
+#: scenes/slider_crank.toml: a steel flywheel disc (radius 0.15 m, 50 mm thick) driven
+#: about z at 10 rad/s, crank pin on its rim at 60 degrees at t = 0; a 10 mm x 10 mm
+#: aluminium rod of 0.5 m hinged at the pin; a 0.5 kg slider on the x axis hinged at the
+#: rod's end; no gravity; the rigid mechanism's velocities at t = 0
 SLIDER_CRANK = {"radius": 0.15, "thickness": 0.05, "density": 7800.0, "omega": 10.0,
                 "angle": math.pi / 3, "rod": 0.5, "side": 0.01, "E": 7.0e10, "rho": 2700.0,
                 "slider": 0.5}
@@ -547,11 +547,13 @@ def _slider_crank_kinematics() -> dict[str, Any]:
 
 def _slider_crank(elements: int) -> tuple[Any, Any, dict[str, int]]:
     """The slider-crank in Exudyn: ObjectRigidBody2D crank on a RevoluteJoint2D to the
-    ground, an ObjectANCFCable2D rod (EA, EI of the square section) hinged to the crank pin
-    and to a MassPoint2D slider held on the x axis by a coordinate constraint.  Returns
+    ground, driven by a coordinate constraint on its angle (offset omega t, a symbolic user
+    function), an ObjectANCFCable2D rod (EA, EI of the square section) hinged to the crank
+    pin and to a MassPoint2D slider held on the x axis by a coordinate constraint.  Returns
     (container, system, {"slider": node, "crank": node}), not assembled."""
     import exudyn as exu
     import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
     p, k = SLIDER_CRANK, _slider_crank_kinematics()
     container = exu.SystemContainer()
@@ -596,8 +598,22 @@ def _slider_crank(elements: int) -> tuple[Any, Any, dict[str, int]]:
     mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
         mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[-1])),
         mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=slider_node))], **hidden))
-    _hold(mbs, mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
-          slider_node, 1)
+    ground_coordinate = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node,
+                                                              coordinate=0))
+    _hold(mbs, ground_coordinate, slider_node, 1)
+    omega = p["omega"]
+
+    def drive(mbs, t, item, offset):       # the crank angle's displacement omega t
+        return omega * t
+
+    def drive_t(mbs, t, item, offset):
+        return exu.symbolic.Real(omega)
+
+    laws = {name: CreateSymbolicUserFunction(mbs, f, name,
+                                             itemTypeName="ObjectConnectorCoordinate")
+            for name, f in (("offsetUserFunction", drive), ("offsetUserFunction_t", drive_t))}
+    mbs.sys["peer_laws"] = list(laws.values())  # the expression trees live with the system
+    _hold(mbs, ground_coordinate, crank_node, 2, **laws)
     return container, mbs, {"slider": slider_node, "crank": crank_node}
 
 
