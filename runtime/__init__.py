@@ -30,6 +30,7 @@ from runtime.model.items.loads import (
     Pressure,
     PythonLoad,
     SpringDamper,
+    TorsionalSpring,
 )
 from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
@@ -76,6 +77,6 @@ __all__ = [
     "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
     "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
     "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
-    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
-    "Velocity", "Weld", "load_scene", "run_scene",
+    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TorsionalSpring",
+    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
 ]

@@ -68,6 +68,7 @@ from runtime import (
     Static,
     StrainEnergy,
     Table,
+    TorsionalSpring,
     TotalEnergy,
     Velocity,
     Weld,
@@ -249,7 +250,7 @@ def test_unknown_types_are_errors_listing_the_registry():
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
                        'point_force, point_moment, gravity, line_force, line_moment, pressure, '
                        'distributed_force, python, body_force, spring_damper, '
-                       'body_torque')
+                       'body_torque, torsional_spring')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -262,7 +263,7 @@ def test_registries_are_keyed_by_type():
                                  "body_prismatic", "body_weld"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
-                           "body_force", "spring_damper", "body_torque"]
+                           "body_force", "spring_damper", "body_torque", "torsional_spring"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
@@ -558,13 +559,19 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     on_node = PointMass("lump", _number(rng, 0.1, 5), node=NodeRef(chain[0].name, 0))
     joint = len(constraints)
     constraints.append(BodySpherical(body="crank", node=f"{end.name}:-1"))
-    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3)))
-    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3)))
+    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3),
+                                    angle=rng.choice([None, SpinUp(_number(rng, -9, 9),
+                                                                   _number(rng, 0.1, 2))])))
+    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3), displacement=rng.choice(
+        [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))])))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
     loads.append(SpringDamper(End(body="bob"), rng.choice([
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),
         End(body="wheel", point=_vector(rng, 3))]), _number(rng, 0, 1e4),
         _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
+    loads.append(TorsionalSpring(body="wheel", stiffness=_number(rng, 0, 100),
+                                 other=rng.choice([None, "crank"]), axis=_vector(rng, 3),
+                                 damping=_number(rng, 0, 10), angle=_number(rng, -1, 1)))
     sensors.append(rng.choice([BodyPosition, BodyVelocity])(
         f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
         rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))

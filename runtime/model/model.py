@@ -527,9 +527,9 @@ class Model:
         return float(total[0]) if q.ndim == 1 else total
 
     def spring_energy(self, q: np.ndarray, t=0.0):
-        """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers (times
-        their time law at t; the nominal value when t is None), at q (size,) or a block
-        (k, size) with times t (k,)."""
+        """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers and
+        k/2 (phi - phi_0)^2 in the torsional ones (times their time law at t; the nominal
+        value when t is None), at q (size,) or a block (k, size) with times t (k,)."""
         rows = np.atleast_2d(q)
         total = np.zeros(rows.shape[0])
         for load in self.scene.loads:
@@ -538,9 +538,7 @@ class Model:
             element = load.state_force(self)
             scale = 1.0 if t is None else load.time_law.sample(
                 np.broadcast_to(np.atleast_1d(np.asarray(t, float)), total.shape))[0]
-            stretch = np.array([np.linalg.norm(element.vector(x)) for x in rows]) \
-                - element.length
-            total += scale * 0.5 * element.stiffness * stretch**2
+            total += scale * np.array([element.energy(x) for x in rows])
         return float(total[0]) if q.ndim == 1 else total
 
     # --- frames and rigid motions --------------------------------------------------------

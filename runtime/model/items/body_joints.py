@@ -37,7 +37,7 @@ from runtime.model.schema import (
 )
 from runtime.model.time_laws import Law
 
-__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld"]
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld", "angle_forms"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
@@ -177,6 +177,43 @@ def _bilinear(first: np.ndarray, second: np.ndarray) -> np.ndarray:
     return hessian
 
 
+def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str | None,
+                node: NodeRef | None, owner: str) -> QuadraticBlock:
+    """The rotation phi of the rigid ``body`` about its ``axis`` (body coordinates)
+    relative to the other side since t = 0, as two quadratic rows [e . e', e . f'] =
+    [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
+    axis, e' and f' = a x e' the other side's vectors that are e and a x e at t = 0: fixed
+    on the ground (linear rows), fixed combinations of the ``other`` body's axes or of the
+    ``node``'s gradients (bilinear rows)."""
+    rigid = model.rigid[body]
+    frame = rigid.item.frame
+    reference = normals_of(frame @ np.asarray(axis))      # e' and f' at t = 0 (2, 3)
+    mine = _direction_map(frame.T @ reference[0])         # e = E y_body (3, 12)
+    if node is None and other is None:
+        dofs = rigid.dofs
+        return QuadraticBlock(owner, dofs, np.zeros((2, dofs.size, dofs.size)),
+                              reference @ mine, np.zeros(2))
+    if other is not None:
+        side = model.rigid[other]
+        other_dofs = side.dofs
+        maps = [_direction_map(side.item.frame.T @ vector) for vector in reference]
+    else:
+        index = model.node_index(node)
+        found = [gradient_map(model, index, vector, f"{owner}: the reference direction")
+                 for vector in reference]
+        other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
+    dofs = np.concatenate([rigid.dofs, other_dofs])
+    return QuadraticBlock(owner, dofs, np.array([_bilinear(mine, m) for m in maps]),
+                          np.zeros((2, dofs.size)), np.zeros(2))
+
+
+def _row(block: QuadraticBlock, row: int, sign: float) -> QuadraticBlock:
+    """Row ``row`` of ``block`` times ``sign``, as a block of its own."""
+    pick = slice(row, row + 1)
+    return QuadraticBlock(block.owner, block.dofs, sign * block.hessians[pick],
+                          sign * block.linear[pick], sign * block.constant[pick])
+
+
 @dataclass(frozen=True)
 class BodyRevolute(BodySpherical):
     """A spherical joint that also keeps the body's ``axis`` (body coordinates) aligned with
@@ -199,40 +236,14 @@ class BodyRevolute(BodySpherical):
             self._drive(model, built)
 
     def _drive(self, model: ModelView, built: Built) -> None:
-        """The row sin(theta) (e . e') - cos(theta) (e . f') = sin(theta - phi): e a body
-        vector normal to the axis, e' and f' = a x e' the other side's vectors that are e
-        and a x e at t = 0 (fixed on the ground, fixed combinations of the other body's
-        axes or of the node's gradients), phi the body's rotation about the axis relative
-        to the other side."""
-        body = model.rigid[self.body]
-        frame = body.item.frame
-        axis_world = frame @ np.asarray(self.axis)
-        reference = normals_of(axis_world)                # e' and f' at t = 0 (2, 3)
-        mine = _direction_map(frame.T @ reference[0])     # e = E y_body (3, 12)
-        if self.node is None and self.other is None:      # e' and f' fixed: linear terms
-            dofs = body.dofs
-            parts = [QuadraticBlock(f"{self.type} of {self.body}", dofs,
-                                    np.zeros((1, dofs.size, dofs.size)),
-                                    sign * (vector @ mine)[None, :], np.zeros(1))
-                     for sign, vector in ((1.0, reference[0]), (-1.0, reference[1]))]
-        else:
-            if self.other is not None:
-                other = model.rigid[self.other]
-                other_dofs = other.dofs
-                maps = [_direction_map(other.item.frame.T @ vector) for vector in reference]
-            else:
-                node = model.node_index(self.node)
-                found = [gradient_map(model, node, vector, f"{self.type}: the angle's "
-                                      "reference direction") for vector in reference]
-                other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
-            dofs = np.concatenate([body.dofs, other_dofs])
-            parts = [QuadraticBlock(f"{self.type} of {self.body}", dofs,
-                                    sign * _bilinear(mine, other_map)[None],
-                                    np.zeros((1, dofs.size)), np.zeros(1))
-                     for sign, other_map in ((1.0, maps[0]), (-1.0, maps[1]))]
+        """The row sin(theta) cos(phi) - cos(theta) sin(phi) = sin(theta - phi), with
+        cos(phi) and sin(phi) the bilinear forms of ``angle_forms``."""
+        forms = angle_forms(model, self.body, self.axis, self.other, self.node,
+                            f"{self.type} of {self.body} (angle)")
         cosine, sine = built.drivers
-        built.blocks.append(DrivenBlock(f"{self.type} of {self.body} (angle)",
-                                        (parts[0], parts[1]), (int(sine), int(cosine))))
+        built.blocks.append(DrivenBlock(forms.owner, (_row(forms, 0, 1.0),
+                                                      _row(forms, 1, -1.0)),
+                                        (int(sine), int(cosine))))
 
     def _align(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
