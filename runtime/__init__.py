@@ -10,6 +10,7 @@ from runtime.app.simulation import run_scene
 from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
+from runtime.model.items.axis_joints import BodyCylindrical, BodyUniversal
 from runtime.model.items.body_joints import (
     BodyPrismatic,
     BodyRevolute,
@@ -69,8 +70,9 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyPrismatic", "BodyReaction",
-    "BodyRevolute", "BodySpherical", "BodyTorque", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
+    "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition",
+    "BodyPrismatic", "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque",
+    "BodyUniversal", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
     "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
     "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",

@@ -18,6 +18,7 @@ import scenes
 from runtime import (
     Arc,
     Body,
+    BodyCylindrical,
     BodyForce,
     BodyPosition,
     BodyPrismatic,
@@ -25,6 +26,7 @@ from runtime import (
     BodyRevolute,
     BodySpherical,
     BodyTorque,
+    BodyUniversal,
     BodyVelocity,
     BodyWeld,
     Clamp,
@@ -260,7 +262,8 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld", "body_spherical", "body_revolute",
-                                 "body_prismatic", "body_weld"]
+                                 "body_prismatic", "body_weld", "body_cylindrical",
+                                 "body_universal"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
                            "body_force", "spring_damper", "body_torque", "torsional_spring"]
@@ -563,7 +566,12 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
                                     angle=rng.choice([None, SpinUp(_number(rng, -9, 9),
                                                                    _number(rng, 0.1, 2))])))
     constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3), displacement=rng.choice(
-        [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))])))
+        [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]),
+        other=rng.choice([None, "wheel"])))
+    constraints.append(BodyCylindrical(body="wheel", point=_vector(rng, 3),
+                                       axis=_vector(rng, 3), other=rng.choice([None, "crank"])))
+    constraints.append(BodyUniversal(body="wheel", point=_vector(rng, 3), axis=(0.0, 0.0, 1.0),
+                                     other_axis=rng.choice([(1.0, 0.0, 0.0), (0.6, 0.8, 0.0)])))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
     loads.append(SpringDamper(End(body="bob"), rng.choice([
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),

@@ -22,6 +22,7 @@ import numpy as np
 
 from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
+from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
@@ -288,7 +289,11 @@ class BodyPrismatic(Constraint):
     point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
     rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
     and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
-    the infinitesimal rotations about w0, u0 and v0)."""
+    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) the
+    axis and the line are fixed in that body (their place at t = 0) and the orientation is
+    kept relative to it: the same rows with the other body's directions (``dot_rows``:
+    bilinear).  With a ``displacement`` law d(t) (m), the travel along the axis from t = 0
+    is prescribed (a rheonomic row)."""
 
     type: ClassVar[str] = "body_prismatic"
     dims: ClassVar[tuple[int, ...]] = (3,)
@@ -297,6 +302,20 @@ class BodyPrismatic(Constraint):
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
     displacement: Law | None = key(_motion_key("a displacement in m"), None)
+    other: str | None = key(rigid_key, None)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        joint = super().parse(data, path, context)
+        if joint.other is not None:
+            if joint.other == joint.body:
+                raise SceneError(f"{path}.other: expected another body than "
+                                 f"{show(joint.body)}")
+            if not isinstance(context.rigid[joint.other], RigidBody):
+                raise SceneError(f"{path}.other: the slide's axis turns with a rigid body "
+                                 f"(type = \"rigid\"), got the point mass "
+                                 f"{show(joint.other)}")
+        return joint
 
     def drivers(self) -> tuple[Driver, ...]:
         return () if self.displacement is None else (Driver(self.displacement),)
@@ -309,14 +328,17 @@ class BodyPrismatic(Constraint):
         return "body"
 
     def apply(self, model: ModelView, built: Built) -> None:
-        dofs, point = model.rigid_point(self.body, self.point)
+        if self.other is not None:
+            self._between(model, built)
+            return
+        dofs, position = model.rigid_point(self.body, self.point)
         normals = normals_of(np.asarray(self.axis))
-        rows = normals @ point                                   # (2, k)
+        rows = normals @ position                                   # (2, k)
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
                                            np.zeros((2, dofs.size, dofs.size)), rows,
                                            -rows @ model.reference[dofs]))
         if self.displacement is not None:   # a . (r_P - r_P0) - d(t) = 0
-            along = np.asarray(self.axis) @ point
+            along = np.asarray(self.axis) @ position
             zero = np.zeros((1, dofs.size, dofs.size))
             owner = f"{self.type} of {self.body} (displacement)"
             built.blocks.append(DrivenBlock(owner, (
@@ -331,6 +353,29 @@ class BodyPrismatic(Constraint):
         for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
             built.rows.append({int(rigid.dofs[3 + 3 * a + c]): float(axes[b, c])
                                for c in range(3) if axes[b, c] != 0.0})
+
+    def _between(self, model: ModelView, built: Built) -> None:
+        """The slide on the ``other`` body (class docstring)."""
+        owner = f"{self.type} of {self.body} on {self.other}"
+        here = vectors.body_point(model, self.body, self.point)
+        slide = here - vectors.point(model, self.other, here.at(model.reference))
+        axis = np.asarray(self.axis)
+        pairs = [(slide, vectors.direction(model, self.other, n)) for n in normals_of(axis)]
+        rigid = model.rigid[self.body]
+        if rigid.dofs.size == 12:          # e_a . e_b0 = 0 with e_b0 fixed in the other
+            axes = rigid.item.frame.T
+            pairs += [(vectors.direction(model, self.body, axes[a]),
+                       vectors.direction(model, self.other, axes[b]))
+                      for a, b in ((0, 1), (1, 2), (2, 0))]
+        built.blocks.append(vectors.dot_rows(owner, pairs))
+        if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
+            along = vectors.dot_rows(f"{owner} (displacement)",
+                                     [(slide, vectors.direction(model, self.other, axis))])
+            k = along.dofs.size
+            unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
+                                  np.zeros((1, k)), -np.ones(1))
+            built.blocks.append(DrivenBlock(along.owner, (along, unit),
+                                            (-1, int(built.drivers[0]))))
 
 
 @dataclass(frozen=True)
