@@ -21,6 +21,7 @@ from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical
 from runtime.model.items.loads import (
     BodyForce,
     BodyTorque,
+    Bushing,
     DistributedForce,
     End,
     Gravity,
@@ -72,7 +73,7 @@ from runtime.model.time_laws import (
 __all__ = [
     "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition",
     "BodyPrismatic", "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque",
-    "BodyUniversal", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
+    "BodyUniversal", "BodyVelocity", "BodyWeld", "Bushing", "Clamp", "Constant",
     "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
     "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",

@@ -29,6 +29,7 @@ from runtime import (
     BodyUniversal,
     BodyVelocity,
     BodyWeld,
+    Bushing,
     Clamp,
     Constant,
     ConstantRate,
@@ -252,7 +253,7 @@ def test_unknown_types_are_errors_listing_the_registry():
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
                        'point_force, point_moment, gravity, line_force, line_moment, pressure, '
                        'distributed_force, python, body_force, spring_damper, '
-                       'body_torque, torsional_spring')
+                       'body_torque, torsional_spring, bushing')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -266,7 +267,8 @@ def test_registries_are_keyed_by_type():
                                  "body_universal"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
-                           "body_force", "spring_damper", "body_torque", "torsional_spring"]
+                           "body_force", "spring_damper", "body_torque", "torsional_spring",
+                           "bushing"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
@@ -577,6 +579,9 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),
         End(body="wheel", point=_vector(rng, 3))]), _number(rng, 0, 1e4),
         _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
+    loads.append(Bushing(body="crank", stiffness=tuple(_number(rng, 0, 1e3) for _ in range(6)),
+                         point=_vector(rng, 3), other=rng.choice([None, "wheel"]),
+                         damping=rng.choice([None, tuple(_number(rng, 0, 5) for _ in range(6))])))
     loads.append(TorsionalSpring(body="wheel", stiffness=_number(rng, 0, 100),
                                  other=rng.choice([None, "crank"]), axis=_vector(rng, 3),
                                  damping=_number(rng, 0, 10), angle=_number(rng, -1, 1)))

@@ -18,7 +18,8 @@ from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.base import ModelView
 from runtime.model.items.rigid import natural_map
 
-__all__ = ["Affine", "body_point", "direction", "dot_rows", "point"]
+__all__ = ["Affine", "body_point", "combined", "direction", "dot_rows", "frame_deflection",
+           "point"]
 
 
 @dataclass(frozen=True)
@@ -87,3 +88,32 @@ def dot_rows(owner: str, pairs: list[tuple[Affine, Affine]],
         constant = [c + extra for c, extra in zip(constant, constants, strict=True)]
     return QuadraticBlock(owner, dofs, np.array(hessians).reshape(len(pairs), k, k),
                           np.array(linear).reshape(len(pairs), k), np.array(constant))
+
+
+def combined(block: QuadraticBlock, matrix: np.ndarray) -> QuadraticBlock:
+    """The rows ``matrix @ phi`` (matrix (n, rows)) of ``block``'s rows phi."""
+    return QuadraticBlock(block.owner, block.dofs, np.tensordot(matrix, block.hessians, 1),
+                          matrix @ block.linear, matrix @ block.constant)
+
+
+def frame_deflection(model: ModelView, body: str, local: tuple[float, ...],
+                     other: str | None, owner: str) -> QuadraticBlock:
+    """Six rows: the displacement of the point ``local`` of the rigid ``body`` from the
+    other side's point that is there at t = 0 (in m, along the other side's directions
+    b_k that are the body's axes a_k at t = 0) and the small rotation of the body's axes
+    relative to them (rad, the axial vector of the skew part of [a_k . b_j]:
+    theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...); all 0 at t = 0, bilinear."""
+    here = body_point(model, body, local)
+    slide = here - point(model, other, here.at(model.reference))
+    axes = model.rigid[body].item.frame.T                 # a_k at t = 0 (rows)
+    mine = [direction(model, body, a) for a in axes]
+    theirs = [direction(model, other, a) for a in axes]
+    pairs = [(slide, b) for b in theirs]
+    for i, j in ((1, 2), (2, 0), (0, 1)):                 # a_i . b_j and a_j . b_i
+        pairs += [(mine[i], theirs[j]), (mine[j], theirs[i])]
+    rows = dot_rows(owner, pairs)
+    matrix = np.zeros((6, 9))
+    matrix[:3, :3] = np.eye(3)
+    for k in range(3):
+        matrix[3 + k, 3 + 2 * k], matrix[3 + k, 4 + 2 * k] = 0.5, -0.5
+    return combined(rows, matrix)

@@ -23,6 +23,13 @@ phi = atan2(S, C), with the exact gradient and Hessian
 
 its moment m = k (phi - phi_0) + c phi' (phi' = phi_x . x') gives Q = -m phi_x, with
 dQ/dx = -phi_x (k phi_x + c phi_xx x')^T - m phi_xx and dQ/dx' = -c phi_x phi_x^T.
+
+The linear bushing (``BushingForce``) acts on six quadratic forms delta(x) of the
+coordinates (relative displacements and small rotations of two frames), with the energy
+delta^T K delta / 2 and the damping C: with J = delta_x, H_i the Hessians and the
+generalised stress m = K delta + C J x',
+
+    Q = -J^T m,   dQ/dx = -J^T K J - sum_i m_i H_i - J^T C [H_i x']_i,   dQ/dx' = -J^T C J.
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.follower import Patches
 from runtime.model.items.python_loads import MotionPatches
 
-__all__ = ["BodyTorqueForce", "SpringDamperForce", "TorsionalSpringForce"]
+__all__ = ["BodyTorqueForce", "BushingForce", "SpringDamperForce", "TorsionalSpringForce"]
 
 
 class SpringDamperForce:
@@ -127,6 +134,45 @@ class TorsionalSpringForce:
         d_q = (-np.outer(grad, self.stiffness * grad + self.damping * (hessian @ rate_vector))
                - moment * hessian)
         d_v = -self.damping * np.outer(grad, grad)
+        return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
+
+
+class BushingForce:
+    """The state force of a linear bushing (module docstring) on the six rows of ``forms``
+    (a ``QuadraticBlock``: displacements in m, small rotations in rad), ``stiffness`` K
+    and ``damping`` C (6, 6; N/m, N/rad, N m/m, N m/rad and their rates).  Reads
+    velocities (``reads_velocity``)."""
+
+    reads_velocity = True
+
+    def __init__(self, forms: QuadraticBlock, stiffness: np.ndarray,
+                 damping: np.ndarray) -> None:
+        self.forms = forms
+        self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
+        self.stiffness, self.damping = np.asarray(stiffness), np.asarray(damping)
+
+    def deflection(self, q: np.ndarray) -> np.ndarray:
+        """delta (6,) at the coordinates q (size,)."""
+        return self.forms.value(q[self.dofs[0]])
+
+    def energy(self, q: np.ndarray) -> float:
+        """The energy delta^T K delta / 2 (J) in its springs at q (size,)."""
+        delta = self.deflection(q)
+        return 0.5 * float(delta @ self.stiffness @ delta)
+
+    def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
+                 t: float = 0.0) -> MotionPatches:
+        x = q[self.dofs[0]]
+        rate_vector = np.zeros_like(x) if v is None else v[self.dofs[0]]
+        slope = self.forms.jacobian(x)                              # J (6, k)
+        stress = self.stiffness @ self.forms.value(x) + self.damping @ (slope @ rate_vector)
+        force = -slope.T @ stress
+        if not jacobian:
+            return MotionPatches(self.dofs, force[None], None, None)
+        hessians = self.forms.hessians
+        d_q = (-slope.T @ self.stiffness @ slope - np.tensordot(stress, hessians, 1)
+               - slope.T @ self.damping @ (hessians @ rate_vector))
+        d_v = -slope.T @ self.damping @ slope
         return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
 
 
