@@ -11,6 +11,12 @@ body coordinates, its direction at t = 0 shared by the other side) on one side, 
 vectors b_1, b_2 normal to it at t = 0 on the other: on the ground (constants: linear rows),
 on another body (bilinear: quadratic rows), or on a node, whose axis is a fixed combination
 of its gradient vectors (``G c = a`` at the reference; bilinear rows with the body's normals).
+
+A revolute joint's ``angle`` law theta(t) adds the rheonomic row sin(theta - phi) = 0 on the
+body's rotation phi about the axis relative to the other side (``angle_forms``), a
+prismatic joint's ``displacement`` law d(t) the row a . (r_P - r_Q) - d(t) = 0; their time
+coefficients are driver coordinates of the model (``runtime.model.holonomic.DrivenBlock``).
+The prismatic joint slides on the ground or, with ``other``, on another rigid body.
 """
 
 from __future__ import annotations
