@@ -486,8 +486,8 @@ def _bushing_matrix_key(value: Any, path: str, context: Context) -> tuple[tuple[
         raise SceneError(f"{path}: expected a symmetric matrix, got {show(value)}")
     lowest = float(np.linalg.eigvalsh(matrix)[0])
     if lowest < -1e-12 * float(np.abs(matrix).max(initial=0.0)):
-        raise SceneError(f"{path}: expected a positive semi-definite matrix (its energy "
-                         f"delta^T K delta / 2 >= 0), got an eigenvalue {lowest:.6g}")
+        raise SceneError(f"{path}: expected a positive semi-definite matrix, got an "
+                         f"eigenvalue {lowest:.6g}")
     return tuple(tuple(float(x) for x in row) for row in matrix)
 
 
