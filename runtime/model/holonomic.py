@@ -21,10 +21,11 @@ law) are *driver coordinates* of the model: prescribed coordinates without mass,
 values, rates and accelerations at every step, as a hub's.  Over the full coordinates
 x = [y, f] the rows are then scleronomic, so the machinery of the quadratic rows holds them
 exactly: ``Phi_t = Phi_f f'`` is the driver columns of the Jacobian times the driver rates,
-and the acceleration constraint ``Phi_q a + x'^T Phi_xx x' = Phi_q a + Phi_tt + 2 Phi_qt v
-+ v^T Phi_qq v`` (``curvature``, ``Phi_f f''`` in ``Phi_x a``) comes out of the full
-second derivative, which is constant in y and linear in f (the driver coordinates are never
-free, so the Newton matrices see ``sum_k f_k H_ik``).
+and the acceleration constraint ``Phi_x x'' + x'^T Phi_xx x' = Phi_q a + v^T Phi_qq v
++ 2 Phi_qt v + Phi_tt`` (the Jacobian over all coordinates times the accelerations, which
+holds ``Phi_f f''``, plus ``curvature``) comes out of the full second derivative, which is
+constant in y and linear in f (the driver coordinates are never free, so the Newton
+matrices see ``sum_k f_k H_ik``).
 ``HolonomicConstraints`` assembles the blocks of a model over its coordinates.
 """
 
