@@ -10,6 +10,7 @@ from runtime.app.simulation import run_scene
 from runtime.element.element import Element
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.errors import SceneError
+from runtime.model.items.axis_joints import BodyCylindrical, BodyUniversal
 from runtime.model.items.body_joints import (
     BodyPrismatic,
     BodyRevolute,
@@ -20,6 +21,7 @@ from runtime.model.items.constraints import Clamp, Hub, Pin, Revolute, Spherical
 from runtime.model.items.loads import (
     BodyForce,
     BodyTorque,
+    Bushing,
     DistributedForce,
     End,
     Gravity,
@@ -30,6 +32,7 @@ from runtime.model.items.loads import (
     Pressure,
     PythonLoad,
     SpringDamper,
+    TorsionalSpring,
 )
 from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
@@ -68,14 +71,15 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyForce", "BodyPosition", "BodyPrismatic", "BodyReaction",
-    "BodyRevolute", "BodySpherical", "BodyTorque", "BodyVelocity", "BodyWeld", "Clamp", "Constant",
+    "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition",
+    "BodyPrismatic", "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque",
+    "BodyUniversal", "BodyVelocity", "BodyWeld", "Bushing", "Clamp", "Constant",
     "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
     "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",
     "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
     "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
     "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
-    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TotalEnergy",
-    "Velocity", "Weld", "load_scene", "run_scene",
+    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TorsionalSpring",
+    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
 ]

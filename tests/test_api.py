@@ -18,6 +18,7 @@ import scenes
 from runtime import (
     Arc,
     Body,
+    BodyCylindrical,
     BodyForce,
     BodyPosition,
     BodyPrismatic,
@@ -25,8 +26,10 @@ from runtime import (
     BodyRevolute,
     BodySpherical,
     BodyTorque,
+    BodyUniversal,
     BodyVelocity,
     BodyWeld,
+    Bushing,
     Clamp,
     Constant,
     ConstantRate,
@@ -68,6 +71,7 @@ from runtime import (
     Static,
     StrainEnergy,
     Table,
+    TorsionalSpring,
     TotalEnergy,
     Velocity,
     Weld,
@@ -249,7 +253,7 @@ def test_unknown_types_are_errors_listing_the_registry():
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
                        'point_force, point_moment, gravity, line_force, line_moment, pressure, '
                        'distributed_force, python, body_force, spring_damper, '
-                       'body_torque')
+                       'body_torque, torsional_spring, bushing')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -259,10 +263,12 @@ def test_registries_are_keyed_by_type():
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
                                  "revolute", "weld", "body_spherical", "body_revolute",
-                                 "body_prismatic", "body_weld"]
+                                 "body_prismatic", "body_weld", "body_cylindrical",
+                                 "body_universal"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "pressure", "distributed_force", "python",
-                           "body_force", "spring_damper", "body_torque"]
+                           "body_force", "spring_damper", "body_torque", "torsional_spring",
+                           "bushing"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
@@ -557,13 +563,27 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     on_node = PointMass("lump", _number(rng, 0.1, 5), node=NodeRef(chain[0].name, 0))
     joint = len(constraints)
     constraints.append(BodySpherical(body="crank", node=f"{end.name}:-1"))
-    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3)))
-    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3)))
+    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3),
+                                    angle=rng.choice([None, SpinUp(_number(rng, -9, 9),
+                                                                   _number(rng, 0.1, 2))])))
+    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3), displacement=rng.choice(
+        [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]),
+        other=rng.choice([None, "wheel"])))
+    constraints.append(BodyCylindrical(body="wheel", point=_vector(rng, 3),
+                                       axis=_vector(rng, 3), other=rng.choice([None, "crank"])))
+    constraints.append(BodyUniversal(body="wheel", point=_vector(rng, 3), axis=(0.0, 0.0, 1.0),
+                                     other_axis=rng.choice([(1.0, 0.0, 0.0), (0.6, 0.8, 0.0)])))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
     loads.append(SpringDamper(End(body="bob"), rng.choice([
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),
         End(body="wheel", point=_vector(rng, 3))]), _number(rng, 0, 1e4),
         _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
+    loads.append(Bushing(body="crank", stiffness=tuple(_number(rng, 0, 1e3) for _ in range(6)),
+                         point=_vector(rng, 3), other=rng.choice([None, "wheel"]),
+                         damping=rng.choice([None, tuple(_number(rng, 0, 5) for _ in range(6))])))
+    loads.append(TorsionalSpring(body="wheel", stiffness=_number(rng, 0, 100),
+                                 other=rng.choice([None, "crank"]), axis=_vector(rng, 3),
+                                 damping=_number(rng, 0, 10), angle=_number(rng, -1, 1)))
     sensors.append(rng.choice([BodyPosition, BodyVelocity])(
         f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
         rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))

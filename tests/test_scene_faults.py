@@ -131,6 +131,9 @@ C = {"body+": {"name": "c", "element": "beam3d", "material": "steel", "elements"
 DYN = "analysis.dynamic"
 LAW = "load.0.time_law"
 
+# a rigid body after BASE's two beams
+RIGID = ('[[body]]\ntype = "rigid"\nname = "bar"\nmass = 1.0\ninertia = [1, 1, 1]\n'
+         'position = [5, 0, 0]\n')
 # a plate body after BASE's two beams (body[2])
 PLATE = """
 [[body]]
@@ -429,6 +432,32 @@ CASES = [
     ("quadrature as a number", {"body.0.quadrature": 5},
      "body[0].quadrature: expected a list of 3 positive integers"),
     ("material as a number", {"material.steel": 5}, "material.steel: expected a table, got 5"),
+    # multibody: prescribed joint motion, joints and force elements of rigid bodies
+    ("driven angle not 0 at t = 0", RIGID + '[[constraint]]\ntype = "body_revolute"\n'
+     'body = "bar"\nangle = {type = "constant", value = 0.5}\n',
+     "constraint[1].angle: expected a law that is 0 at t = 0"),
+    ("driven displacement as a number", RIGID + '[[constraint]]\ntype = "body_prismatic"\n'
+     'body = "bar"\ndisplacement = 0.1\n', "constraint[1].displacement: expected a table"),
+    ("prismatic joint on its own body", RIGID + '[[constraint]]\ntype = "body_prismatic"\n'
+     'body = "bar"\nother = "bar"\n', "constraint[1].other: expected another body"),
+    ("cylindrical joint of a meshed body", RIGID + '[[constraint]]\n'
+     'type = "body_cylindrical"\nbody = "beam"\n',
+     "constraint[1].body: expected the name of a rigid body"),
+    ("universal joint's axes not normal", RIGID + '[[constraint]]\ntype = "body_universal"\n'
+     'body = "bar"\nother_axis = [0, 0.6, 0.8]\n',
+     "constraint[1].other_axis: expected an axis normal to the body's axis"),
+    ("torsional spring of negative stiffness", RIGID + '[[load]]\n'
+     'type = "torsional_spring"\nbody = "bar"\nstiffness = -1.0\n',
+     "load[1].stiffness: expected a number >= 0"),
+    ("torsional spring to a node and a body", RIGID + '[[load]]\n'
+     'type = "torsional_spring"\nbody = "bar"\nstiffness = 1.0\nnode = "beam:-1"\n'
+     'other = "bar"\n', "load[1].other: expected a node or another body"),
+    ("bushing of five entries", RIGID + '[[load]]\ntype = "bushing"\nbody = "bar"\n'
+     'stiffness = [1, 2, 3, 4, 5]\n',
+     "load[1].stiffness: expected six diagonal entries or a 6 x 6 matrix"),
+    ("bushing damping not positive", RIGID + '[[load]]\ntype = "bushing"\nbody = "bar"\n'
+     'stiffness = [1, 1, 1, 1, 1, 1]\ndamping = [1, 1, 1, 1, 1, -1]\n',
+     "load[1].damping: expected a positive semi-definite matrix"),
 ]
 def _apply(data: dict, changes: dict) -> None:
     for key, value in changes.items():

@@ -162,7 +162,7 @@ class DAESystem:
         constraints at q_full, v_full and the accelerations a_full (size,)."""
         return np.concatenate([self.model.joints @ a_full,
                                self.holonomic.jacobian(q_full) @ a_full
-                               + self.holonomic.curvature(v_full)])
+                               + self.holonomic.curvature(q_full, v_full)])
 
     def constraint_forces(self, q_full: np.ndarray, multipliers: np.ndarray) -> np.ndarray:
         """A_f^T lambda_joints + Phi_q,f(q)^T lambda_rows (nf,) for the multipliers
@@ -173,10 +173,10 @@ class DAESystem:
             force += self.joints_free.T @ multipliers[:nj]
         return force
 
-    def geometric_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
-        """(Phi_q^T lambda)_q (pattern nnz,) of the quadratic rows' multipliers (taken from
-        the constraint_rows multipliers)."""
-        return self.model.holonomic_stiffness(multipliers[self.joints:])
+    def geometric_stiffness(self, multipliers: np.ndarray, q_full: np.ndarray) -> np.ndarray:
+        """(Phi_q^T lambda)_q (pattern nnz,) at q_full of the quadratic rows' multipliers
+        (taken from the constraint_rows multipliers)."""
+        return self.model.holonomic_stiffness(multipliers[self.joints:], q_full)
 
     def full_accelerations(self, a_free: np.ndarray, a_prescribed: np.ndarray) -> np.ndarray:
         """a_full (size,): fixed coordinates at rest."""
@@ -202,6 +202,9 @@ class DAESystem:
                 q[:, cols] = rot @ ref
                 v[:, cols] = rate[:, None] * (d_rot @ ref)
                 a[:, cols] = acc[:, None] * (d_rot @ ref) + rate[:, None] ** 2 * (dd_rot @ ref)
+        for coordinate, driver in self.model.drivers:    # rheonomic rows' coefficients
+            column = self._prescribed_position[coordinate]
+            q[:, column], v[:, column], a[:, column] = driver.sample(times)
         return q, v, a
 
     def load_factors(self, times: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ from runtime.element.element import Element
 from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
 from runtime.model.errors import SceneError
-from runtime.model.holonomic import HolonomicConstraints
+from runtime.model.holonomic import Driver, HolonomicConstraints
 from runtime.model.items.constraints import Built
 from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
@@ -166,10 +166,22 @@ class Model:
         for item in scene.rigid_bodies:
             self.rigid[item.name] = RigidCoordinates(item, coordinates)
             coordinates += item.coordinates
+        #: the driver coordinates of the rheonomic joints (``runtime.model.holonomic``:
+        #: prescribed, without mass) after the rigid items': (coordinate, Driver), and the
+        #: coordinates of each scene constraint's drivers
+        self.drivers: list[tuple[int, Driver]] = []
+        self._constraint_drivers: list[np.ndarray] = []
+        for constraint in scene.constraints:
+            own = constraint.drivers()
+            self._constraint_drivers.append(np.arange(coordinates, coordinates + len(own)))
+            self.drivers += [(coordinates + k, driver) for k, driver in enumerate(own)]
+            coordinates += len(own)
         self.size = coordinates
         self.reference = np.concatenate([b.reference for b in self.bodies.values()]
                                         + [r.item.initial_coordinates()
-                                           for r in self.rigid.values()])
+                                           for r in self.rigid.values()]
+                                        + [driver.sample(0.0)[0]
+                                           for _, driver in self.drivers])
         self._build_mass()
         self._build_constraints()
         self._build_maps()
@@ -255,6 +267,7 @@ class Model:
         for index, constraint in enumerate(self.scene.constraints):
             rows = len(built.rows)
             quadratic = sum(block.rows for block in built.blocks)
+            built.drivers = self._constraint_drivers[index]
             try:
                 constraint.apply(self, built)
             except SceneError as error:   # what only the model can check (gradients' span)
@@ -267,6 +280,7 @@ class Model:
         prescribed = np.zeros(self.size, bool)
         for node, _, _ in self.hubs:
             prescribed[self.node_dofs(node)] = True
+        prescribed[[coordinate for coordinate, _ in self.drivers]] = True
         fixed &= ~prescribed
         self.fixed = np.flatnonzero(fixed)
         self.prescribed = np.flatnonzero(prescribed)
@@ -389,12 +403,13 @@ class Model:
             assert np.array_equal(held, inside), "entries outside the Jacobian pattern"
         return np.where(held, found, np.where(inside, -2, -1))
 
-    def holonomic_stiffness(self, multipliers: np.ndarray) -> np.ndarray:
+    def holonomic_stiffness(self, multipliers: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for
-        their multipliers (rows,) as data in ``pattern`` order (nnz,)."""
+        their multipliers (rows,) at the coordinates q (size,; the driver coordinates of
+        rheonomic rows scale their Hessians) as data in ``pattern`` order (nnz,)."""
         data = np.zeros(self.pattern.nnz)
         for slots, block in zip(self.holonomic_slots,
-                                self.holonomic.stiffness_blocks(multipliers), strict=True):
+                                self.holonomic.stiffness_blocks(multipliers, q), strict=True):
             keep = slots >= 0
             data += np.bincount(slots[keep], block[keep], self.pattern.nnz)
         return data
@@ -530,9 +545,9 @@ class Model:
         return float(total[0]) if q.ndim == 1 else total
 
     def spring_energy(self, q: np.ndarray, t=0.0):
-        """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers (times
-        their time law at t; the nominal value when t is None), at q (size,) or a block
-        (k, size) with times t (k,)."""
+        """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers and
+        k/2 (phi - phi_0)^2 in the torsional ones (times their time law at t; the nominal
+        value when t is None), at q (size,) or a block (k, size) with times t (k,)."""
         rows = np.atleast_2d(q)
         total = np.zeros(rows.shape[0])
         for load in self.scene.loads:
@@ -541,9 +556,7 @@ class Model:
             element = load.state_force(self)
             scale = 1.0 if t is None else load.time_law.sample(
                 np.broadcast_to(np.atleast_1d(np.asarray(t, float)), total.shape))[0]
-            stretch = np.array([np.linalg.norm(element.vector(x)) for x in rows]) \
-                - element.length
-            total += scale * 0.5 * element.stiffness * stretch**2
+            total += scale * np.array([element.energy(x) for x in rows])
         return float(total[0]) if q.ndim == 1 else total
 
     # --- frames and rigid motions --------------------------------------------------------

@@ -313,35 +313,41 @@ class CompiledEngine:
 
     def _holonomic(self, m) -> None:
         """Bind the quadratic constraint rows as data for the step's ``quadratic_rows``
-        (per row its coordinates, linear parts, Hessian entries, constant; the header says
-        the layout) and the trapezoidal projection onto them, a Python callback
-        (``ManifoldProjection``, the Python engine's)."""
+        (per term its row, its factor, coordinates, linear parts, Hessian entries, constant;
+        the header says the layout) and the trapezoidal projection onto them, a Python
+        callback (``ManifoldProjection``, the Python engine's)."""
         dae, model = self.dae, self.dae.model
         h, offset = dae.holonomic, dae.joints_free.nnz
         free = np.zeros(dae.size, bool)
         free[dae.free] = True
         a_list, g_list, af_list, b_list, h_list, slot_list = [], [], [], [], [], []
-        aptr, hptr, row = [0], [0], 0
+        row_list, factor_list, c_list = [], [], []
+        aptr, hptr, first = [0], [0], 0
         for block, slots in zip(h.blocks, model.holonomic_slots, strict=True):
             rank = np.cumsum(free[block.dofs]) - 1       # place among the free columns
-            for r in range(block.rows):
-                for j, a in enumerate(block.dofs):
-                    a_list.append(a)
-                    g_list.append(block.linear[r, j])
-                    af_list.append(offset + h.free_indptr[row] + rank[j] if free[a] else -1)
-                    nonzero = np.flatnonzero(block.hessians[r, j])
-                    b_list.extend(block.dofs[nonzero])
-                    h_list.extend(block.hessians[r, j, nonzero])
-                    slot_list.extend(slots[j, nonzero])
-                    hptr.append(len(b_list))
-                aptr.append(len(a_list))
-                row += 1
-        m.nrows_h = h.rows
+            for part, factor in block.terms:       # a term's dofs lead the block's
+                for r in range(part.rows):
+                    for j, a in enumerate(part.dofs):
+                        a_list.append(a)
+                        g_list.append(part.linear[r, j])
+                        af_list.append(offset + h.free_indptr[first + r] + rank[j]
+                                       if free[a] else -1)
+                        nonzero = np.flatnonzero(part.hessians[r, j])
+                        b_list.extend(part.dofs[nonzero])
+                        h_list.extend(part.hessians[r, j, nonzero])
+                        slot_list.extend(slots[j, nonzero])
+                        hptr.append(len(b_list))
+                    aptr.append(len(a_list))
+                    row_list.append(first + r)
+                    factor_list.append(factor)
+                    c_list.append(part.constant[r])
+            first += block.rows
+        m.nrows_h, m.nterms_h = h.rows, len(row_list)
         for name, values in (("h_aptr", aptr), ("h_a", a_list), ("h_af", af_list),
-                             ("h_hptr", hptr), ("h_b", b_list), ("h_slot", slot_list)):
+                             ("h_hptr", hptr), ("h_b", b_list), ("h_slot", slot_list),
+                             ("h_row", row_list), ("h_factor", factor_list)):
             setattr(m, name, self._buffer(np.array(values, np.int64), "long"))
-        for name, values in (("h_g", g_list), ("h_h", h_list),
-                             ("h_c", np.concatenate([b.constant for b in h.blocks]))):
+        for name, values in (("h_g", g_list), ("h_h", h_list), ("h_c", c_list)):
             setattr(m, name, self._buffer(np.array(values, float)))
         m.holonomic_value = self._work(h.rows)
         m.a_full = self._work(dae.size)
@@ -425,9 +431,12 @@ class CompiledEngine:
             block[:] = lu["factor"].solve(np.ascontiguousarray(block.T)).T
             return 0
 
-        m.lu_factor = ffi.callback("int(void)", lu_factor, error=-1)
-        m.lu_solve = ffi.callback("int(double *, long)", lu_solve, error=-1)
-        self._keep += [m.lu_factor, m.lu_solve]
+        # the callback objects themselves are kept alive (what the struct's fields read
+        # back is a bare pointer to them)
+        callbacks = [ffi.callback("int(void)", lu_factor, error=-1),
+                     ffi.callback("int(double *, long)", lu_solve, error=-1)]
+        m.lu_factor, m.lu_solve = callbacks
+        self._keep += callbacks
 
     def _group(self, target, group) -> None:
         element = group.element

@@ -387,7 +387,8 @@ class Integrator:
                 values += damping_coef * data_dot
             rows = self.dae.joints_free
             if self.dae.nonlinear:
-                values = values - jacobian_coef * self.dae.geometric_stiffness(multipliers)
+                values = values - jacobian_coef * self.dae.geometric_stiffness(multipliers,
+                                                                             q_full)
                 rows = self.dae.constraint_matrix(q_full)
             start = time.perf_counter()
             try:

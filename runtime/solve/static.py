@@ -174,7 +174,7 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
         if holonomic:     # quadratic rows: Phi_q at q, their geometric stiffness in J
             rows = scipy.sparse.vstack([joints, holonomic.jacobian_free(q)], format="csr")
             violation = np.concatenate([violation, holonomic.value(q)])
-            data = data - model.holonomic_stiffness(multipliers[nj:])
+            data = data - model.holonomic_stiffness(multipliers[nj:], q)
         residual = force[free] + applied - rows.T @ multipliers
         if not np.all(np.isfinite(residual)):
             raise ConvergenceError("static: non-finite residual")

@@ -149,19 +149,20 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
             cases.append(Case(table, f"Exudyn ANCFCable2D {newton}", _exudyn(
                 peers.exudyn_rotating_beam, elements=10, t_end=t_rotating, step=1e-3,
                 newton=newton, integrator="generalized_alpha", rho_inf=0.8)))
-    return cases + _slider_crank_cases(quick, with_peer)
+    return cases + _slider_crank_cases(quick, with_peer) + _four_bar_cases(quick, with_peer)
 
 
-def _cable_rod(scene: Scene) -> Scene:
-    """The slider-crank with a cable3d rod (the peer's element kind, in 3D) hinged at the
-    crank pin by a spherical joint (a cable node has no frame for the revolute's axis; the
+def _cable_rod(scene: Scene, name: str = "rod") -> Scene:
+    """The mechanism with its flexible body ``name`` (the slider-crank's rod, the four-bar's
+    coupler) of cable3d elements (the peer's element kind, in 3D), hinged to the rigid
+    bodies by spherical joints (a cable node has no frame for the revolute's axis; the
     planar motion needs none)."""
     def pin(joint):
         if isinstance(joint, BodyRevolute) and joint.node is not None:
             return BodySpherical(body=joint.body, point=joint.point, node=joint.node)
         return joint
     return dataclasses.replace(
-        scene, bodies=tuple(dataclasses.replace(b, element="cable3d") if b.name == "rod"
+        scene, bodies=tuple(dataclasses.replace(b, element="cable3d") if b.name == name
                             else b for b in scene.bodies),
         constraints=tuple(pin(joint) for joint in scene.constraints))
 
@@ -188,6 +189,32 @@ def _slider_crank_cases(quick: bool, with_peer: bool) -> list[Case]:
     if with_peer:
         cases += [Case(table, f"Exudyn RigidBody2D + ANCFCable2D {newton}", _exudyn(
             peers.exudyn_slider_crank, elements=8, t_end=t_end, step=settings.step,
+            newton=newton, integrator=settings.integrator, rho_inf=settings.rho_inf))
+            for newton in peers.NEWTON]
+    return cases
+
+
+def _four_bar_cases(quick: bool, with_peer: bool) -> list[Case]:
+    """The shipped four-bar (rigid crank driven by a prescribed angle, 8 beam3d coupler,
+    rigid rocker), the same with a cable3d coupler, and Exudyn's (RigidBody2D crank and
+    rocker, ANCFCable2D coupler)."""
+    t_end = 0.05 if quick else 1.5
+    scene = _scene("four_bar", t_end=t_end)
+    scene = dataclasses.replace(scene, sensors=tuple(s for s in scene.sensors
+                                                     if s.name == "rocker_tip_y"))
+    settings = scene.dynamic
+    table = (f"four-bar, driven rigid crank, 8-element coupler, rigid rocker, {t_end:g} s, "
+             f"generalized-alpha rho_inf = {settings.rho_inf:g}, h = {settings.step:g}")
+    cases = [Case(table, f"compiled {newton} gram", _ours(scene, "compiled", newton,
+                                                          tip="rocker_tip_y"))
+             for newton in NEWTON_MODES]
+    cables = _cable_rod(scene, "coupler")
+    cases += [Case(table, f"compiled {newton} gram, cable3d coupler",
+                   _ours(cables, "compiled", newton, tip="rocker_tip_y"))
+              for newton in NEWTON_MODES]
+    if with_peer:
+        cases += [Case(table, f"Exudyn RigidBody2D + ANCFCable2D {newton}", _exudyn(
+            peers.exudyn_four_bar, elements=8, t_end=t_end, step=settings.step,
             newton=newton, integrator=settings.integrator, rho_inf=settings.rho_inf))
             for newton in peers.NEWTON]
     return cases

@@ -337,16 +337,12 @@ def _positions(mbs: Any, node: int, sensor: int) -> tuple[np.ndarray, np.ndarray
 
 # --------------------------------------------------------------------------- rotating beam
 
-def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
-    """The paper rotating beam as Exudyn ANCFCable2D elements; the first node stays at the
-    origin and its slope is driven to (cos a, sin a) by the spin-up law a(t) of eq. 45.
-    Returns (container, system, nodes), not assembled."""
+def _spin_up(w: float, T: float) -> tuple[Any, Any]:
+    """The spin-up law of eq. 45 (to ``w`` rad/s in ``T`` s) and its rate as functions of
+    Exudyn's symbolic time."""
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
-    p = ROTATING_BEAM
-    esym, w, T = exu.symbolic, p["omega"], p["t_ramp"]
-    c = T / (2.0 * math.pi)
+    esym, c = exu.symbolic, T / (2.0 * math.pi)
 
     def angle(t):
         ramp = (w / T) * (0.5 * t * t - 2.0 * c * c * esym.sin(t * (math.pi / T)) ** 2)
@@ -355,6 +351,20 @@ def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
     def rate(t):
         ramp = (w / T) * (t - c * esym.sin(t * (2.0 * math.pi / T)))
         return esym.IfThenElse(t <= T, ramp, esym.Real(w))
+
+    return angle, rate
+
+
+def _rotating_beam(elements: int) -> tuple[Any, Any, list]:
+    """The paper rotating beam as Exudyn ANCFCable2D elements; the first node stays at the
+    origin and its slope is driven to (cos a, sin a) by the spin-up law a(t) of eq. 45.
+    Returns (container, system, nodes), not assembled."""
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    p = ROTATING_BEAM
+    esym = exu.symbolic
+    angle, rate = _spin_up(p["omega"], p["t_ramp"])
 
     # offsets of the slope displacements (reference slope (1, 0)) and their time derivatives;
     # Exudyn records each law once with symbolic arguments (mbs, t, item, offset)
@@ -519,10 +529,10 @@ def exudyn_elastica(elements: int, load_steps: int = 20, newton: str = "full", *
 
 # --------------------------------------------------------------------------- slider-crank
 
-#: scenes/slider_crank.toml: a steel flywheel disc (radius 0.15 m, 50 mm thick) turning
-#: about z at 10 rad/s, crank pin on its rim at 60 degrees; a 10 mm x 10 mm aluminium rod
-#: of 0.5 m hinged at the pin; a 0.5 kg slider on the x axis hinged at the rod's end; no
-#: gravity, no motor; the rigid mechanism's velocities at t = 0
+#: scenes/slider_crank.toml: a steel flywheel disc (radius 0.15 m, 50 mm thick) driven
+#: about z at 10 rad/s, crank pin on its rim at 60 degrees at t = 0; a 10 mm x 10 mm
+#: aluminium rod of 0.5 m hinged at the pin; a 0.5 kg slider on the x axis hinged at the
+#: rod's end; no gravity; the rigid mechanism's velocities at t = 0
 SLIDER_CRANK = {"radius": 0.15, "thickness": 0.05, "density": 7800.0, "omega": 10.0,
                 "angle": math.pi / 3, "rod": 0.5, "side": 0.01, "E": 7.0e10, "rho": 2700.0,
                 "slider": 0.5}
@@ -547,11 +557,13 @@ def _slider_crank_kinematics() -> dict[str, Any]:
 
 def _slider_crank(elements: int) -> tuple[Any, Any, dict[str, int]]:
     """The slider-crank in Exudyn: ObjectRigidBody2D crank on a RevoluteJoint2D to the
-    ground, an ObjectANCFCable2D rod (EA, EI of the square section) hinged to the crank pin
-    and to a MassPoint2D slider held on the x axis by a coordinate constraint.  Returns
+    ground, driven by a coordinate constraint on its angle (offset omega t, a symbolic user
+    function), an ObjectANCFCable2D rod (EA, EI of the square section) hinged to the crank
+    pin and to a MassPoint2D slider held on the x axis by a coordinate constraint.  Returns
     (container, system, {"slider": node, "crank": node}), not assembled."""
     import exudyn as exu
     import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
     p, k = SLIDER_CRANK, _slider_crank_kinematics()
     container = exu.SystemContainer()
@@ -596,8 +608,22 @@ def _slider_crank(elements: int) -> tuple[Any, Any, dict[str, int]]:
     mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
         mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[-1])),
         mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=slider_node))], **hidden))
-    _hold(mbs, mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
-          slider_node, 1)
+    ground_coordinate = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node,
+                                                              coordinate=0))
+    _hold(mbs, ground_coordinate, slider_node, 1)
+    omega = p["omega"]
+
+    def drive(mbs, t, item, offset):       # the crank angle's displacement omega t
+        return omega * t
+
+    def drive_t(mbs, t, item, offset):
+        return exu.symbolic.Real(omega)
+
+    laws = {name: CreateSymbolicUserFunction(mbs, f, name,
+                                             itemTypeName="ObjectConnectorCoordinate")
+            for name, f in (("offsetUserFunction", drive), ("offsetUserFunction_t", drive_t))}
+    mbs.sys["peer_laws"] = list(laws.values())  # the expression trees live with the system
+    _hold(mbs, ground_coordinate, crank_node, 2, **laws)
     return container, mbs, {"slider": slider_node, "crank": crank_node}
 
 
@@ -629,3 +655,120 @@ def exudyn_slider_crank(elements: int = 8, t_end: float = 0.7, step: float = 2.5
                    solver.it.newtonStepsCount, solver.it.newtonJacobiCount, float(x),
                    _note(f"RigidBody2D crank, {PEER_ELEMENT} x {elements} rod, MassPoint2D "
                          "slider", newton, integrator, rho_inf, step), history)
+
+
+# --------------------------------------------------------------------------- four-bar
+
+#: scenes/four_bar.toml: ground pivots 0.45 m apart, a steel crank bar of 0.15 m (20 mm
+#: square) spun up about z from rest to 2 pi rad/s in 0.5 s, pointing along +y at t = 0; a
+#: 0.5 m aluminium coupler of 8 mm square section; a steel rocker bar of 0.35 m (20 mm
+#: square); no gravity
+FOUR_BAR = {"crank": 0.15, "coupler": 0.5, "rocker": 0.35, "ground": 0.45, "bar": 0.02,
+            "density": 7800.0, "side": 0.008, "E": 7.0e10, "rho": 2700.0,
+            "omega": 2.0 * math.pi, "t_ramp": 0.5}
+
+
+def four_bar_tip() -> np.ndarray:
+    """The coupler's end C (2,) at t = 0 (m): the linkage's closure with the crank along +y,
+    on the branch above the line from the crank pin to the rocker's pivot."""
+    p = FOUR_BAR
+    pin, pivot = np.array([0.0, p["crank"]]), np.array([p["ground"], 0.0])
+    span = pivot - pin
+    distance = float(np.linalg.norm(span))
+    along = (p["coupler"] ** 2 - p["rocker"] ** 2 + distance**2) / (2 * distance)
+    unit = span / distance
+    return pin + along * unit + math.sqrt(p["coupler"] ** 2 - along**2) * np.array(
+        [-unit[1], unit[0]])
+
+
+def _four_bar(elements: int) -> tuple[Any, Any, dict[str, int]]:
+    """The four-bar in Exudyn: ObjectRigidBody2D crank and rocker (nodes at their centres
+    of mass) on RevoluteJoint2D pivots, the crank driven by a coordinate constraint on its
+    angle (the symbolic spin-up law), an ObjectANCFCable2D coupler hinged to both by
+    RevoluteJoint2D.  Returns (container, system, {"crank": node, "rocker": node}), not
+    assembled."""
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    p = FOUR_BAR
+    container = exu.SystemContainer()
+    mbs = container.AddSystem()
+    ground_node = mbs.AddNode(ei.NodePointGround())
+    ground = mbs.AddObject(ei.ObjectGround())
+    hidden = {"visualization": ei.VRevoluteJoint2D(show=False)}
+    tip = four_bar_tip()
+    bodies = {}
+    for name, pivot, angle in (("crank", np.zeros(2), math.pi / 2),
+                               ("rocker", np.array([p["ground"], 0.0]),
+                                math.atan2(tip[1], tip[0] - p["ground"]))):
+        length, bar = p[name], p["bar"]
+        mass = p["density"] * length * bar * bar
+        centre = pivot + 0.5 * length * np.array([math.cos(angle), math.sin(angle)])
+        node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[*centre, angle]))
+        body = mbs.AddObject(ei.ObjectRigidBody2D(
+            nodeNumber=node, mass=mass, inertia=mass * (length**2 + bar**2) / 12,
+            visualization=ei.VObjectRigidBody2D(show=False)))
+        mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
+            mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=ground,
+                                                localPosition=[*pivot, 0.0])),
+            mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=body,
+                                                localPosition=[-0.5 * length, 0.0, 0.0]))],
+            **hidden))
+        bodies[name] = (node, body)
+    area, side = p["side"] ** 2, p["side"]
+    pin = np.array([0.0, p["crank"]])
+    direction = (tip - pin) / p["coupler"]
+    h = p["coupler"] / elements
+    nodes = [mbs.AddNode(ei.NodePoint2DSlope1(
+        referenceCoordinates=[*(pin + i * h * direction), *direction],
+        visualization=ei.VNodePoint2DSlope1(show=False))) for i in range(elements + 1)]
+    for a, b in zip(nodes, nodes[1:], strict=False):
+        mbs.AddObject(ei.ObjectANCFCable2D(
+            nodeNumbers=[a, b], length=h, massPerLength=p["rho"] * area,
+            bendingStiffness=p["E"] * side**4 / 12, axialStiffness=p["E"] * area,
+            visualization=ei.VObjectANCFCable2D(show=False)))
+    for name, node in (("crank", nodes[0]), ("rocker", nodes[-1])):
+        mbs.AddObject(ei.RevoluteJoint2D(markerNumbers=[
+            mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=bodies[name][1],
+                                                localPosition=[0.5 * p[name], 0.0, 0.0])),
+            mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=node))], **hidden))
+    angle, rate = _spin_up(p["omega"], p["t_ramp"])
+    laws = {name: CreateSymbolicUserFunction(mbs, f, name,
+                                             itemTypeName="ObjectConnectorCoordinate")
+            for name, f in (("offsetUserFunction", lambda mbs, t, item, offset: angle(t)),
+                            ("offsetUserFunction_t", lambda mbs, t, item, offset: rate(t)))}
+    mbs.sys["peer_laws"] = list(laws.values())  # the expression trees live with the system
+    _hold(mbs, mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
+          bodies["crank"][0], 2, **laws)
+    return container, mbs, {name: node for name, (node, _) in bodies.items()}
+
+
+def exudyn_four_bar(elements: int = 8, t_end: float = 1.5, step: float = 5e-4,
+                    newton: str = "modified", integrator: str = "generalized_alpha",
+                    rho_inf: float = 0.9, every: float | None = None) -> PeerRun:
+    """The four-bar of scenes/four_bar.toml in Exudyn (``_four_bar``), from rest;
+    ``tip_displacement`` is the final y of the rocker's tip (m), and with ``every`` (s)
+    ``history`` the rocker's angle (rad) as a time series."""
+    import exudyn as exu
+
+    _check(newton, integrator)
+    with _quiet():
+        start = time.perf_counter()
+        container, mbs, nodes = _four_bar(elements)
+        sensor = _record(mbs, [nodes["rocker"]])[0]
+        mbs.Assemble()
+        build_s = time.perf_counter() - start
+        simulate_s, solver = _solve(mbs, FOUR_BAR["coupler"], t_end, step, newton,
+                                    integrator, rho_inf, every)
+        history = None
+        if every is not None:
+            t, coordinates = _positions(mbs, nodes["rocker"], sensor)
+            history = (t, coordinates[:, 2])
+        angle = (mbs.GetNodeOutput(nodes["rocker"], exu.OutputVariableType.Coordinates)[2]
+                 + mbs.GetNodeParameter(nodes["rocker"], "referenceCoordinates")[2])
+    return PeerRun(simulate_s, build_s, solver.it.currentStepIndex - 1,
+                   solver.it.newtonStepsCount, solver.it.newtonJacobiCount,
+                   FOUR_BAR["rocker"] * math.sin(angle),
+                   _note(f"RigidBody2D crank and rocker, {PEER_ELEMENT} x {elements} coupler",
+                         newton, integrator, rho_inf, step), history)

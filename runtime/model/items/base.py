@@ -82,4 +82,5 @@ class ModelView(Protocol):
         """Potential energy (J) of the gravity loads at ``q`` and time ``t``."""
 
     def spring_energy(self, q: np.ndarray, t: float | None = 0.0) -> float:
-        """Energy (J) stored in the springs of the spring-dampers at ``q`` and time ``t``."""
+        """Energy (J) stored in the springs of the force elements (spring-dampers, torsional
+        springs, bushings) at ``q`` and time ``t``."""

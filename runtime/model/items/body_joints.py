@@ -11,6 +11,12 @@ body coordinates, its direction at t = 0 shared by the other side) on one side, 
 vectors b_1, b_2 normal to it at t = 0 on the other: on the ground (constants: linear rows),
 on another body (bilinear: quadratic rows), or on a node, whose axis is a fixed combination
 of its gradient vectors (``G c = a`` at the reference; bilinear rows with the body's normals).
+
+A revolute joint's ``angle`` law theta(t) adds the rheonomic row sin(theta - phi) = 0 on the
+body's rotation phi about the axis relative to the other side (``angle_forms``), a
+prismatic joint's ``displacement`` law d(t) the row a . (r_P - r_Q) - d(t) = 0; their time
+coefficients are driver coordinates of the model (``runtime.model.holonomic.DrivenBlock``).
+The prismatic joint slides on the ground or, with ``other``, on another rigid body.
 """
 
 from __future__ import annotations
@@ -21,16 +27,29 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.model.errors import SceneError, show
-from runtime.model.holonomic import QuadraticBlock
+from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
+from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
 from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
-from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
+from runtime.model.schema import (
+    Context,
+    NodeRef,
+    Record,
+    key,
+    law_key,
+    node_key,
+    unit_axis,
+    vector,
+)
+from runtime.model.time_laws import Law
 
-__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld"]
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld", "angle_forms"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
+#: a prescribed joint motion starts at 0 to this (rad or m)
+MOTION_START = 1e-12
 
 
 def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -135,15 +154,105 @@ class BodySpherical(Constraint):
             built.rows.append(row)
 
 
+def _motion_key(what: str):
+    """A time law of prescribed joint motion (``what``: its unit), zero at t = 0: the
+    motion is measured from the joint's pose at t = 0."""
+    def parse(value: Any, path: str, context: Context) -> Law:
+        law = law_key(value, path, context)
+        start = law.value(0.0)
+        if abs(start) > MOTION_START:
+            raise SceneError(f"{path}: expected a law that is 0 at t = 0 ({what}, measured "
+                             f"from the joint's pose at t = 0), got {start:.6g} at t = 0")
+        return law
+    return parse
+
+
+def _direction_map(direction: np.ndarray) -> np.ndarray:
+    """The map (3, 12) from a body's natural coordinates to its vector ``direction``
+    (body coordinates): [0, d_1 I, d_2 I, d_3 I]."""
+    return natural_map(direction) - natural_map(np.zeros(3))
+
+
+def _bilinear(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """The Hessian (k1 + k2, k1 + k2) of (A y_1) . (B y_2) for the maps first = A (3, k1)
+    and second = B (3, k2) over y = [y_1, y_2]."""
+    n = first.shape[1]
+    coupling = first.T @ second
+    hessian = np.zeros((n + second.shape[1],) * 2)
+    hessian[:n, n:] = coupling
+    hessian[n:, :n] = coupling.T
+    return hessian
+
+
+def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str | None,
+                node: NodeRef | None, owner: str) -> QuadraticBlock:
+    """The rotation phi of the rigid ``body`` about its ``axis`` (body coordinates)
+    relative to the other side since t = 0, as two quadratic rows [e . e', e . f'] =
+    [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
+    axis, e' and f' = a x e' the other side's vectors that are e and a x e at t = 0: fixed
+    on the ground (linear rows), fixed combinations of the ``other`` body's axes or of the
+    ``node``'s gradients (bilinear rows)."""
+    rigid = model.rigid[body]
+    frame = rigid.item.frame
+    reference = normals_of(frame @ np.asarray(axis))      # e' and f' at t = 0 (2, 3)
+    mine = _direction_map(frame.T @ reference[0])         # e = E y_body (3, 12)
+    if node is None and other is None:
+        dofs = rigid.dofs
+        return QuadraticBlock(owner, dofs, np.zeros((2, dofs.size, dofs.size)),
+                              reference @ mine, np.zeros(2))
+    if other is not None:
+        side = model.rigid[other]
+        other_dofs = side.dofs
+        maps = [_direction_map(side.item.frame.T @ vector) for vector in reference]
+    else:
+        index = model.node_index(node)
+        found = [gradient_map(model, index, vector, f"{owner}: the reference direction")
+                 for vector in reference]
+        other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
+    dofs = np.concatenate([rigid.dofs, other_dofs])
+    return QuadraticBlock(owner, dofs, np.array([_bilinear(mine, m) for m in maps]),
+                          np.zeros((2, dofs.size)), np.zeros(2))
+
+
+def _row(block: QuadraticBlock, row: int, sign: float) -> QuadraticBlock:
+    """Row ``row`` of ``block`` times ``sign``, as a block of its own."""
+    pick = slice(row, row + 1)
+    return QuadraticBlock(block.owner, block.dofs, sign * block.hessians[pick],
+                          sign * block.linear[pick], sign * block.constant[pick])
+
+
 @dataclass(frozen=True)
 class BodyRevolute(BodySpherical):
     """A spherical joint that also keeps the body's ``axis`` (body coordinates) aligned with
-    the other side's (module docstring): one relative rotation, about the axis."""
+    the other side's (module docstring): one relative rotation, about the axis.  With an
+    ``angle`` law theta(t) (rad) that rotation is prescribed (a rheonomic row, module
+    docstring)."""
 
     type: ClassVar[str] = "body_revolute"
     axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0))
+    angle: Law | None = key(_motion_key("an angle in rad"), None)
+
+    def drivers(self) -> tuple[Driver, ...]:
+        if self.angle is None:
+            return ()
+        return Driver(self.angle, "cos"), Driver(self.angle, "sin")
 
     def apply(self, model: ModelView, built: Built) -> None:
+        self._align(model, built)
+        if self.angle is not None:
+            self._drive(model, built)
+
+    def _drive(self, model: ModelView, built: Built) -> None:
+        """The row sin(theta) cos(phi) - cos(theta) sin(phi) = sin(theta - phi), with
+        cos(phi) and sin(phi) the bilinear forms of ``angle_forms``."""
+        forms = angle_forms(model, self.body, self.axis, self.other, self.node,
+                            f"{self.type} of {self.body} (angle)")
+        cosine, sine = built.drivers
+        built.blocks.append(DrivenBlock(forms.owner, (_row(forms, 0, 1.0),
+                                                      _row(forms, 1, -1.0)),
+                                        (int(sine), int(cosine))))
+
+    def _align(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
         body = model.rigid[self.body]
         dofs = body.dofs
@@ -151,7 +260,7 @@ class BodyRevolute(BodySpherical):
         axis_world = frame @ np.asarray(self.axis)
         normals = normals_of(axis_world)
         # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
-        axis_map = natural_map(np.asarray(self.axis)) - natural_map(np.zeros(3))
+        axis_map = _direction_map(np.asarray(self.axis))
         if self.node is None and self.other is None:      # normals fixed: linear rows
             for normal in normals:
                 coefficients = normal @ axis_map
@@ -162,21 +271,16 @@ class BodyRevolute(BodySpherical):
             other = model.rigid[self.other]
             other_dofs = other.dofs
             local = other.item.frame.T @ normals.T          # (3, 2) body components
-            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            maps = [_direction_map(local[:, k]) for k in range(2)]
             first_map, first_dofs = axis_map, dofs
         else:                           # the node's axis a = G c, the body's normals
             first_dofs, first_map = gradient_map(model, model.node_index(self.node),
                                                  axis_world, f"{self.type}: the axis")
             local = frame.T @ normals.T
-            maps = [natural_map(local[:, k]) - natural_map(np.zeros(3)) for k in range(2)]
+            maps = [_direction_map(local[:, k]) for k in range(2)]
             other_dofs = dofs
         joined = np.concatenate([first_dofs, other_dofs])
-        n = first_dofs.size
-        hessians = np.zeros((2, joined.size, joined.size))
-        for k, normal_map in enumerate(maps):
-            coupling = first_map.T @ normal_map        # a . b = q_1^T (A^T B) q_2
-            hessians[k, :n, n:] = coupling
-            hessians[k, n:, :n] = coupling.T
+        hessians = np.array([_bilinear(first_map, normal_map) for normal_map in maps])
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
                                            np.zeros((2, joined.size)), np.zeros(2)))
 
@@ -191,7 +295,11 @@ class BodyPrismatic(Constraint):
     point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
     rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
     and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
-    the infinitesimal rotations about w0, u0 and v0)."""
+    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) the
+    axis and the line are fixed in that body (their place at t = 0) and the orientation is
+    kept relative to it: the same rows with the other body's directions (``dot_rows``:
+    bilinear).  With a ``displacement`` law d(t) (m), the travel along the axis from t = 0
+    is prescribed (a rheonomic row)."""
 
     type: ClassVar[str] = "body_prismatic"
     dims: ClassVar[tuple[int, ...]] = (3,)
@@ -199,6 +307,24 @@ class BodyPrismatic(Constraint):
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
+    displacement: Law | None = key(_motion_key("a displacement in m"), None)
+    other: str | None = key(rigid_key, None)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        joint = super().parse(data, path, context)
+        if joint.other is not None:
+            if joint.other == joint.body:
+                raise SceneError(f"{path}.other: expected another body than "
+                                 f"{show(joint.body)}")
+            if not isinstance(context.rigid[joint.other], RigidBody):
+                raise SceneError(f"{path}.other: the slide's axis turns with a rigid body "
+                                 f"(type = \"rigid\"), got the point mass "
+                                 f"{show(joint.other)}")
+        return joint
+
+    def drivers(self) -> tuple[Driver, ...]:
+        return () if self.displacement is None else (Driver(self.displacement),)
 
     def targets(self) -> list[NodeRef]:
         return []
@@ -208,12 +334,24 @@ class BodyPrismatic(Constraint):
         return "body"
 
     def apply(self, model: ModelView, built: Built) -> None:
-        dofs, point = model.rigid_point(self.body, self.point)
+        if self.other is not None:
+            self._between(model, built)
+            return
+        dofs, position = model.rigid_point(self.body, self.point)
         normals = normals_of(np.asarray(self.axis))
-        rows = normals @ point                                   # (2, k)
+        rows = normals @ position                                   # (2, k)
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
                                            np.zeros((2, dofs.size, dofs.size)), rows,
                                            -rows @ model.reference[dofs]))
+        if self.displacement is not None:   # a . (r_P - r_P0) - d(t) = 0
+            along = np.asarray(self.axis) @ position
+            zero = np.zeros((1, dofs.size, dofs.size))
+            owner = f"{self.type} of {self.body} (displacement)"
+            built.blocks.append(DrivenBlock(owner, (
+                QuadraticBlock(owner, dofs, zero, along[None, :],
+                               np.array([-along @ model.reference[dofs]])),
+                QuadraticBlock(owner, dofs, zero, np.zeros((1, dofs.size)), -np.ones(1))),
+                (-1, int(built.drivers[0]))))
         rigid = model.rigid[self.body]
         if rigid.dofs.size != 12:
             return
@@ -221,6 +359,29 @@ class BodyPrismatic(Constraint):
         for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
             built.rows.append({int(rigid.dofs[3 + 3 * a + c]): float(axes[b, c])
                                for c in range(3) if axes[b, c] != 0.0})
+
+    def _between(self, model: ModelView, built: Built) -> None:
+        """The slide on the ``other`` body (class docstring)."""
+        owner = f"{self.type} of {self.body} on {self.other}"
+        here = vectors.body_point(model, self.body, self.point)
+        slide = here - vectors.point(model, self.other, here.at(model.reference))
+        axis = np.asarray(self.axis)
+        pairs = [(slide, vectors.direction(model, self.other, n)) for n in normals_of(axis)]
+        rigid = model.rigid[self.body]
+        if rigid.dofs.size == 12:          # e_a . e_b0 = 0 with e_b0 fixed in the other
+            axes = rigid.item.frame.T
+            pairs += [(vectors.direction(model, self.body, axes[a]),
+                       vectors.direction(model, self.other, axes[b]))
+                      for a, b in ((0, 1), (1, 2), (2, 0))]
+        built.blocks.append(vectors.dot_rows(owner, pairs))
+        if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
+            along = vectors.dot_rows(f"{owner} (displacement)",
+                                     [(slide, vectors.direction(model, self.other, axis))])
+            k = along.dofs.size
+            unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
+                                  np.zeros((1, k)), -np.ones(1))
+            built.blocks.append(DrivenBlock(along.owner, (along, unit),
+                                            (-1, int(built.drivers[0]))))
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,11 @@
 """The registry of every ``[[constraint]]`` type, ``CONSTRAINTS``: the node constraints and
 joints between ANCF nodes (``runtime.model.items.constraints``) and the joints of rigid
-bodies, which build on them (``runtime.model.items.body_joints``).  A new constraint class
-is one entry here."""
+bodies, which build on them (``runtime.model.items.body_joints``, ``axis_joints``).  A new
+constraint class is one entry here."""
 
 from __future__ import annotations
 
+from runtime.model.items.axis_joints import BodyCylindrical, BodyUniversal
 from runtime.model.items.body_joints import BodyPrismatic, BodyRevolute, BodySpherical, BodyWeld
 from runtime.model.items.constraints import (
     Clamp,
@@ -19,4 +20,4 @@ from runtime.model.schema import registry
 
 CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
                                                     BodySpherical, BodyRevolute, BodyPrismatic,
-                                                    BodyWeld)
+                                                    BodyWeld, BodyCylindrical, BodyUniversal)

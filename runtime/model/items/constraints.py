@@ -18,7 +18,7 @@ import numpy as np
 
 from runtime.kernels.kind import is_first_gradient
 from runtime.model.errors import SceneError, show
-from runtime.model.holonomic import QuadraticBlock
+from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items.base import ModelView
 from runtime.model.schema import (
     Context,
@@ -48,18 +48,26 @@ class Built:
     fixed: (size,) bool, coordinates held at their initial values; hubs: (node, angle law,
     axis (3,)) of the nodes that follow a prescribed rigid rotation; rows: joint rows
     ``sum(coefficient * q[index]) = 0`` as {index: coefficient}; blocks: quadratic
-    constraint rows ``Phi(q) = 0`` (``runtime.model.holonomic``: rigid bodies, 3D joints).
+    constraint rows ``Phi(q) = 0`` (``runtime.model.holonomic``: rigid bodies, 3D joints)
+    and rheonomic ones (prescribed joint motion).
     """
 
     fixed: np.ndarray
     hubs: list[tuple[int, Law, np.ndarray]] = field(default_factory=list)
     rows: list[dict[int, float]] = field(default_factory=list)
-    blocks: list[QuadraticBlock] = field(default_factory=list)
+    blocks: list[QuadraticBlock | DrivenBlock] = field(default_factory=list)
+    #: the driver coordinates of the constraint being applied (its ``drivers()``, in order)
+    drivers: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 @dataclass(frozen=True)
 class Constraint(Record):
     """Base of the constraints."""
+
+    def drivers(self) -> tuple[Driver, ...]:
+        """The time coefficients of its rheonomic rows (``runtime.model.holonomic``): the
+        model gives each a prescribed coordinate (``Built.drivers`` in ``apply``)."""
+        return ()
 
     def apply(self, model: ModelView, built: Built) -> None:
         """Record the effect of this constraint on ``model``'s coordinates in ``built``."""

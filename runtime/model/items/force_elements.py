@@ -1,4 +1,5 @@
-"""Force elements: the linear point-to-point spring-damper, and a torque on a rigid body.
+"""Force elements: the linear point-to-point spring-damper, the torsional spring-damper of a
+revolute joint, and a torque on a rigid body.
 
 The points are nodes of meshed bodies, points of rigid bodies (or point masses), or a fixed
 anchor; each position is linear in its coordinates, so with x = q[dofs] (k,) the vector
@@ -10,16 +11,38 @@ n = d / L and the rate L' = n . D x', the force along the element is
     dQ/dx' = -c D^T n n^T D
 
 (``SpringDamperForce``; both engines evaluate it as a state load, ``runtime.model.dae``).
+
+The torsional spring-damper (``TorsionalSpringForce``) acts on the relative rotation phi of
+a joint about its axis, given by two quadratic forms [C, S] = sqrt(rho) [cos phi, sin phi] of its
+coordinates (``runtime.model.items.body_joints.angle_forms``; rho = C^2 + S^2):
+phi = atan2(S, C), with the exact gradient and Hessian
+
+    phi_x  = (C S_x - S C_x) / rho,
+    phi_xx = (S_x C_x^T - C_x S_x^T + C S_xx - S C_xx) / rho
+             - phi_x (2 C C_x + 2 S S_x)^T / rho;
+
+its moment m = k (phi - phi_0) + c phi' (phi' = phi_x . x') gives Q = -m phi_x, with
+dQ/dx = -phi_x (k phi_x + c phi_xx x')^T - m phi_xx and dQ/dx' = -c phi_x phi_x^T.
+
+The linear bushing (``BushingForce``) acts on six quadratic forms delta(x) of the
+coordinates (relative displacements and small rotations of two frames), with the energy
+delta^T K delta / 2 and the damping C: with J = delta_x, H_i the Hessians and the
+generalised stress m = K delta + C J x',
+
+    Q = -J^T m,   dQ/dx = -J^T K J - sum_i m_i H_i - J^T C [H_i x']_i,   dQ/dx' = -J^T C J.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.follower import Patches
 from runtime.model.items.python_loads import MotionPatches
 
-__all__ = ["BodyTorqueForce", "SpringDamperForce"]
+__all__ = ["BodyTorqueForce", "BushingForce", "SpringDamperForce", "TorsionalSpringForce"]
 
 
 class SpringDamperForce:
@@ -39,6 +62,10 @@ class SpringDamperForce:
     def vector(self, q: np.ndarray) -> np.ndarray:
         """d (3,) at the coordinates q (size,)."""
         return self.difference @ q[self.dofs[0]] + self.offset
+
+    def energy(self, q: np.ndarray) -> float:
+        """The energy k (L - L0)^2 / 2 (J) in its spring at q (size,)."""
+        return 0.5 * self.stiffness * (float(np.linalg.norm(self.vector(q))) - self.length) ** 2
 
     def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
                  t: float = 0.0) -> MotionPatches:
@@ -60,6 +87,92 @@ class SpringDamperForce:
                  + self.damping * np.outer(n, rate_vector - n * rate) / length + f * across)
         d_q = -D.T @ inner @ D
         d_v = -self.damping * D.T @ np.outer(n, n) @ D
+        return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
+
+
+class TorsionalSpringForce:
+    """The state force of a torsional spring-damper of ``stiffness`` k (N m/rad),
+    ``damping`` c (N m s/rad) and free angle ``angle`` phi_0 (rad) on the relative rotation
+    phi of a joint, given by its ``forms`` (a ``QuadraticBlock`` of the two rows [C, S] =
+    sqrt(rho) [cos phi, sin phi] on its coordinates; module docstring); phi - phi_0 in
+    (-pi, pi].  Reads velocities (``reads_velocity``)."""
+
+    reads_velocity = True
+
+    def __init__(self, forms: QuadraticBlock, stiffness: float, damping: float,
+                 angle: float) -> None:
+        self.forms = forms
+        self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
+        self.stiffness, self.damping, self.angle = stiffness, damping, angle
+
+    def deflection(self, q: np.ndarray) -> float:
+        """phi - phi_0 (rad) in (-pi, pi] at the coordinates q (size,)."""
+        c, s = self.forms.value(q[self.dofs[0]])
+        ca, sa = math.cos(self.angle), math.sin(self.angle)
+        return math.atan2(s * ca - c * sa, c * ca + s * sa)
+
+    def energy(self, q: np.ndarray) -> float:
+        """The energy k (phi - phi_0)^2 / 2 (J) in its spring at q (size,)."""
+        return 0.5 * self.stiffness * self.deflection(q) ** 2
+
+    def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
+                 t: float = 0.0) -> MotionPatches:
+        x = q[self.dofs[0]]
+        (c, s), (dc, ds) = self.forms.value(x), self.forms.jacobian(x)
+        rho = c * c + s * s
+        if rho == 0.0:
+            raise ZeroDivisionError("a torsional spring whose joint vectors vanish")
+        grad = (c * ds - s * dc) / rho                          # phi_x (k,)
+        rate_vector = np.zeros_like(x) if v is None else v[self.dofs[0]]
+        moment = self.stiffness * self.deflection(q) + self.damping * float(grad @ rate_vector)
+        force = -moment * grad
+        if not jacobian:
+            return MotionPatches(self.dofs, force[None], None, None)
+        hc, hs = self.forms.hessians
+        hessian = ((np.outer(ds, dc) - np.outer(dc, ds) + c * hs - s * hc) / rho
+                   - np.outer(grad, 2 * c * dc + 2 * s * ds) / rho)
+        d_q = (-np.outer(grad, self.stiffness * grad + self.damping * (hessian @ rate_vector))
+               - moment * hessian)
+        d_v = -self.damping * np.outer(grad, grad)
+        return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
+
+
+class BushingForce:
+    """The state force of a linear bushing (module docstring) on the six rows of ``forms``
+    (a ``QuadraticBlock``: displacements in m, small rotations in rad), ``stiffness`` K
+    and ``damping`` C (6, 6; N/m, N/rad, N m/m, N m/rad and their rates).  Reads
+    velocities (``reads_velocity``)."""
+
+    reads_velocity = True
+
+    def __init__(self, forms: QuadraticBlock, stiffness: np.ndarray,
+                 damping: np.ndarray) -> None:
+        self.forms = forms
+        self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
+        self.stiffness, self.damping = np.asarray(stiffness), np.asarray(damping)
+
+    def deflection(self, q: np.ndarray) -> np.ndarray:
+        """delta (6,) at the coordinates q (size,)."""
+        return self.forms.value(q[self.dofs[0]])
+
+    def energy(self, q: np.ndarray) -> float:
+        """The energy delta^T K delta / 2 (J) in its springs at q (size,)."""
+        delta = self.deflection(q)
+        return 0.5 * float(delta @ self.stiffness @ delta)
+
+    def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
+                 t: float = 0.0) -> MotionPatches:
+        x = q[self.dofs[0]]
+        rate_vector = np.zeros_like(x) if v is None else v[self.dofs[0]]
+        slope = self.forms.jacobian(x)                              # J (6, k)
+        stress = self.stiffness @ self.forms.value(x) + self.damping @ (slope @ rate_vector)
+        force = -slope.T @ stress
+        if not jacobian:
+            return MotionPatches(self.dofs, force[None], None, None)
+        hessians = self.forms.hessians
+        d_q = (-slope.T @ self.stiffness @ slope - np.tensordot(stress, hessians, 1)
+               - slope.T @ self.damping @ (hessians @ rate_vector))
+        d_v = -slope.T @ self.damping @ slope
         return MotionPatches(self.dofs, force[None], d_q[None], d_v[None])
 
 

@@ -20,8 +20,15 @@ from runtime.kernels.kind import element_kind
 from runtime.model.errors import SceneError, show
 from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
+from runtime.model.items.body_joints import angle_forms
+from runtime.model.items.body_vectors import frame_deflection
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
-from runtime.model.items.force_elements import BodyTorqueForce, SpringDamperForce
+from runtime.model.items.force_elements import (
+    BodyTorqueForce,
+    BushingForce,
+    SpringDamperForce,
+    TorsionalSpringForce,
+)
 from runtime.model.items.python_loads import PythonForce, PythonFunction
 from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
@@ -43,9 +50,9 @@ from runtime.model.schema import (
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "BodyForce", "BodyTorque", "DistributedForce", "End", "Gravity", "LineForce",
-           "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment", "Pressure",
-           "PythonLoad", "SpringDamper"]
+__all__ = ["LOADS", "BodyForce", "BodyTorque", "Bushing", "DistributedForce", "End", "Gravity",
+           "LineForce", "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment",
+           "Pressure", "PythonLoad", "SpringDamper", "TorsionalSpring"]
 
 StateForce = Callable[[np.ndarray, bool], Patches]
 
@@ -412,6 +419,129 @@ class SpringDamper(Load):
 
 
 @dataclass(frozen=True)
+class TorsionalSpring(Load):
+    """A torsional spring-damper about the ``axis`` (body coordinates, default z) of a
+    revolute joint of the rigid ``body``: on its rotation relative to the ground, to the
+    rigid body ``other`` or to a ``node`` of a meshed body (``angle_forms``), the moment
+    k (phi - phi_0) + c phi' with ``stiffness`` k (N m/rad), ``damping`` c (N m s/rad) and
+    free ``angle`` phi_0 (rad, from the pose at t = 0; default 0), with exact Jacobians
+    (``runtime.model.items.force_elements``), times its ``time_law``."""
+
+    type: ClassVar[str] = "torsional_spring"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    stiffness: float = key(_non_negative_key)
+    other: str | None = key(rigid_key, None)
+    node: NodeRef | str | None = key(node_key, None)
+    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0))
+    damping: float = key(_non_negative_key, 0.0)
+    angle: float = key(_finite_key, 0.0)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        if "node" in data and "other" in data:
+            raise SceneError(f"{path}.other: expected a node or another body (or neither: "
+                             "the ground), got both")
+        load = super().parse(data, path, context)
+        for name in ("body", "other"):
+            value = getattr(load, name)
+            if value is not None and not isinstance(context.rigid[value], RigidBody):
+                raise SceneError(f"{path}.{name}: a torsional spring needs a rigid body "
+                                 f"(type = \"rigid\"), got the point mass {show(value)}")
+        if load.other == load.body:
+            raise SceneError(f"{path}.other: expected another body than {show(load.body)}")
+        return load
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def coupled_dofs(self, model: ModelView) -> np.ndarray:
+        """The coordinates its Jacobian couples (they join the model's pattern)."""
+        return self.state_force(model).dofs[0]
+
+    def state_force(self, model: ModelView) -> TorsionalSpringForce:
+        forms = angle_forms(model, self.body, self.axis, self.other, self.node,
+                            f"{self.type} of {self.body}")
+        return TorsionalSpringForce(forms, self.stiffness, self.damping, self.angle)
+
+
+def _bushing_matrix_key(value: Any, path: str, context: Context) -> tuple[tuple[float, ...], ...]:
+    """A symmetric positive semi-definite 6 x 6 matrix (rows: the displacements along the
+    frame's axes, then the small rotations about them), or its six diagonal entries."""
+    if isinstance(value, list) and len(value) == 6 and not any(isinstance(x, list)
+                                                                for x in value):
+        matrix = np.diag(vector(value, path, 6, "six diagonal entries"))
+    elif isinstance(value, list) and len(value) == 6:
+        matrix = np.array([vector(row, f"{path}[{i}]", 6, "a row of a 6 x 6 matrix")
+                           for i, row in enumerate(value)])
+    else:
+        raise SceneError(f"{path}: expected six diagonal entries or a 6 x 6 matrix, got "
+                         f"{show(value)}")
+    if not np.allclose(matrix, matrix.T, rtol=1e-12, atol=0.0):
+        raise SceneError(f"{path}: expected a symmetric matrix, got {show(value)}")
+    lowest = float(np.linalg.eigvalsh(matrix)[0])
+    if lowest < -1e-12 * float(np.abs(matrix).max(initial=0.0)):
+        raise SceneError(f"{path}: expected a positive semi-definite matrix, got an "
+                         f"eigenvalue {lowest:.6g}")
+    return tuple(tuple(float(x) for x in row) for row in matrix)
+
+
+@dataclass(frozen=True)
+class Bushing(Load):
+    """A linear bushing between the frame of the rigid ``body`` at its ``point`` (body
+    coordinates) and the other side's frame there at t = 0: the rigid body ``other`` or
+    the ground.  Its deflection delta (6,) is the displacement (m) along and the small
+    rotation (rad) about the body's axes at t = 0 fixed in the other side
+    (``body_vectors.frame_deflection``), its force and moment K delta + C delta' with the
+    6 x 6 ``stiffness`` K and ``damping`` C (default 0), exact Jacobians
+    (``runtime.model.items.force_elements``), times its ``time_law``.  The rotations are
+    those of small relative rotations."""
+
+    type: ClassVar[str] = "bushing"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
+    body: str = key(rigid_key)
+    stiffness: tuple[tuple[float, ...], ...] = key(_bushing_matrix_key)
+    point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+    other: str | None = key(rigid_key, None)
+    damping: tuple[tuple[float, ...], ...] | None = key(_bushing_matrix_key, None)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        load = super().parse(data, path, context)
+        for name in ("body", "other"):
+            value = getattr(load, name)
+            if value is not None and not isinstance(context.rigid[value], RigidBody):
+                raise SceneError(f"{path}.{name}: a bushing joins rigid bodies (type = "
+                                 f"\"rigid\"), got the point mass {show(value)}")
+        if load.other == load.body:
+            raise SceneError(f"{path}.other: expected another body than {show(load.body)}")
+        return load
+
+    @property
+    def follows(self) -> bool:
+        return True
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        return np.zeros(model.size)
+
+    def coupled_dofs(self, model: ModelView) -> np.ndarray:
+        """The coordinates its Jacobian couples (they join the model's pattern)."""
+        return self.state_force(model).dofs[0]
+
+    def state_force(self, model: ModelView) -> BushingForce:
+        forms = frame_deflection(model, self.body, self.point, self.other,
+                                 f"{self.type} of {self.body}")
+        damping = np.zeros((6, 6)) if self.damping is None else np.array(self.damping)
+        return BushingForce(forms, np.array(self.stiffness), damping)
+
+
+@dataclass(frozen=True)
 class EdgeLoad(Load):
     """A load per unit (reference) length along the ``edge`` of a rectangle body
     (``"BODY:x=-1"``: its last grid column), integrated over the element sides on that grid
@@ -632,4 +762,4 @@ class PythonLoad(Load):
 
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
                                         Pressure, DistributedForce, PythonLoad, BodyForce,
-                                        SpringDamper, BodyTorque)
+                                        SpringDamper, BodyTorque, TorsionalSpring, Bushing)
