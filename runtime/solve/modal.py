@@ -108,7 +108,7 @@ def _modal(model: Model, q: np.ndarray, modes: int, multipliers: np.ndarray | No
     rows, quadratic = _constraint_rows(model, q, multipliers)
     _, data = model.internal_forces(q)
     if quadratic is not None:       # the rows' geometric stiffness sum lambda_i H_i
-        data = data - model.holonomic_stiffness(quadratic)
+        data = data - model.holonomic_stiffness(quadratic, q)
     stiffness = -model.jacobian_matrix(data)
     mass = model.mass_ff
     basis = None
