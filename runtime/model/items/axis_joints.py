@@ -20,11 +20,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from runtime.model.errors import SceneError, show
+from runtime.model.errors import SceneError
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, normals_of
-from runtime.model.items.rigid import RigidBody, rigid_key
+from runtime.model.items.rigid import check_rigid_pair, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, unit_axis, vector
 
 __all__ = ["BodyCylindrical", "BodyUniversal"]
@@ -57,13 +57,7 @@ class AxisJoint(Constraint):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         joint = super().parse(data, path, context)
-        for name in ("body", "other"):
-            value = getattr(joint, name)
-            if value is not None and not isinstance(context.rigid[value], RigidBody):
-                raise SceneError(f"{path}.{name}: a {cls.type} joint needs a rigid body "
-                                 f"(type = \"rigid\"), got the point mass {show(value)}")
-        if joint.other == joint.body:
-            raise SceneError(f"{path}.other: expected another body than {show(joint.body)}")
+        check_rigid_pair(joint, path, context, f"a {cls.type} joint needs a rigid body")
         return joint
 
     def targets(self) -> list[NodeRef]:

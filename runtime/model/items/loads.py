@@ -30,7 +30,7 @@ from runtime.model.items.force_elements import (
     TorsionalSpringForce,
 )
 from runtime.model.items.python_loads import PythonForce, PythonFunction
-from runtime.model.items.rigid import RigidBody, rigid_key
+from runtime.model.items.rigid import RigidBody, check_rigid_pair, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -378,20 +378,13 @@ def _non_negative_key(value: Any, path: str, context: Context) -> float:
 
 
 @dataclass(frozen=True)
-class SpringDamper(Load):
-    """A linear spring-damper between ``end_a`` and ``end_b`` (``End``): ``stiffness`` (N/m),
-    ``damping`` (N s/m), rest ``length`` (m; default the distance at t = 0); the force
-    k (L - L0) + c L' along the line of the ends, with exact Jacobians
-    (``runtime.model.items.force_elements``), times its ``time_law``."""
+class ForceElement(Load):
+    """A force element: a state load of 3D scenes with no nominal part, whose exact
+    Jacobians (``state_force``, ``runtime.model.items.force_elements``) couple its
+    coordinates in the model's pattern."""
 
-    type: ClassVar[str] = "spring_damper"
     dims: ClassVar[tuple[int, ...]] = (3,)
     dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
-    end_a: End = key(_end_key)
-    end_b: End = key(_end_key)
-    stiffness: float = key(_non_negative_key)
-    damping: float = key(_non_negative_key, 0.0)
-    length: float | None = key(_non_negative_key, None)
 
     @property
     def follows(self) -> bool:
@@ -403,6 +396,35 @@ class SpringDamper(Load):
     def coupled_dofs(self, model: ModelView) -> np.ndarray:
         """The coordinates its Jacobian couples (they join the model's pattern)."""
         return self.state_force(model).dofs[0]
+
+
+@dataclass(frozen=True)
+class RigidForceElement(ForceElement):
+    """A force element on the rigid ``body`` and the rigid body ``other`` (or the ground):
+    both must be rigid bodies (``joins``: what the message says it joins) and distinct."""
+
+    joins: ClassVar[str] = "joins rigid bodies"
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        load = super().parse(data, path, context)
+        check_rigid_pair(load, path, context, f"a {cls.type.replace('_', ' ')} {cls.joins}")
+        return load
+
+
+@dataclass(frozen=True)
+class SpringDamper(ForceElement):
+    """A linear spring-damper between ``end_a`` and ``end_b`` (``End``): ``stiffness`` (N/m),
+    ``damping`` (N s/m), rest ``length`` (m; default the distance at t = 0); the force
+    k (L - L0) + c L' along the line of the ends, with exact Jacobians
+    (``runtime.model.items.force_elements``), times its ``time_law``."""
+
+    type: ClassVar[str] = "spring_damper"
+    end_a: End = key(_end_key)
+    end_b: End = key(_end_key)
+    stiffness: float = key(_non_negative_key)
+    damping: float = key(_non_negative_key, 0.0)
+    length: float | None = key(_non_negative_key, None)
 
     def state_force(self, model: ModelView) -> SpringDamperForce:
         dofs_a, map_a, const_a = self.end_a.position(model)
@@ -419,7 +441,7 @@ class SpringDamper(Load):
 
 
 @dataclass(frozen=True)
-class TorsionalSpring(Load):
+class TorsionalSpring(RigidForceElement):
     """A torsional spring-damper about the ``axis`` (body coordinates, default z) of a
     revolute joint of the rigid ``body``: on its rotation relative to the ground, to the
     rigid body ``other`` or to a ``node`` of a meshed body (``angle_forms``), the moment
@@ -428,8 +450,7 @@ class TorsionalSpring(Load):
     (``runtime.model.items.force_elements``), times its ``time_law``."""
 
     type: ClassVar[str] = "torsional_spring"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
+    joins: ClassVar[str] = "needs a rigid body"
     body: str = key(rigid_key)
     stiffness: float = key(_non_negative_key)
     other: str | None = key(rigid_key, None)
@@ -443,26 +464,7 @@ class TorsionalSpring(Load):
         if "node" in data and "other" in data:
             raise SceneError(f"{path}.other: expected a node or another body (or neither: "
                              "the ground), got both")
-        load = super().parse(data, path, context)
-        for name in ("body", "other"):
-            value = getattr(load, name)
-            if value is not None and not isinstance(context.rigid[value], RigidBody):
-                raise SceneError(f"{path}.{name}: a torsional spring needs a rigid body "
-                                 f"(type = \"rigid\"), got the point mass {show(value)}")
-        if load.other == load.body:
-            raise SceneError(f"{path}.other: expected another body than {show(load.body)}")
-        return load
-
-    @property
-    def follows(self) -> bool:
-        return True
-
-    def nominal(self, model: ModelView) -> np.ndarray:
-        return np.zeros(model.size)
-
-    def coupled_dofs(self, model: ModelView) -> np.ndarray:
-        """The coordinates its Jacobian couples (they join the model's pattern)."""
-        return self.state_force(model).dofs[0]
+        return super().parse(data, path, context)
 
     def state_force(self, model: ModelView) -> TorsionalSpringForce:
         forms = angle_forms(model, self.body, self.axis, self.other, self.node,
@@ -492,7 +494,7 @@ def _bushing_matrix_key(value: Any, path: str, context: Context) -> tuple[tuple[
 
 
 @dataclass(frozen=True)
-class Bushing(Load):
+class Bushing(RigidForceElement):
     """A linear bushing between the frame of the rigid ``body`` at its ``point`` (body
     coordinates) and the other side's frame there at t = 0: the rigid body ``other`` or
     the ground.  Its deflection delta (6,) is the displacement (m) along and the small
@@ -503,36 +505,11 @@ class Bushing(Load):
     those of small relative rotations."""
 
     type: ClassVar[str] = "bushing"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
     body: str = key(rigid_key)
     stiffness: tuple[tuple[float, ...], ...] = key(_bushing_matrix_key)
     point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
     other: str | None = key(rigid_key, None)
     damping: tuple[tuple[float, ...], ...] | None = key(_bushing_matrix_key, None)
-
-    @classmethod
-    def parse(cls, data: dict, path: str, context: Context) -> Record:
-        load = super().parse(data, path, context)
-        for name in ("body", "other"):
-            value = getattr(load, name)
-            if value is not None and not isinstance(context.rigid[value], RigidBody):
-                raise SceneError(f"{path}.{name}: a bushing joins rigid bodies (type = "
-                                 f"\"rigid\"), got the point mass {show(value)}")
-        if load.other == load.body:
-            raise SceneError(f"{path}.other: expected another body than {show(load.body)}")
-        return load
-
-    @property
-    def follows(self) -> bool:
-        return True
-
-    def nominal(self, model: ModelView) -> np.ndarray:
-        return np.zeros(model.size)
-
-    def coupled_dofs(self, model: ModelView) -> np.ndarray:
-        """The coordinates its Jacobian couples (they join the model's pattern)."""
-        return self.state_force(model).dofs[0]
 
     def state_force(self, model: ModelView) -> BushingForce:
         forms = frame_deflection(model, self.body, self.point, self.other,

@@ -332,3 +332,16 @@ class PointMass(RigidItem):
 
 
 RIGID_BODIES: dict[str, type[RigidItem]] = registry(RigidBody, PointMass)
+
+
+def check_rigid_pair(item, path: str, context: Context, needs: str) -> None:
+    """SceneError unless ``item.body`` and ``item.other`` (None: the ground) are rigid bodies,
+    not point masses, and distinct; ``needs`` says what the item needs, as in "a bushing
+    joins rigid bodies"."""
+    for name in ("body", "other"):
+        value = getattr(item, name)
+        if value is not None and not isinstance(context.rigid[value], RigidBody):
+            raise SceneError(f"{path}.{name}: {needs} (type = \"rigid\"), got the point mass "
+                             f"{show(value)}")
+    if item.other == item.body:
+        raise SceneError(f"{path}.other: expected another body than {show(item.body)}")
