@@ -613,11 +613,6 @@ def test_a_redundant_joint_is_named_when_the_model_is_built():
     Model(scene_of(PENDULUM))           # the pendulum's own joint is not
 
 
-def test_arc_length_analyses_of_rigid_models_are_scene_errors():
-    with pytest.raises(SceneError, match=r"^analysis.static.method: arc_length does not"):
-        scene_of(PENDULUM + '[analysis.static]\nmethod = "arc_length"\n')
-
-
 def test_compiled_static_takes_quadratic_rows_on_nodes():
     """A cantilever whose tip (a point mass on it) slides along x on a body_prismatic
     roller: a propped cantilever.  Under a uniform load w its root moment is w L^2 / 8

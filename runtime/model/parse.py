@@ -34,10 +34,9 @@ from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body, Material, Spin
 from runtime.model.checks import check_constraints, check_frequency, check_loads
 from runtime.model.errors import SceneError, number_text, show
-from runtime.model.items.body_joints import BodyPrismatic, BodySpherical
 from runtime.model.items.constraint_types import CONSTRAINTS
 from runtime.model.items.loads import LOADS
-from runtime.model.items.rigid import RIGID_BODIES, RigidBody, RigidItem
+from runtime.model.items.rigid import RIGID_BODIES, RigidItem
 from runtime.model.items.sensors import (
     SENSORS,
     MaterialPointSensor,
@@ -563,12 +562,6 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     dynamic = _dynamic(analysis["dynamic"]) if "dynamic" in analysis else None
     if dynamic is not None and dynamic.frequency_of is not None:
         check_frequency(dynamic, sensors)
-    quadratic = any(isinstance(r, RigidBody) for r in rigid_bodies) or any(
-        isinstance(c, BodySpherical | BodyPrismatic) for c in constraints)
-    if quadratic and static is not None and static.method == "arc_length":
-        raise SceneError("analysis.static.method: arc_length does not take the quadratic "
-                         "constraint rows of rigid bodies and their joints yet; use "
-                         "\"load_stepping\"")
     solver = _solver(data.get("solver", {}))
     output = _output(data.get("output", {}))
     check_sizes(tuple(bodies), constraints, sensors, static, modal, dynamic,

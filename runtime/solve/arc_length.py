@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse
 
 from runtime.model.dae import StateLoads
 from runtime.model.model import Model
@@ -32,6 +33,7 @@ from runtime.solve.static import (
     _solve,
     check_held,
     force_scale,
+    load_factors,
 )
 
 #: iterations a step aims at: the step length grows when fewer were needed, shrinks when more
@@ -84,47 +86,70 @@ class _PathTracer:
     """The state of a path being traced: the last converged point and the step length."""
 
     def __init__(self, model: Model, settings) -> None:
-        if model.holonomic:
-            raise ValueError("analysis.static.method: arc_length does not take the quadratic "
-                             "constraint rows of rigid bodies and their joints yet; use "
-                             "method = \"load_stepping\"")
         self.model, self.settings = model, settings
         self.convergence = Convergence.of(model, settings.tolerance)
         self.nominal = model.nominal_load()[model.free]
-        self.followers = StateLoads(model)
-        self.unit = np.ones(len(model.scene.loads))
-        if not np.any(self.nominal) and not self.followers:
+        self.state_loads = StateLoads(model)
+        #: the state loads' factors: the loads that lambda scales (follower loads), and the
+        #: force elements, which it does not (``Load.load_factor``)
+        self.scaled = load_factors(model, 1.0) - load_factors(model, 0.0)
+        self.structural = load_factors(model, 0.0)
+        self.follows = any(self.scaled[index] for index, _, _ in self.state_loads.loads)
+        if not np.any(self.nominal) and not self.follows:
             raise ConvergenceError("static: arc length needs a load (every load is zero): "
                                    "the path of lambda times no load is the reference")
-        self.no_constraint = np.zeros(model.joints.shape[0])
+        self.rows = model.joints.shape[0] + model.holonomic.rows
+        self.no_constraint = np.zeros(self.rows)
 
-    def _linearise(self, q: np.ndarray, lam: float):
-        """(internal + follower forces (size,), their Jacobian data, the load pattern P(q)
-        (free,): the loads at unit factor, followers included) at (q, lambda)."""
-        force, data = self.model.internal_forces(q)
-        if not self.followers:
-            return force, data, self.nominal
-        follower, follower_data = self.followers.evaluate(q, self.unit, True)[:2]
-        return (force + lam * follower, data + lam * follower_data,
-                self.nominal + follower[self.model.free])
+    def _linearise(self, q: np.ndarray, lam: float, mu: np.ndarray):
+        """(internal + state forces (size,), their Jacobian data (with the quadratic rows'
+        geometric stiffness at the multipliers ``mu``), the load pattern P(q) (free,): the
+        loads at unit factor, followers included) at (q, lambda)."""
+        model = self.model
+        force, data = model.internal_forces(q)
+        pattern = self.nominal
+        if self.state_loads:
+            structural, structural_data = self.state_loads.evaluate(q, self.structural,
+                                                                    True)[:2]
+            follower, follower_data = self.state_loads.evaluate(q, self.scaled, True)[:2]
+            force = force + structural + lam * follower
+            data = data + structural_data + lam * follower_data
+            pattern = self.nominal + follower[model.free]
+        if model.holonomic:
+            data = data - model.holonomic_stiffness(mu[model.joints.shape[0]:], q)
+        return force, data, pattern
 
-    def _tangent(self, data: np.ndarray, pattern: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _constraints(self, q: np.ndarray) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
+        """(the constraint rows (rows, free), their values (rows,)) at q: the joints, and
+        the quadratic rows' Phi_q and Phi."""
+        model = self.model
+        if not model.holonomic:
+            return model.joints_free, model.joints @ q
+        return (scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
+                                    format="csr"),
+                np.concatenate([model.joints @ q, model.holonomic.value(q)]))
+
+    def _tangent(self, data: np.ndarray, pattern: np.ndarray, rows) -> tuple[np.ndarray,
+                                                                            np.ndarray]:
         """(dq_P, dmu_P): the free coordinates' and multipliers' rates per unit load factor
-        at an iterate of Jacobian ``data`` and load pattern ``pattern``."""
-        return self._solve(data, pattern, self.no_constraint)
+        at an iterate of Jacobian ``data``, load pattern ``pattern`` and constraint
+        ``rows``."""
+        return self._solve(data, pattern, self.no_constraint, rows)
 
-    def _solve(self, data: np.ndarray, rhs: np.ndarray, rhs_constraints: np.ndarray):
-        """The load stepping's linear solve (non-symmetric with follower loads)."""
-        return _solve(self.model, -1.0, data, rhs, rhs_constraints, not self.followers)
+    def _solve(self, data: np.ndarray, rhs: np.ndarray, rhs_constraints: np.ndarray, rows):
+        """The load stepping's linear solve (non-symmetric with state loads)."""
+        return _solve(self.model, -1.0, data, rhs, rhs_constraints, not self.state_loads,
+                      rows)
 
     def trace(self, stop) -> PathResult:
         model, settings = self.model, self.settings
         q = model.reference.copy()
-        mu = np.zeros(model.joints.shape[0])
+        mu = np.zeros(self.rows)
         lam = 0.0
-        _, data, pattern = self._linearise(q, lam)
-        first = settings.arc_length or (float(np.linalg.norm(self._tangent(data, pattern)[0]))
-                                        / settings.load_steps)
+        _, data, pattern = self._linearise(q, lam, mu)
+        rows = self._constraints(q)[0]
+        first = settings.arc_length or (float(np.linalg.norm(
+            self._tangent(data, pattern, rows)[0])) / settings.load_steps)
         length, previous = first, None
         factors, states = [0.0], [q.copy()]
         iterations, stopped = 0, f"max_steps = {settings.max_steps} points"
@@ -160,22 +185,24 @@ class _PathTracer:
         lam, Delta q over the free coordinates, iterations).  Raises _Failed,
         ConvergenceError."""
         model, test = self.model, self.convergence
-        free, joints = model.free, model.joints_free
-        _, data, pattern = self._linearise(q, lam)
-        rate, rate_mu = self._tangent(data, pattern)
+        free = model.free
+        _, data, pattern = self._linearise(q, lam, mu)
+        rows = self._constraints(q)[0]
+        rate, rate_mu = self._tangent(data, pattern, rows)
         direction = 1.0 if previous is None or previous @ rate >= 0.0 else -1.0
         d_lam = direction * length / np.linalg.norm(rate)
         increment = d_lam * rate
         q, mu, lam = q.copy(), mu + d_lam * rate_mu, lam + d_lam
         q[free] += increment
         for iteration in range(1, self.settings.max_iterations + 1):
-            force, data, pattern = self._linearise(q, lam)
+            force, data, pattern = self._linearise(q, lam, mu)
+            rows, violation = self._constraints(q)
             applied = lam * self.nominal
-            residual = force[free] + applied - joints.T @ mu
+            residual = force[free] + applied - rows.T @ mu
             if not np.all(np.isfinite(residual)):
                 raise ConvergenceError("static: non-finite residual")
-            correction, correction_mu = self._solve(data, residual, -(model.joints @ q))
-            rate, rate_mu = self._tangent(data, pattern)
+            correction, correction_mu = self._solve(data, residual, -violation, rows)
+            rate, rate_mu = self._tangent(data, pattern, rows)
             d_lam = self._root(increment, correction, rate, length)
             step = correction + d_lam * rate
             increment = increment + step

@@ -46,7 +46,7 @@ from runtime.solve.python_engine import (
     one_by_one,
     uses_kkt,
 )
-from runtime.solve.static import Convergence, ConvergenceError
+from runtime.solve.static import Convergence, ConvergenceError, load_factors
 from templates import environment
 
 STEPPER_VERSION = "5"
@@ -646,7 +646,7 @@ class CompiledStatic:
         state_q, state_lam = self.engine._state_arrays[0], self.engine._state_arrays[3]
         state_q[:] = q[dae.free]
         state_lam[:] = multipliers
-        loads = self.engine._buffer(np.full(len(dae.load_laws), load_fraction))
+        loads = self.engine._buffer(load_factors(dae.model, load_fraction))
         before = s.newton_iterations
         status = self.engine._lib.ancf_static(self._m, s, self._qp_buffer, loads)
         self.engine._sync(s)

@@ -190,6 +190,12 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
     raise test.not_converged(settings.max_iterations, size, remaining, scale)
 
 
+def load_factors(model: Model, factor: float) -> np.ndarray:
+    """The factor (loads,) of every scene load in a static analysis at load factor
+    ``factor``: ``factor`` for the loads, 1 for the force elements (``Load.load_factor``)."""
+    return np.array([factor if load.load_factor else 1.0 for load in model.scene.loads])
+
+
 def solve_static(model: Model, settings, newton=None) -> StaticResult:
     """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
     solves one load increment (default ``newton_static``, in Python; the compiled engine's
@@ -199,10 +205,10 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
 
     convergence = Convergence.of(model, settings.tolerance)
     state_loads = StateLoads(model)
-    factors = np.ones(len(model.scene.loads))
 
     def python_newton(q, fraction, multipliers):
-        follower = (lambda q: state_loads.evaluate(q, fraction * factors, True)[:2]) \
+        factors = load_factors(model, fraction)
+        follower = (lambda q: state_loads.evaluate(q, factors, True)[:2]) \
             if state_loads else None
         return newton_static(model, q, fraction * model.nominal_load(), settings, multipliers,
                              convergence, follower)

@@ -63,6 +63,10 @@ class Load(Record):
     work is the potential energy of the ``potential_energy`` sensor (gravity)."""
 
     potential: ClassVar[bool] = False
+    #: whether the static analyses scale it by their load factor (the load stepping's
+    #: fraction, the arc length's lambda): every load, not the force elements (springs,
+    #: dampers, bushings are part of the structure)
+    load_factor: ClassVar[bool] = True
     time_law: Law | dict = key(law_key, Constant(), kw_only=True)
 
     def nominal(self, model: ModelView) -> np.ndarray:
@@ -385,6 +389,7 @@ class ForceElement(Load):
 
     dims: ClassVar[tuple[int, ...]] = (3,)
     dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
+    load_factor: ClassVar[bool] = False
 
     @property
     def follows(self) -> bool:
