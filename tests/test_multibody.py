@@ -529,6 +529,12 @@ def test_pivot_reaction_of_the_pendulum_is_the_closed_form_one():
     with pytest.raises(SceneError, match=r"sensor\[0\].constraint: expected the index"):
         scene_of(PENDULUM + '[[sensor]]\nname = "r"\ntype = "body_reaction"\nbody = "bar"\n'
                  'constraint = 3\n')
+    # a point mass has no frame to react on: a scene error, not a failure during the run
+    with pytest.raises(SceneError, match=r"^sensor\[0\].body: a body_reaction reads a rigid "
+                                         r"body .*the point mass \"dot\""):
+        scene_of(PENDULUM + '[[body]]\ntype = "point_mass"\nname = "dot"\nmass = 1.0\n'
+                 'position = [2, 0, 0]\n[[sensor]]\nname = "r"\ntype = "body_reaction"\n'
+                 'body = "dot"\n')
 
 
 def test_slider_crank_with_a_stiff_rod_follows_the_rigid_position_formula():

@@ -22,7 +22,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Joint
-from runtime.model.items.rigid import rigid_key
+from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -403,11 +403,16 @@ class BodyReaction(Sensor):
     def unit(self) -> str:   # type: ignore[override]
         return "N" if self.quantity == "force" else "N m"
 
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        if not isinstance(context.rigid[sensor.body], RigidBody):
+            raise SceneError(f"{path}.body: a body_reaction reads a rigid body (type = "
+                             f"\"rigid\"), got the point mass {show(sensor.body)}")
+        return sensor
+
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         rigid = model.rigid[self.body]
-        if rigid.dofs.size != 12:
-            raise ValueError(f"sensor {self.name}: body_reaction reads a rigid body "
-                             f"(type = \"rigid\"); {self.body!r} is a point mass")
         if self.constraint is not None and self.constraint >= len(model.constraint_multipliers):
             raise ValueError(f"sensor {self.name}: constraint {self.constraint} out of range")
         rows = None if self.constraint is None else model.constraint_multipliers[
