@@ -433,7 +433,7 @@ BAD = [
     ("3d", _set("constraint", 0, "angle", {"type": "constant"}), "constraint[0].angle: unknown"),
     ("3d", _set("analysis", "transient", {}), "analysis.transient: unknown key"),
     ("3d", _set(*DYN, "dt", 0.1), "analysis.dynamic.dt: unknown key"),
-    ("3d", _set("solver", {"threads": 2}), "solver.threads: unknown key"),
+    ("3d", _set("solver", {"workers": 2}), "solver.workers: unknown key"),
     ("3d", _set("material", "steel", "G", 1.0), "material.steel.G: unknown key"),
     # missing keys
     ("3d", _delete(*BODY, "material"), "body[0].material: missing required key"),

@@ -170,7 +170,8 @@ def _build(modname: str, source: str, cdef: str, flags: tuple[str, ...], cmd: tu
             try:
                 ffi = cffi.FFI()
                 ffi.cdef(cdef)
-                ffi.set_source(modname, source, extra_compile_args=list(flags))
+                ffi.set_source(modname, source, extra_compile_args=list(flags),
+                               extra_link_args=[OPENMP] if OPENMP in flags else [])
                 built = ffi.compile(tmpdir=str(tmp), verbose=False)
             except Exception as exc:  # cffi.VerificationError, CDefError, distutils errors
                 error = exc
@@ -271,9 +272,13 @@ def _obtain(
 # --------------------------------------------------------------------------- public entry
 
 
+#: the flag that compiles and links a module with OpenMP (its ``#pragma omp`` loops)
+OPENMP = "-fopenmp"
+
+
 def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0,
                    label: str | None = None,
-                   optimization: int = OPTIMIZATION) -> CompiledModule:
+                   optimization: int = OPTIMIZATION, openmp: bool = False) -> CompiledModule:
     """Compile ``source`` (declarations ``cdef``) once into the cache and load it.
 
     ``name`` becomes part of the module name ``_ancf_{name}_{hash}``; ``label`` names the
@@ -282,13 +287,14 @@ def compile_module(name: str, source: str, cdef: str, timeout_s: float = 600.0,
     waited for another process's compile (``seconds`` includes that wait).  ``timeout_s`` is
     the age after which another process's lock counts as stale, and the longest this call
     waits for one.  ``optimization`` is the level of :func:`compile_flags` (ValueError
-    outside 0 to 3).  Raises :class:`CompilerNotFoundError` when no C compiler exists,
+    outside 0 to 3); ``openmp``: compiled and linked with OpenMP (``OPENMP``).  Raises
+    :class:`CompilerNotFoundError` when no C compiler exists,
     :class:`CompilerNotWorkingError` when it cannot build extensions,
     :class:`CompilationError` when the source fails to compile and :class:`CacheError` when
     the cache folder is unsafe or unusable (all :class:`JitEnvironmentError`).
     """
     t0 = time.perf_counter()
-    flags = compile_flags(optimization)
+    flags = compile_flags(optimization) + ((OPENMP,) if openmp else ())
     modname = module_name(name, source, cdef, flags)
     with _LOCK:
         memo = _MEMO.get(modname)

@@ -432,7 +432,8 @@ def _solver(data: Any) -> Solver:
         "method": lambda v, p: choice(v, p, METHODS, "method"),
         "backend": lambda v, p: choice(v, p, BACKENDS, "backend"),
         "engine": lambda v, p: choice(v, p, ENGINES, "engine"),
-        "linear_solver": lambda v, p: choice(v, p, LINEAR_SOLVERS, "linear solver")}))
+        "linear_solver": lambda v, p: choice(v, p, LINEAR_SOLVERS, "linear solver"),
+        "threads": lambda v, p: count(v, p, LIMITS["threads"], " threads")}))
 
 
 def _output(data: Any) -> Output:

@@ -84,13 +84,15 @@ class Dynamic:
 class Solver:
     """Elastic force method (gram | cij | quadrature), kernel backend (c | numpy), engine
     (compiled | python; None: compiled when a C compiler is present and the backend is c, else
-    python) and linear solver of the Newton iterations (banded | sparse; None: chosen per
-    model, ``runtime.solve.linear.choose``)."""
+    python), linear solver of the Newton iterations (banded | sparse; None: chosen per
+    model, ``runtime.solve.linear.choose``) and the compiled step's ``threads`` for the
+    element kernels (None: chosen per model, ``runtime.solve.compiled_engine.threads``)."""
 
     method: str = "gram"
     backend: str = "c"
     engine: str | None = None
     linear_solver: str | None = None
+    threads: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[solver]``."""

@@ -25,6 +25,7 @@ LIMITS = {
     "element_steps": 10**10,             # elements x steps: ~9 us each -> about a day
     "output_values": 10**8,              # rows x columns of timeseries.csv (read back to plot)
     "iterations": 1000,                  # Newton iterations per step
+    "threads": 64,                       # threads of the compiled step's kernels
     "modes": 1000,
     "sensors": 1000,                     # one CSV column and one PNG each
     "quadrature": 64,                    # Gauss order per direction (runtime.element.element)

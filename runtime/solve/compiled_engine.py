@@ -13,6 +13,7 @@ those of the Python engine (``runtime.solve.python_engine``), which stays the re
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -52,6 +53,31 @@ from templates import environment
 STEPPER_VERSION = "5"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
+#: the automatic thread count: the cores (at most MAX_THREADS) when one evaluation of the
+#: element kernels counts at least THREAD_OPERATIONS operations and at least
+#: THREAD_OPERATIONS_PER_ENTRY per entry of their Jacobians (the entries are added in chunk
+#: order, on one thread at a time), else one (docs/design.md, "Threads")
+THREAD_OPERATIONS, THREAD_OPERATIONS_PER_ENTRY, MAX_THREADS = 20_000_000, 50.0, 4
+
+
+def kernel_threads(dae: DAESystem, requested: int | None) -> int:
+    """The threads of the compiled step's element kernels: ``requested`` (the scene's
+    ``[solver] threads``), or the automatic count.  A chunk of elements' kernels runs on
+    each thread and their sums stay in chunk order: bit for bit those of one thread."""
+    if requested is not None:
+        return requested
+    operations = entries = 0.0
+    for group in dae.groups:
+        elements, ndof = group.dofs.shape
+        operations += elements * group.element.kind.operations(group.family, "force_jacobian")
+        entries += elements * ndof * ndof
+    if operations < THREAD_OPERATIONS or operations < THREAD_OPERATIONS_PER_ENTRY * entries:
+        return 1
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+        os.cpu_count() or 1)
+    return max(1, min(cores, MAX_THREADS))
+
+
 #: a call of the compiled step covers as many output times as the previous calls' time per
 #: output says fit in this (s), up to MAX_BLOCK_OUTPUTS of them (the interrupt and progress
 #: latency stays short, the calls few)
@@ -65,7 +91,7 @@ def _kernel_call(signature: dict, slots: dict[str, int], inputs: str = "",
     (``runtime.kernels.abi``).  Invariant inputs come from the group's
     ``{inputs}real``/``ints``/``count`` slots, outputs from the group buffers named by
     ``outputs`` (default: the output's own name)."""
-    batch = {"e": ("g->e", "n"), "e0": ("g->e0 + first * n", "n"), "e_dot": ("g->e_dot", "n")}
+    batch = {"e": ("w_e", "n"), "e0": ("g->e0 + first * n", "n"), "e_dot": ("w_e_dot", "n")}
     args = []
     for p in abi.parameters(signature):
         if p.part == "count":
@@ -73,8 +99,8 @@ def _kernel_call(signature: dict, slots: dict[str, int], inputs: str = "",
         elif p.role == "batch":
             values, stride = batch[p.array]
             args.append(stride if p.part == "stride" else values)
-        elif p.role == "output":
-            args.append(f"g->{(outputs or {}).get(p.array, p.array)}")
+        elif p.role == "output":     # the calling thread's chunk buffers (w_force, ...)
+            args.append(f"w_{(outputs or {}).get(p.array, p.array)}")
         elif p.part == "indptr":
             args.append(f"g->{inputs}ints[{2 * slots[p.array]}]")
         elif p.part == "indices":
@@ -167,10 +193,13 @@ class CompiledEngine:
         #: the joints through the KKT system (many rows, sparse solver), else their Schur
         #: complement: the Python engine's choice
         self.kkt = uses_kkt(self.dae, self.linear)
+        #: threads of the element kernels (``kernel_threads``)
+        self.threads = kernel_threads(self.dae, model.scene.solver.threads)
         source, cdef = render(self.dae, self.integrator, self.linear_solver, self.kkt)
         start = time.perf_counter()
         compiled = jit.compile_module("stepper", source, cdef,
-                                      label=f"stepper/{self.integrator}")
+                                      label=f"stepper/{self.integrator}",
+                                      openmp=self.threads > 1)
         self.compile_s = compiled.seconds if compiled.compiled or compiled.waited else 0.0
         self.load_s = time.perf_counter() - start - self.compile_s
         self.modules = [f"stepper/{self.integrator}"]
@@ -235,6 +264,7 @@ class CompiledEngine:
         m.contraction = CONTRACTION
         m.alpha_m, m.alpha_f, m.gamma, m.beta = alpha_parameters(self.settings.rho_inf)
         m.max_iterations = self.settings.max_iterations
+        m.threads = self.threads
         m.newton = NEWTON_MODES.index(self.newton)     # the template's NEWTON_* order
         m.max_full_steps = MAX_FULL_STEPS
         m.jacobian_weight, m.tally_window = self.jacobian_weight, TALLY_WINDOW
@@ -451,9 +481,10 @@ class CompiledEngine:
         for kernel in ELASTIC:
             setattr(target, f"{kernel}_kernel", self._ffi.cast("void *", family.address(kernel)))
         chunk = min(elements, CHUNK)
-        target.e = self._work(chunk * ndof)
-        target.force = self._work(chunk * ndof)
-        target.jacobian = self._work(chunk * ndof * ndof)
+        chunks = chunk * self.threads          # one chunk's buffers per thread
+        target.e = self._work(chunks * ndof)
+        target.force = self._work(chunks * ndof)
+        target.jacobian = self._work(chunks * ndof * ndof)
         if self.linear_solver == "sparse":
             target.slots = self._buffer(self.dae.model.slots(group.dofs), "int")
         if element.damping > 0:
@@ -464,9 +495,9 @@ class CompiledEngine:
             for kernel in DAMPING:
                 setattr(target, f"{kernel}_kernel",
                         self._ffi.cast("void *", family.address(kernel)))
-            target.e_dot = self._work(chunk * ndof)
-            target.force_damping = self._work(chunk * ndof)
-            target.jacobian_dot = self._work(chunk * ndof * ndof)
+            target.e_dot = self._work(chunks * ndof)
+            target.force_damping = self._work(chunks * ndof)
+            target.jacobian_dot = self._work(chunks * ndof * ndof)
 
     def _inputs(self, target, prefix: str, slots: dict[str, int], inputs: dict) -> None:
         """Bind invariant inputs into the group's ``{prefix}real/ints/count`` slots."""
