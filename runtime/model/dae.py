@@ -144,12 +144,11 @@ class DAESystem:
 
     def constraint_matrix(self, q_full: np.ndarray) -> scipy.sparse.csr_matrix:
         """[A_f; Phi_q,f(q)] (constraint_rows, nf): the free columns of every row at q_full."""
-        return scipy.sparse.vstack([self.joints_free, self.holonomic.jacobian_free(q_full)],
-                                   format="csr")
+        return self.model.constraint_rows(q_full)
 
     def violation(self, q_full: np.ndarray) -> np.ndarray:
         """[A q; Phi(q)] (constraint_rows,) at the coordinates q_full (size,)."""
-        return np.concatenate([self.model.joints @ q_full, self.holonomic.value(q_full)])
+        return self.model.constraint_values(q_full)
 
     def velocity_violation(self, q_full: np.ndarray, v_full: np.ndarray) -> np.ndarray:
         """[A v; Phi_q(q) v] (constraint_rows,) at q_full and the velocities v_full."""

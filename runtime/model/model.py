@@ -403,6 +403,20 @@ class Model:
             assert np.array_equal(held, inside), "entries outside the Jacobian pattern"
         return np.where(held, found, np.where(inside, -2, -1))
 
+    def constraint_rows(self, q: np.ndarray) -> scipy.sparse.csr_matrix:
+        """[A_f; Phi_q,f(q)] (joint rows + quadratic rows, nf): the free columns of the joint
+        rows and of the quadratic rows' Jacobian at the coordinates q (size,)."""
+        if not self.holonomic:
+            return scipy.sparse.csr_matrix(self.joints_free)
+        return scipy.sparse.vstack([self.joints_free, self.holonomic.jacobian_free(q)],
+                                   format="csr")
+
+    def constraint_values(self, q: np.ndarray) -> np.ndarray:
+        """[A q; Phi(q)] (joint rows + quadratic rows,) at the coordinates q (size,)."""
+        if not self.holonomic:
+            return self.joints @ q
+        return np.concatenate([self.joints @ q, self.holonomic.value(q)])
+
     def holonomic_stiffness(self, multipliers: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for
         their multipliers (rows,) at the coordinates q (size,; the driver coordinates of

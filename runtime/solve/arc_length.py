@@ -21,7 +21,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse
 
 from runtime.model.dae import StateLoads
 from runtime.model.model import Model
@@ -119,16 +118,6 @@ class _PathTracer:
             data = data - model.holonomic_stiffness(mu[model.joints.shape[0]:], q)
         return force, data, pattern
 
-    def _constraints(self, q: np.ndarray) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
-        """(the constraint rows (rows, free), their values (rows,)) at q: the joints, and
-        the quadratic rows' Phi_q and Phi."""
-        model = self.model
-        if not model.holonomic:
-            return model.joints_free, model.joints @ q
-        return (scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
-                                    format="csr"),
-                np.concatenate([model.joints @ q, model.holonomic.value(q)]))
-
     def _tangent(self, data: np.ndarray, pattern: np.ndarray, rows) -> tuple[np.ndarray,
                                                                             np.ndarray]:
         """(dq_P, dmu_P): the free coordinates' and multipliers' rates per unit load factor
@@ -147,7 +136,7 @@ class _PathTracer:
         mu = np.zeros(self.rows)
         lam = 0.0
         _, data, pattern = self._linearise(q, lam, mu)
-        rows = self._constraints(q)[0]
+        rows = self.model.constraint_rows(q)
         first = settings.arc_length or (float(np.linalg.norm(
             self._tangent(data, pattern, rows)[0])) / settings.load_steps)
         length, previous = first, None
@@ -187,7 +176,7 @@ class _PathTracer:
         model, test = self.model, self.convergence
         free = model.free
         _, data, pattern = self._linearise(q, lam, mu)
-        rows = self._constraints(q)[0]
+        rows = self.model.constraint_rows(q)
         rate, rate_mu = self._tangent(data, pattern, rows)
         direction = 1.0 if previous is None or previous @ rate >= 0.0 else -1.0
         d_lam = direction * length / np.linalg.norm(rate)
@@ -196,7 +185,7 @@ class _PathTracer:
         q[free] += increment
         for iteration in range(1, self.settings.max_iterations + 1):
             force, data, pattern = self._linearise(q, lam, mu)
-            rows, violation = self._constraints(q)
+            rows, violation = model.constraint_rows(q), model.constraint_values(q)
             applied = lam * self.nominal
             residual = force[free] + applied - rows.T @ mu
             if not np.all(np.isfinite(residual)):

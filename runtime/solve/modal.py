@@ -69,10 +69,9 @@ def _constraint_rows(model: Model, q: np.ndarray,
                      multipliers: np.ndarray | None) -> tuple[scipy.sparse.csr_matrix,
                                                               np.ndarray | None]:
     """(C (rows, nf), the multipliers of the quadratic rows or None without them) at q."""
+    rows = model.constraint_rows(q)
     if not model.holonomic:
-        return model.joints_free.tocsr(), None
-    rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
-                               format="csr")
+        return rows, None
     if multipliers is None:         # C^T lambda = F(q): the balance of the internal forces
         force = model.internal_forces(q, jacobian=False)[0][model.free]
         multipliers = np.linalg.lstsq(rows.T.toarray(), force, rcond=None)[0]

@@ -170,10 +170,8 @@ def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
         if state_load is not None:
             follower, follower_data = state_load(q)
             force, data = force + follower, data + follower_data
-        rows, violation = joints, model.joints @ q
-        if holonomic:     # quadratic rows: Phi_q at q, their geometric stiffness in J
-            rows = scipy.sparse.vstack([joints, holonomic.jacobian_free(q)], format="csr")
-            violation = np.concatenate([violation, holonomic.value(q)])
+        rows, violation = model.constraint_rows(q), model.constraint_values(q)
+        if holonomic:     # the quadratic rows' geometric stiffness in J
             data = data - model.holonomic_stiffness(multipliers[nj:], q)
         residual = force[free] + applied - rows.T @ multipliers
         if not np.all(np.isfinite(residual)):
@@ -266,8 +264,7 @@ def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
         return multipliers
     rigid = model.free_position[np.concatenate([r.dofs for r in model.rigid.values()])]
     rigid = rigid[rigid >= 0]
-    rows = scipy.sparse.vstack([model.joints_free, model.holonomic.jacobian_free(q)],
-                               format="csc")[:, rigid].toarray()
+    rows = model.constraint_rows(q).tocsc()[:, rigid].toarray()
     mismatch = load[model.free][rigid] - rows.T @ multipliers
     return multipliers + np.linalg.lstsq(rows.T, mismatch, rcond=None)[0]
 
