@@ -66,11 +66,7 @@ def kernel_threads(dae: DAESystem, requested: int | None) -> int:
     each thread and their sums stay in chunk order: bit for bit those of one thread."""
     if requested is not None:
         return requested
-    operations = entries = 0.0
-    for group in dae.groups:
-        elements, ndof = group.dofs.shape
-        operations += elements * group.element.kind.operations(group.family, "force_jacobian")
-        entries += elements * ndof * ndof
+    _, operations, entries = newton_cost.kernel_work(dae)
     if operations < THREAD_OPERATIONS or operations < THREAD_OPERATIONS_PER_ENTRY * entries:
         return 1
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
@@ -183,8 +179,7 @@ class CompiledEngine:
         self.dae = DAESystem(model, q_full)
         self.counters = Counters()
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0,
-                       "solve_s": 0.0,
-                       "constraint_s": 0.0}
+                       "solve_s": 0.0, "constraint_s": 0.0}
         self.linear = linear_solver(self.dae)
         #: the name of the linear solver (``runtime.catalog.LINEAR_SOLVERS``)
         self.linear_solver = self.linear.name

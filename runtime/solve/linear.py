@@ -197,9 +197,9 @@ class KKTSystem:
         self.s_diagonal = np.flatnonzero(s_rows == s_cols)
         self.cholesky = cholmod.Cholesky(kkt, indefinite=True)
 
-    def values(self, s_values: np.ndarray, c_values: np.ndarray) -> tuple[np.ndarray, float]:
-        """(KKT values in the pattern's order, delta) of S (``pattern`` order) and C (the
-        structure's entries, in ``rows_structure`` order)."""
+    def values(self, s_values: np.ndarray, c_values: np.ndarray) -> np.ndarray:
+        """The KKT values in the pattern's order of S (``pattern`` order) and C (the
+        structure's entries, in ``rows_structure`` order), the constraint block -delta I."""
         values = np.zeros(self.pattern.nnz)
         values[self.s_slots] = s_values
         values[self.below_slots] = c_values
@@ -208,7 +208,7 @@ class KKTSystem:
         largest = float(np.abs(c_values).max(initial=0.0))
         delta = KKT_REGULARISATION * largest ** 2 / max(float(np.abs(diagonal).max()), 1e-300)
         values[self.diagonal_slots] = -delta
-        return values, delta
+        return values
 
     def factor(self, s_values: np.ndarray, rows: scipy.sparse.spmatrix) -> KKTFactor:
         """The factorisation of [[S, C^T], [C, 0]] with S's ``s_values`` (pattern order) and
@@ -219,12 +219,12 @@ class KKTSystem:
         c_values = np.asarray(rows[structure.row, structure.col]).ravel()
         if np.count_nonzero(rows.data) > np.count_nonzero(c_values):
             raise RuntimeError("KKTSystem: constraint rows outside the structure analysed")
-        values, _ = self.values(s_values, c_values)
-        self.cholesky.values[:] = values
-        self.cholesky._lib.cholmod_factorize(self.cholesky.matrix, self.cholesky.factor,
-                                             self.cholesky.common)
-        if self.cholesky.factor.minor < self.n + self.m:
-            raise np.linalg.LinAlgError("singular saddle-point system (a zero pivot)")
+        values = self.values(s_values, c_values)
+        try:
+            self.cholesky.factorize(values)
+        except cholmod.NotPositiveDefinite:       # L D L^T stops only at a zero pivot
+            raise np.linalg.LinAlgError("singular saddle-point system (a zero pivot)") \
+                from None
         exact = values.copy()
         exact[self.diagonal_slots] = 0.0
         matrix = scipy.sparse.csr_matrix((exact, self.pattern.indices, self.pattern.indptr),

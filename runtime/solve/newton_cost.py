@@ -61,15 +61,22 @@ def _factor_size(linear) -> tuple[float, float, float]:
     return float(n * width), BAND_CALL_NS + per_flop * n * width ** 2, 0.0
 
 
-def jacobian_weight(dae: DAESystem, linear) -> float:
-    """``c_jacobian / c_iteration`` (module docstring) of Newton on ``dae`` with the linear
-    solver ``linear``: how many iterations with a kept Jacobian one new Jacobian costs."""
+def kernel_work(dae: DAESystem) -> tuple[float, float, float]:
+    """(counted operations of the element forces, of the forces with their Jacobians, the
+    Jacobians' entries) of one evaluation of every element of ``dae``."""
     force_ops = jacobian_ops = entries = 0.0
     for group in dae.groups:
         kind, (elements, ndof) = group.element.kind, group.dofs.shape
         force_ops += elements * kind.operations(group.family, "force")
         jacobian_ops += elements * kind.operations(group.family, "force_jacobian")
         entries += elements * ndof * ndof
+    return force_ops, jacobian_ops, entries
+
+
+def jacobian_weight(dae: DAESystem, linear) -> float:
+    """``c_jacobian / c_iteration`` (module docstring) of Newton on ``dae`` with the linear
+    solver ``linear``: how many iterations with a kept Jacobian one new Jacobian costs."""
+    force_ops, jacobian_ops, entries = kernel_work(dae)
     pattern = dae.model.pattern
     n, rows = pattern.shape[0], dae.constraint_rows
     factor_entries, factorisation, solve_call = _factor_size(linear)

@@ -319,11 +319,11 @@ class Integrator:
         self._full_step = self.newton == "full"   # this step rebuilds at every iteration
         self._full_steps = 0       # auto: steps of full Newton still to do ...
         self._probe = 1            # ... and how many after the next stale modified step
+        #: the joints' KKT system when they are many (else their Schur complement)
+        self.kkt = constraint_system(self.dae, self.linear)
         #: auto: what a new Jacobian costs in iterations without one, and the tallies
         #: [steps, iterations, factorisations] of the full (True) and modified (False) steps
         self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
-        #: the joints' KKT system when they are many (else their Schur complement)
-        self.kkt = constraint_system(self.dae, self.linear)
         self._tally = {True: [0.0, 0.0, 0.0], False: [0.0, 0.0, 0.0]}
 
     # --- pieces of a Newton iteration --------------------------------------------------
@@ -475,8 +475,9 @@ class Integrator:
         t = n * h
         start, kernels = time.perf_counter(), self.dae.model.kernel_seconds
         # a factorisation this step is a stale Jacobian only if there was one to keep
-        factorisations = self.counters.factorisations if self._solver is not None else None
-        counts = (self.counters.newton_iterations, self.counters.factorisations)
+        kept = self._solver is not None
+        iterations, factorisations = (self.counters.newton_iterations,
+                                      self.counters.factorisations)
         if self.newton == "auto":
             self._full_step = self._full_steps > 0
             self._full_steps -= self._full_step
@@ -500,9 +501,9 @@ class Integrator:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
-        if self.newton == "auto" and factorisations is not None:
-            self._count(started_full, self.counters.newton_iterations - counts[0],
-                        self.counters.factorisations - counts[1])
+        if self.newton == "auto" and kept:
+            self._count(started_full, self.counters.newton_iterations - iterations,
+                        self.counters.factorisations - factorisations)
             if not self._full_step:
                 if self.counters.factorisations == factorisations:
                     self._probe = 1
