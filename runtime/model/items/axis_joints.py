@@ -24,7 +24,7 @@ from runtime.model.errors import SceneError
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, normals_of
-from runtime.model.items.rigid import check_rigid_pair, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, unit_axis, vector
 
 __all__ = ["BodyCylindrical", "BodyUniversal"]
@@ -57,7 +57,7 @@ class AxisJoint(Constraint):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         joint = super().parse(data, path, context)
-        check_rigid_pair(joint, path, context, f"a {cls.type} joint needs a rigid body")
+        check_rigid_bodies(joint, path, context, f"a {cls.type} joint needs a rigid body")
         return joint
 
     def targets(self) -> list[NodeRef]:

@@ -30,7 +30,7 @@ from runtime.model.items.force_elements import (
     TorsionalSpringForce,
 )
 from runtime.model.items.python_loads import PythonForce, PythonFunction
-from runtime.model.items.rigid import RigidBody, check_rigid_pair, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -311,9 +311,7 @@ class BodyTorque(Load):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         load = super().parse(data, path, context)
-        if not isinstance(context.rigid[load.body], RigidBody):
-            raise SceneError(f"{path}.body: a torque needs a rigid body (type = \"rigid\"), "
-                             f"got the point mass {show(load.body)}")
+        check_rigid_bodies(load, path, context, "a torque needs a rigid body")
         return load
 
     @property
@@ -413,7 +411,7 @@ class RigidForceElement(ForceElement):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         load = super().parse(data, path, context)
-        check_rigid_pair(load, path, context, f"a {cls.type.replace('_', ' ')} {cls.joins}")
+        check_rigid_bodies(load, path, context, f"a {cls.type.replace('_', ' ')} {cls.joins}")
         return load
 
 

@@ -334,14 +334,14 @@ class PointMass(RigidItem):
 RIGID_BODIES: dict[str, type[RigidItem]] = registry(RigidBody, PointMass)
 
 
-def check_rigid_pair(item, path: str, context: Context, needs: str) -> None:
-    """SceneError unless ``item.body`` and ``item.other`` (None: the ground) are rigid bodies,
-    not point masses, and distinct; ``needs`` says what the item needs, as in "a bushing
-    joins rigid bodies"."""
+def check_rigid_bodies(item, path: str, context: Context, needs: str) -> None:
+    """SceneError unless ``item.body`` and, where the item has one, ``item.other`` (None: the
+    ground) are rigid bodies, not point masses, and distinct; ``needs`` says what the item
+    needs, as in "a bushing joins rigid bodies"."""
     for name in ("body", "other"):
-        value = getattr(item, name)
+        value = getattr(item, name, None)
         if value is not None and not isinstance(context.rigid[value], RigidBody):
             raise SceneError(f"{path}.{name}: {needs} (type = \"rigid\"), got the point mass "
                              f"{show(value)}")
-    if item.other == item.body:
+    if getattr(item, "other", None) == item.body:
         raise SceneError(f"{path}.other: expected another body than {show(item.body)}")

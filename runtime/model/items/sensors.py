@@ -22,7 +22,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Joint
-from runtime.model.items.rigid import RigidBody, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -406,9 +406,7 @@ class BodyReaction(Sensor):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         sensor = super().parse(data, path, context)
-        if not isinstance(context.rigid[sensor.body], RigidBody):
-            raise SceneError(f"{path}.body: a body_reaction reads a rigid body (type = "
-                             f"\"rigid\"), got the point mass {show(sensor.body)}")
+        check_rigid_bodies(sensor, path, context, "a body_reaction reads a rigid body")
         return sensor
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
