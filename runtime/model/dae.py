@@ -268,16 +268,28 @@ class StateLoads:
         """The state forces of its Python loads."""
         return [evaluate for _, evaluate, _ in self.loads if isinstance(evaluate, PythonForce)]
 
+    @property
+    def compiled(self) -> list:
+        """Its loads that the compiled step evaluates itself (force elements: ``compiled()``,
+        ``runtime.model.items.force_elements``), as entries of ``loads``."""
+        return [entry for entry in self.loads if hasattr(entry[1], "compiled")]
+
+    @property
+    def called(self) -> list:
+        """Its other loads (follower and Python loads), which the compiled step calls back."""
+        return [entry for entry in self.loads if not hasattr(entry[1], "compiled")]
+
     def evaluate(self, q_full: np.ndarray, factors: np.ndarray, jacobian: bool,
-                 v_full: np.ndarray | None = None, t: float = 0.0):
+                 v_full: np.ndarray | None = None, t: float = 0.0, loads=None):
         """Force (size,) in N and, if asked, the Jacobian data (pattern nnz,) with respect to
         q and to v (None when no load reads velocities) at coordinates q_full and velocities
         v_full (size,; None: at rest) at time t (s), with the load factors of every scene
-        load ``factors`` (loads,)."""
+        load ``factors`` (loads,); of the entries ``loads`` of ``self.loads`` (default
+        all)."""
         force = np.zeros(self.size)
         data = np.zeros(self.nnz) if jacobian else None
         data_dot = None
-        for index, evaluate, slots in self.loads:
+        for index, evaluate, slots in self.loads if loads is None else loads:
             factor = factors[index]
             moving = getattr(evaluate, "reads_velocity", False)
             if moving:

@@ -30,11 +30,25 @@ delta^T K delta / 2 and the damping C: with J = delta_x, H_i the Hessians and th
 generalised stress m = K delta + C J x',
 
     Q = -J^T m,   dQ/dx = -J^T K J - sum_i m_i H_i - J^T C [H_i x']_i,   dQ/dx' = -J^T C J.
+
+Every force element is also data for the compiled step (``compiled``: a ``CompiledForce``):
+rows y(x) = 1/2 x^T H x + g . x + c of its coordinates (a ``QuadraticBlock``: the spring's
+d, the joint's [C, S], the bushing's delta) and a law of the generalised stress m(y, y')
+on them (``FORCE_LAWS``), so that, with J = y_x and y' = J x', one generic evaluation
+
+    Q = -J^T m,   dQ/dx = -J^T (m_y J + m_y' [H_i x']_i) - sum_i m_i H_i,
+    dQ/dx' = -J^T m_y' J
+
+holds them all (``templates/stepper.c.j2``, ``force_elements``); the law ``direct`` takes
+the rows as the force itself (Q = y, dQ/dx = J: the body torque, quadratic in the
+coordinates).  The classes here evaluate their own formulas: the Python engine's, and the
+independent check of the compiled one.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -42,7 +56,30 @@ from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.follower import Patches
 from runtime.model.items.python_loads import MotionPatches
 
-__all__ = ["BodyTorqueForce", "BushingForce", "SpringDamperForce", "TorsionalSpringForce"]
+__all__ = ["FORCE_LAWS", "BodyTorqueForce", "BushingForce", "CompiledForce",
+           "SpringDamperForce", "TorsionalSpringForce"]
+
+#: the laws of the compiled force elements, in the order of the step's codes
+#: (``templates/stepper.c.j2``): their parameters are those of ``CompiledForce``
+FORCE_LAWS = ("spring_damper", "torsional_spring", "bushing", "direct")
+
+
+@dataclass(frozen=True)
+class CompiledForce:
+    """A force element as data of the compiled step (module docstring): its ``law`` (one of
+    ``FORCE_LAWS``), its rows ``forms`` (on its coordinates ``forms.dofs``; the law
+    ``direct``: one row per coordinate, the force on it) and the law's ``parameters``:
+    spring_damper [k, c, L0], torsional_spring [k, c, phi_0], bushing [K (36, row-major),
+    C (36)], direct []."""
+
+    law: str
+    forms: QuadraticBlock
+    parameters: np.ndarray
+
+    def __post_init__(self) -> None:
+        assert self.law in FORCE_LAWS, self.law
+        if self.law == "direct":
+            assert self.forms.rows == self.forms.dofs.size
 
 
 class SpringDamperForce:
@@ -58,6 +95,14 @@ class SpringDamperForce:
         self.dofs = np.asarray(dofs, np.int64)[None, :]
         self.difference, self.offset = difference, np.asarray(offset, float)
         self.stiffness, self.damping, self.length = stiffness, damping, length
+
+    def compiled(self) -> CompiledForce:
+        """Its data for the compiled step: the rows d = D x + d_0."""
+        k = self.dofs.shape[1]
+        forms = QuadraticBlock("spring_damper", self.dofs[0], np.zeros((3, k, k)),
+                               self.difference, self.offset)
+        return CompiledForce("spring_damper", forms,
+                             np.array([self.stiffness, self.damping, self.length]))
 
     def vector(self, q: np.ndarray) -> np.ndarray:
         """d (3,) at the coordinates q (size,)."""
@@ -105,6 +150,11 @@ class TorsionalSpringForce:
         self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
         self.stiffness, self.damping, self.angle = stiffness, damping, angle
 
+    def compiled(self) -> CompiledForce:
+        """Its data for the compiled step: the rows [C, S]."""
+        return CompiledForce("torsional_spring", self.forms,
+                             np.array([self.stiffness, self.damping, self.angle]))
+
     def deflection(self, q: np.ndarray) -> float:
         """phi - phi_0 (rad) in (-pi, pi] at the coordinates q (size,)."""
         c, s = self.forms.value(q[self.dofs[0]])
@@ -151,6 +201,11 @@ class BushingForce:
         self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
         self.stiffness, self.damping = np.asarray(stiffness), np.asarray(damping)
 
+    def compiled(self) -> CompiledForce:
+        """Its data for the compiled step: the rows delta."""
+        return CompiledForce("bushing", self.forms,
+                             np.concatenate([self.stiffness.ravel(), self.damping.ravel()]))
+
     def deflection(self, q: np.ndarray) -> np.ndarray:
         """delta (6,) at the coordinates q (size,)."""
         return self.forms.value(q[self.dofs[0]])
@@ -192,6 +247,19 @@ class BodyTorqueForce:
     def __init__(self, dofs: np.ndarray, axis: np.ndarray, torque: float) -> None:
         self.dofs = np.asarray(dofs, np.int64)[None, :]
         self.axis, self.torque = np.asarray(axis, float), float(torque)
+
+    def compiled(self) -> CompiledForce:
+        """Its data for the compiled step: Q itself, quadratic in the coordinates with the
+        Hessians H_i whose columns are the (linear) Jacobian at the unit coordinates."""
+        dofs = self.dofs[0]
+        hessians = np.empty((12, 12, 12))
+        for column in range(12):
+            unit = np.zeros(int(dofs.max()) + 1)
+            unit[dofs[column]] = 1.0
+            hessians[:, :, column] = self(unit, True).jacobian[0]
+        forms = QuadraticBlock("body_torque", dofs, hessians, np.zeros((12, 12)),
+                               np.zeros(12))
+        return CompiledForce("direct", forms, np.zeros(0))
 
     def __call__(self, q: np.ndarray, jacobian: bool) -> Patches:
         axes = q[self.dofs[0][3:]].reshape(3, 3)           # rows u_1, u_2, u_3
