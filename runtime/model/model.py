@@ -288,8 +288,13 @@ class Model:
         rows = np.repeat(np.arange(len(built.rows)), [len(row) for row in built.rows])
         cols = [i for row in built.rows for i in row]
         vals = np.array([v for row in built.rows for v in row.values()], float)
-        self.joints = scipy.sparse.csr_matrix((vals, (rows, cols)),     # A, with A q = 0
+        self.joints = scipy.sparse.csr_matrix((vals, (rows, cols)),     # A, with A q = b
                                               shape=(len(built.rows), self.size))
+        #: b of the joint rows A q = b (rows,): 0 but for rows held at their reference
+        #: value (``runtime.model.items.symmetry``), m or 1
+        self.joint_offsets = np.zeros(len(built.rows))
+        for row, offset in built.offsets.items():
+            self.joint_offsets[row] = offset
         self.joints_free = self.joints[:, self.free]
         self.joints_prescribed = self.joints[:, self.prescribed]
         #: the quadratic constraint rows (rigid bodies' own, nonlinear joints)
@@ -412,10 +417,11 @@ class Model:
                                    format="csr")
 
     def constraint_values(self, q: np.ndarray) -> np.ndarray:
-        """[A q; Phi(q)] (joint rows + quadratic rows,) at the coordinates q (size,)."""
+        """[A q - b; Phi(q)] (joint rows + quadratic rows,) at the coordinates q (size,)."""
+        linear = self.joints @ q - self.joint_offsets
         if not self.holonomic:
-            return self.joints @ q
-        return np.concatenate([self.joints @ q, self.holonomic.value(q)])
+            return linear
+        return np.concatenate([linear, self.holonomic.value(q)])
 
     def holonomic_stiffness(self, multipliers: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for
