@@ -3,8 +3,9 @@
 * constraints: at most one kind of clamp, pin or prescribed rotation per node (a clamp
   already holds what a pin holds; a clamp and a prescribed rotation contradict each other;
   two clamps or two pins of one node, as at the corner of two clamped edges, are merged;
-  two prescribed rotations are refused); a symmetry or fix (which hold parts of a node) is
-  redundant on a clamped node and contradicts a prescribed rotation; joints join two
+  two prescribed rotations are refused); a symmetry or fix (which hold parts of a node)
+  contradicts a prescribed rotation (beside a clamp or pin it holds what they leave free,
+  as at the corner of a clamped edge and a symmetry edge); joints join two
   distinct nodes at the same place in the reference, each pair once, and never two nodes whose
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
@@ -31,7 +32,6 @@ from runtime.model.settings import MULTIPLE_TOLERANCE, Dynamic
 
 # a constraint holding parts of a node (symmetry, fix) beside one of these on the node: why not
 PARTIAL_CONFLICTS = {
-    "clamp": "redundant: the clamp already holds every coordinate of the node",
     "prescribed_rotation": "contradictory: the prescribed rotation drives the node's "
                            "coordinates",
 }

@@ -57,18 +57,18 @@ def _cleaned(rows: np.ndarray) -> np.ndarray:
 
 
 def _span(columns: np.ndarray) -> np.ndarray:
-    """Independent columns (k, r) of ``columns`` (k, m) spanning its range, taken in order
-    (so that unit columns stay unit: coordinate axes stay single coordinates)."""
+    """Independent columns (k, r) of ``columns`` (k, m) of entries of order 1 (projections,
+    unit vectors) spanning its range, taken in order (so that unit columns stay unit:
+    coordinate axes stay single coordinates); parts below TOLERANCE are round-off."""
     picked: list[np.ndarray] = []
     basis: list[np.ndarray] = []
-    scale = max(float(np.abs(columns).max(initial=0.0)), 1e-300)
-    for column in _cleaned(columns.T):
+    for column in columns.T:
         rest = column.copy()
         for unit in basis:
             rest -= (unit @ rest) * unit
         size = float(np.linalg.norm(rest))
-        if size > TOLERANCE * scale:
-            picked.append(column)
+        if size > TOLERANCE:
+            picked.append(np.where(np.abs(column) < ZERO, 0.0, column))
             basis.append(rest / size)
     return np.array(picked).T.reshape(columns.shape[0], len(picked))
 
