@@ -14,6 +14,7 @@
 Both carry the exact surface normals as point data ``normal`` and 0/1 point data node sets
 (the roof: ``hinged``, the straight edges; ``centre``, the apex node; the hemisphere:
 ``xz_plane`` and ``yz_plane``, the meridians on the symmetry planes y = 0 and x = 0;
+``equator`` and ``hole``, the free edges;
 ``A`` and ``B``, the load points on the equator at (R, 0, 0) and (0, R, 0); ``top``, the
 node of the hole's edge on the plane y = 0).
 """
@@ -85,7 +86,8 @@ def hemisphere(nu: int = 16, nv: int = 16, radius: float = HEMISPHERE_RADIUS):
     normals[np.isclose(uv[:, 0], 1.0), 0] = 0.0      # on the plane x = 0 exactly
     equator, hole = np.isclose(uv[:, 1], 0.0), np.isclose(uv[:, 1], 1.0)
     meridian_xz, meridian_yz = np.isclose(uv[:, 0], 0.0), np.isclose(uv[:, 0], 1.0)
-    sets = {"xz_plane": meridian_xz, "yz_plane": meridian_yz, "A": meridian_xz & equator,
+    sets = {"xz_plane": meridian_xz, "yz_plane": meridian_yz, "equator": equator,
+            "hole": hole, "A": meridian_xz & equator,
             "B": meridian_yz & equator, "top": meridian_xz & hole}
     return meshio.Mesh(radius * normals, [("quad8", cells)], point_data={
         "normal": normals, **{name: flags.astype(np.int32) for name, flags in sets.items()}})
