@@ -55,6 +55,7 @@ from runtime.model.items.sensors import (
     TotalEnergy,
     Velocity,
 )
+from runtime.model.items.symmetry import Fix, Symmetry
 from runtime.model.placements import Arc, Rectangle
 from runtime.model.scene import Scene, load_scene
 from runtime.model.schema import NodeRef
@@ -75,11 +76,11 @@ __all__ = [
     "BodyPrismatic", "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque",
     "BodyUniversal", "BodyVelocity", "BodyWeld", "Bushing", "Clamp", "Constant",
     "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
-    "DistributedForce", "Dynamic", "Element", "End", "Gravity", "Hub", "KineticEnergy",
+    "DistributedForce", "Dynamic", "Element", "End", "Fix", "Gravity", "Hub", "KineticEnergy",
     "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",
     "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
     "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
     "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
-    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Table", "TorsionalSpring",
-    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
+    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table",
+    "TorsionalSpring", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
 ]

@@ -3,7 +3,9 @@
 * constraints: at most one kind of clamp, pin or prescribed rotation per node (a clamp
   already holds what a pin holds; a clamp and a prescribed rotation contradict each other;
   two clamps or two pins of one node, as at the corner of two clamped edges, are merged;
-  two prescribed rotations are refused); joints join two
+  two prescribed rotations are refused); a symmetry or fix (which hold parts of a node)
+  contradicts a prescribed rotation (beside a clamp or pin it holds what they leave free,
+  as at the corner of a clamped edge and a symmetry edge); joints join two
   distinct nodes at the same place in the reference, each pair once, and never two nodes whose
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
@@ -28,6 +30,12 @@ from runtime.model.items.sensors import Sensor
 from runtime.model.schema import NodeRef
 from runtime.model.settings import MULTIPLE_TOLERANCE, Dynamic
 
+# a constraint holding parts of a node (symmetry, fix) beside one of these on the node: why not
+PARTIAL_CONFLICTS = {
+    "prescribed_rotation": "contradictory: the prescribed rotation drives the node's "
+                           "coordinates",
+}
+
 # two node constraints on one node: why not (by their types; one type listed: refused twice)
 CONFLICTS = {
     frozenset({"clamp", "pin"}): "redundant: the clamp holds every coordinate of the node, the "
@@ -45,7 +53,7 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
     """Reject constraints that contradict or repeat each other (see the module docstring)."""
     holds: dict[NodeRef, int] = {}   # node -> the constraint holding its position
     for i, c in enumerate(constraints):
-        if not isinstance(c, NodeConstraint):
+        if not isinstance(c, NodeConstraint) or not c.holds_position:
             continue
         for node in c.targets():
             j = holds.setdefault(node, i)
@@ -58,6 +66,16 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
             where = c.target_key
             raise SceneError(f"constraint[{i}].{where}: constraint[{j}] ({first.type}) and "
                              f"constraint[{i}] ({c.type}) on node {node}: {why}")
+
+    for i, c in enumerate(constraints):
+        if not isinstance(c, NodeConstraint) or c.holds_position:
+            continue
+        for node in c.targets():
+            j = holds.get(node)
+            if j is not None and constraints[j].type in PARTIAL_CONFLICTS:
+                raise SceneError(f"constraint[{i}].{c.target_key}: constraint[{j}] "
+                                 f"({constraints[j].type}) and constraint[{i}] ({c.type}) on "
+                                 f"node {node}: {PARTIAL_CONFLICTS[constraints[j].type]}")
 
     by_name = {b.name: b for b in bodies}
     for i, c in enumerate(constraints):
@@ -167,8 +185,8 @@ def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
             raise SceneError(f"load[{i}].edge: {edge} is a face of the box body "
                              f"{show(edge.body)}; a {load.noun} acts along a grid line of a "
                              f"rectangle body (loads on faces are not built yet)")
-    held = {node: i for i, c in enumerate(constraints) if isinstance(c, NodeConstraint)
-            for node in c.targets()}
+    held = {node: i for i, c in enumerate(constraints)
+            if isinstance(c, NodeConstraint) and c.holds_position for node in c.targets()}
     for i, load in enumerate(loads):
         targets = load.targets()
         blocked = [held[node] for node in targets if node in held and not (

@@ -1,11 +1,12 @@
 """The differential-algebraic system that the dynamic solvers see (both engines).
 
     M_ff a + M_fp a_p + A_f^T lambda = F(q_full, t)         (free coordinates)
-    A_f q_free + A_p q_p + A_x q_x = 0                       (joints)
+    A_f q_free + A_p q_p + A_x q_x = b                       (joints)
 
 ``q_full`` (size,) holds every coordinate of the model; ``q_free`` (nf,) the unknowns;
 ``q_p`` the prescribed coordinates (hub rotations: known values, rates and accelerations
-at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values).
+at every time); ``q_x`` the fixed ones (clamps, pins: held at their initial values); ``b``
+the joint offsets (0 but for rows held at their reference value: symmetry planes).
 ``F`` is the elastic force of the element groups plus the external loads, each a constant
 vector times a time law, or a state-dependent generalised force (follower loads f(q),
 Python loads f(t, q, v): ``StateLoads``) times its time law, whose Jacobians join the
@@ -75,7 +76,8 @@ class DAESystem:
         self.joints_free = model.joints_free.tocsr()
         self.joints_prescribed = model.joints_prescribed.tocsr()
         self.joint_fixed_part = np.asarray(model.joints[:, self.fixed]
-                                           @ self.fixed_values[self.fixed]).ravel()
+                                           @ self.fixed_values[self.fixed]).ravel() \
+            - model.joint_offsets
         self.groups = [ElementGroup(b.name, b.element.kind.name, b.element.family,
                                     b.element_dofs.astype(np.int32), b.element_e0, b.element)
                        for b in model.groups]

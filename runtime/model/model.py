@@ -29,7 +29,7 @@ from runtime.kernels.kind import ElementKind, element_kind
 from runtime.model import mesh as meshing
 from runtime.model.errors import SceneError
 from runtime.model.holonomic import Driver, HolonomicConstraints
-from runtime.model.items.constraints import Built
+from runtime.model.items.constraints import Built, HeldNodes
 from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
 from runtime.model.schema import NodeRef
@@ -263,8 +263,14 @@ class Model:
             if block is not None:
                 built.blocks.append(block)
         #: the multipliers of each scene constraint: indices into [joints; quadratic rows]
-        self.constraint_multipliers: list = []
-        for index, constraint in enumerate(self.scene.constraints):
+        multipliers: dict[int, tuple[list[int], list[int]]] = {}
+        # the clamps and pins first (they add no rows): the rows of symmetry planes then see
+        # every coordinate held on their nodes (``runtime.model.items.symmetry.hold_rows``)
+        constraints = self.scene.constraints
+        order = sorted(range(len(constraints)), key=lambda i: not (
+            isinstance(constraints[i], HeldNodes) and constraints[i].holds_position))
+        for index in order:
+            constraint = constraints[index]
             rows = len(built.rows)
             quadratic = sum(block.rows for block in built.blocks)
             built.drivers = self._constraint_drivers[index]
@@ -272,9 +278,9 @@ class Model:
                 constraint.apply(self, built)
             except SceneError as error:   # what only the model can check (gradients' span)
                 raise SceneError(f"constraint[{index}]: {error}") from None
-            self.constraint_multipliers.append((
+            multipliers[index] = (
                 list(range(rows, len(built.rows))),
-                list(range(quadratic, sum(block.rows for block in built.blocks)))))
+                list(range(quadratic, sum(block.rows for block in built.blocks))))
         fixed = built.fixed
         self.hubs = built.hubs  # (node, angle law, axis (3,))
         prescribed = np.zeros(self.size, bool)
@@ -288,15 +294,21 @@ class Model:
         rows = np.repeat(np.arange(len(built.rows)), [len(row) for row in built.rows])
         cols = [i for row in built.rows for i in row]
         vals = np.array([v for row in built.rows for v in row.values()], float)
-        self.joints = scipy.sparse.csr_matrix((vals, (rows, cols)),     # A, with A q = 0
+        self.joints = scipy.sparse.csr_matrix((vals, (rows, cols)),     # A, with A q = b
                                               shape=(len(built.rows), self.size))
+        #: b of the joint rows A q = b (rows,): 0 but for rows held at their reference
+        #: value (``runtime.model.items.symmetry``), m or 1
+        self.joint_offsets = np.zeros(len(built.rows))
+        for row, offset in built.offsets.items():
+            self.joint_offsets[row] = offset
         self.joints_free = self.joints[:, self.free]
         self.joints_prescribed = self.joints[:, self.prescribed]
         #: the quadratic constraint rows (rigid bodies' own, nonlinear joints)
         self.holonomic = HolonomicConstraints(built.blocks, self.size, self.free)
         joints = len(built.rows)
-        self.constraint_multipliers = [(linear + [joints + r for r in quadratic])
-                                       for linear, quadratic in self.constraint_multipliers]
+        self.constraint_multipliers = [
+            multipliers[index][0] + [joints + r for r in multipliers[index][1]]
+            for index in range(len(constraints))]
         self._check_independent()
         self.mass_ff = self.mass[self.free][:, self.free].tocsc()
         self.mass_fp = self.mass[self.free][:, self.prescribed].tocsr()
@@ -412,10 +424,11 @@ class Model:
                                    format="csr")
 
     def constraint_values(self, q: np.ndarray) -> np.ndarray:
-        """[A q; Phi(q)] (joint rows + quadratic rows,) at the coordinates q (size,)."""
+        """[A q - b; Phi(q)] (joint rows + quadratic rows,) at the coordinates q (size,)."""
+        linear = self.joints @ q - self.joint_offsets
         if not self.holonomic:
-            return self.joints @ q
-        return np.concatenate([self.joints @ q, self.holonomic.value(q)])
+            return linear
+        return np.concatenate([linear, self.holonomic.value(q)])
 
     def holonomic_stiffness(self, multipliers: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The geometric stiffness (Phi_q^T lambda)_q of the quadratic constraint rows for

@@ -6,13 +6,17 @@
   along the axis (y), opening angle 0.2 rad (phi in [-0.1, 0.1] about the apex, x = R sin
   phi, z = R (cos phi - cos 0.1): the straight edges at z = 0), quad8 cells of the 8-node
   shells (8 x 8 elements), counter-clockwise seen from outside (normals outward).
-* ``hemisphere.vtu``: a hemisphere of radius 10 m (the pinched hemisphere's radius) cut by
-  meridians and parallels; its elements differ from ring to ring, so a body of it is refused
-  until a body's elements can have several shapes (written for that; no scene uses it).
+* ``hemisphere.vtu``: a quarter (longitude 0 to 90 degrees) of the pinched hemisphere of
+  Sze, Liu and Lo: radius 10, a hole of 18 degrees about the pole, cut by
+  meridians and parallels into 16 x 16 quad8 cells (its elements differ from ring to ring:
+  16 element shapes), for ``scenes/hemisphere.toml``.
 
 Both carry the exact surface normals as point data ``normal`` and 0/1 point data node sets
 (the roof: ``hinged``, the straight edges; ``centre``, the apex node; the hemisphere:
-``equator`` and ``pole``).
+``xz_plane`` and ``yz_plane``, the meridians on the symmetry planes y = 0 and x = 0;
+``equator`` and ``hole``, the free edges;
+``A`` and ``B``, the load points on the equator at (R, 0, 0) and (0, R, 0); ``top``, the
+node of the hole's edge on the plane y = 0).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from runtime.model.mesh_file import CELL_NODES
 
 ROOF = {"radius": 2.54, "length": 0.508, "angle": 0.2}
 HEMISPHERE_RADIUS = 10.0
+HEMISPHERE_HOLE_DEG = 18.0    # the polar hole's half-angle (degrees from the pole)
 
 
 def quad8_grid(nu: int, nv: int) -> tuple[np.ndarray, np.ndarray]:
@@ -67,30 +72,25 @@ def roof(nu: int = 8, nv: int = 8, radius: float = ROOF["radius"],
         "centre": centre.astype(np.int32)})
 
 
-def hemisphere(nu: int = 8, nv: int = 3, radius: float = HEMISPHERE_RADIUS):
-    """A hemisphere (z >= 0) of nu elements around and nv from the equator towards a polar
-    hole at 72 degrees of latitude (quad8 cells, outward normals)."""
+def hemisphere(nu: int = 16, nv: int = 16, radius: float = HEMISPHERE_RADIUS):
+    """A quarter of the pinched hemisphere (z >= 0, longitude 0 to 90 degrees) of nu
+    elements around and nv from the equator to the hole at 72 degrees of latitude, cut by
+    meridians and parallels (quad8 cells, outward normals)."""
     import meshio
 
     cells, uv = quad8_grid(nu, nv)
-    longitude = uv[:, 0] * 2 * np.pi
-    latitude = uv[:, 1] * np.radians(72.0)
+    longitude = uv[:, 0] * np.pi / 2
+    latitude = uv[:, 1] * np.radians(90.0 - HEMISPHERE_HOLE_DEG)
     normals = np.column_stack([np.cos(latitude) * np.cos(longitude),
                                np.cos(latitude) * np.sin(longitude), np.sin(latitude)])
-    # the seam at longitude 2 pi is the meridian at 0: merge its points
-    seam = np.isclose(uv[:, 0], 1.0)
-    first = {round(v, 12): k for k, v in enumerate(uv[:, 1]) if np.isclose(uv[k, 0], 0.0)}
-    target = np.arange(len(uv))
-    target[seam] = [first[round(v, 12)] for v in uv[seam, 1]]
-    keep = np.flatnonzero(~seam)
-    renumber = np.full(len(uv), -1)
-    renumber[keep] = np.arange(keep.size)
-    cells = renumber[target[cells]]
-    points = radius * normals[keep]
-    return meshio.Mesh(points, [("quad8", cells)], point_data={
-        "normal": normals[keep],
-        "equator": np.isclose(uv[keep, 1], 0).astype(np.int32),
-        "pole": np.isclose(uv[keep, 1], 1).astype(np.int32)})
+    normals[np.isclose(uv[:, 0], 1.0), 0] = 0.0      # on the plane x = 0 exactly
+    equator, hole = np.isclose(uv[:, 1], 0.0), np.isclose(uv[:, 1], 1.0)
+    meridian_xz, meridian_yz = np.isclose(uv[:, 0], 0.0), np.isclose(uv[:, 0], 1.0)
+    sets = {"xz_plane": meridian_xz, "yz_plane": meridian_yz, "equator": equator,
+            "hole": hole, "A": meridian_xz & equator,
+            "B": meridian_yz & equator, "top": meridian_xz & hole}
+    return meshio.Mesh(radius * normals, [("quad8", cells)], point_data={
+        "normal": normals, **{name: flags.astype(np.int32) for name, flags in sets.items()}})
 
 
 def write(folder: Path) -> list[Path]:

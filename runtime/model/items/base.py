@@ -34,7 +34,7 @@ class BodyView(Protocol):
 class ModelView(Protocol):
     """What an item may ask of the model: sizes (``dim``, ``size`` coordinates), the reference
     coordinates (size,), the indices of the ``free`` coordinates (neither fixed nor
-    prescribed), the mass matrix (size, size) in kg, the joint rows ``A`` of ``A q = 0``
+    prescribed), the mass matrix (size, size) in kg, the joint rows ``A`` of ``A q = b``
     (rows, size), the bodies by name, the scene it was built from, and the queries below.
     Units SI."""
 
@@ -44,6 +44,8 @@ class ModelView(Protocol):
     free: np.ndarray
     mass: scipy.sparse.csr_matrix
     joints: scipy.sparse.csr_matrix
+    #: b of the joint rows A q = b (rows,)
+    joint_offsets: np.ndarray
     #: the quadratic constraint rows Phi(q) = 0 (``runtime.model.holonomic``)
     holonomic: Any
     #: per scene constraint, the indices of its multipliers in [joints; quadratic rows]

@@ -16,8 +16,10 @@ from runtime.model.items.constraints import (
     Spherical,
     Weld,
 )
+from runtime.model.items.symmetry import Fix, Symmetry
 from runtime.model.schema import registry
 
-CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Hub, Spherical, Revolute, Weld,
-                                                    BodySpherical, BodyRevolute, BodyPrismatic,
-                                                    BodyWeld, BodyCylindrical, BodyUniversal)
+CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Symmetry, Fix, Hub, Spherical,
+                                                    Revolute, Weld, BodySpherical,
+                                                    BodyRevolute, BodyPrismatic, BodyWeld,
+                                                    BodyCylindrical, BodyUniversal)

@@ -1,7 +1,8 @@
 """Constraints of scenes (``[[constraint]]`` tables) on ANCF nodes.
 
 A constraint either holds coordinates of one node (``NodeConstraint``: clamp, pin, a hub
-whose rotation is prescribed) or ties two nodes together with linear joint rows
+whose rotation is prescribed; ``symmetry`` and ``fix``, which hold combinations of them:
+``runtime.model.items.symmetry``) or ties two nodes together with linear joint rows
 ``A q = 0`` solved with Lagrange multipliers (``Joint``: spherical, revolute, weld).  Each
 class declares its TOML keys as fields (``runtime.model.schema.Record``) and implements its effect
 on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``
@@ -47,7 +48,8 @@ class Built:
 
     fixed: (size,) bool, coordinates held at their initial values; hubs: (node, angle law,
     axis (3,)) of the nodes that follow a prescribed rigid rotation; rows: joint rows
-    ``sum(coefficient * q[index]) = 0`` as {index: coefficient}; blocks: quadratic
+    ``sum(coefficient * q[index]) = offset`` as {index: coefficient}, with ``offsets``
+    {row: offset} where it is not 0 (units of the row: m or 1); blocks: quadratic
     constraint rows ``Phi(q) = 0`` (``runtime.model.holonomic``: rigid bodies, 3D joints)
     and rheonomic ones (prescribed joint motion).
     """
@@ -55,6 +57,7 @@ class Built:
     fixed: np.ndarray
     hubs: list[tuple[int, Law, np.ndarray]] = field(default_factory=list)
     rows: list[dict[int, float]] = field(default_factory=list)
+    offsets: dict[int, float] = field(default_factory=dict)
     blocks: list[QuadraticBlock | DrivenBlock] = field(default_factory=list)
     #: the driver coordinates of the constraint being applied (its ``drivers()``, in order)
     drivers: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -77,9 +80,11 @@ class Constraint(Record):
 @dataclass(frozen=True)
 class NodeConstraint(Constraint):
     """A constraint on one node (``"BODY:INDEX"``, or a NodeRef); ``holds_gradients``: it
-    holds the node's gradients as well as its position."""
+    holds the node's gradients as well as its position; ``holds_position``: it holds the
+    whole position (not some components of it, as ``symmetry`` and ``fix``)."""
 
     holds_gradients: ClassVar[bool] = True
+    holds_position: ClassVar[bool] = True
     node: NodeRef | str = key(node_key)
 
     def held(self, dim: int, per_node: int) -> int:

@@ -695,7 +695,8 @@ class ConstraintViolation(Sensor):
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         violation = np.zeros(len(samples.q))
         if model.joints.shape[0]:
-            violation = np.abs(model.joints @ samples.q.T).max(axis=0)
+            violation = np.abs(model.joints @ samples.q.T
+                               - model.joint_offsets[:, None]).max(axis=0)
         if model.holonomic:
             violation = np.maximum(violation, [np.abs(model.holonomic.value(q)).max()
                                                for q in samples.q])
