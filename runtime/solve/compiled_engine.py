@@ -292,6 +292,7 @@ class CompiledEngine:
         m.lu = self._work(nf * (3 * bw + 1))
         m.lu_pivots = self._work(nf, "int")
         m.coupling = self._work(nf * schur_rows)
+        m.solve_work = self._work(nf * schur_rows)
         m.schur = self._work(schur_rows * schur_rows)
         m.schur_pivots = self._work(schur_rows, "int")
         for name, address in lapack.functions().items():
