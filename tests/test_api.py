@@ -40,6 +40,7 @@ from runtime import (
     DistributedForce,
     Dynamic,
     End,
+    Fix,
     Gravity,
     Hub,
     KineticEnergy,
@@ -70,6 +71,7 @@ from runtime import (
     SpringDamper,
     Static,
     StrainEnergy,
+    Symmetry,
     Table,
     TorsionalSpring,
     TotalEnergy,
@@ -261,8 +263,9 @@ def test_unknown_types_are_errors_listing_the_registry():
 def test_registries_are_keyed_by_type():
     for registry in (CONSTRAINTS, LOADS, SENSORS):
         assert all(cls.type == name for name, cls in registry.items())
-    assert list(CONSTRAINTS) == ["clamp", "pin", "prescribed_rotation", "spherical",
-                                 "revolute", "weld", "body_spherical", "body_revolute",
+    assert list(CONSTRAINTS) == ["clamp", "pin", "symmetry", "fix", "prescribed_rotation",
+                                 "spherical", "revolute", "weld", "body_spherical",
+                                 "body_revolute",
                                  "body_prismatic", "body_weld", "body_cylindrical",
                                  "body_universal"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
@@ -450,11 +453,17 @@ def random_scene(rng: random.Random) -> Scene:
             *([LineMoment(edge=f"sheet:{other}", moment_per_length=_vector(rng, 3),
                           follower=rng.random() < 0.5)] if framed else []),
             Pressure(body="sheet", pressure=_number(rng, -1e3, 1e3))])]
-    for body in chain:            # pins on interior nodes
+        if rng.random() < 0.5:    # the free edge on a mirror plane normal to its axis
+            normal = tuple(float(i == a) * rng.choice([-1.0, 1.0]) for i in range(3))
+            constraints.append(Symmetry(edge=f"sheet:{other}", normal=normal))
+    for body in chain:            # pins and fixed components on interior nodes
         for index in range(1, body.n_nodes - 1):
             if rng.random() < 0.2:
                 constraints.append(Pin(NodeRef(body.name, index)))
                 held[(body.name, index)] = Pin
+            elif rng.random() < 0.2:
+                constraints.append(Fix(NodeRef(body.name, index), components=tuple(
+                    rng.sample("xyz"[:dim], rng.randint(1, dim)))))
 
     loads = loads_on_plate if plate is not None else []
     for _ in range(rng.randint(0, 3)):

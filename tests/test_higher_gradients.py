@@ -168,6 +168,10 @@ def test_r_zz_removes_the_poisson_thickness_locking_of_the_strip():
     beam, plate = beam_tip(scene, steel.E), beam_tip(scene, steel.E / (1 - nu**2))
     assert beam < tips[KIND] < plate          # measured -1.847 mm: 0.97 of beam theory
     assert tips["shell3d_8node"] > plate      # measured -1.665 mm, 4 % stiffer than plate
+    # so a run warns of Poisson thickness locking for the shell without r_zz only
+    warned = {kind: element_kind(kind).svk_locking(nu) for kind in tips}
+    assert warned[KIND] is None
+    assert warned["shell3d_8node"][0] == "plates"
 
 
 def test_shell3833_strip_writes_quads_through_every_node(strip, tmp_path):

@@ -324,8 +324,14 @@ class ElementKind:
         """How much too stiff in bending the St. Venant-Kirchhoff law makes this kind at
         Poisson's ratio ``nu``: (what locks, relative excess stiffness), None without
         locking.  Beam bending sees lam + 2G instead of E (Poisson locking), plate bending
-        lam + 2G instead of E / (1 - nu^2) (Poisson thickness locking)."""
+        lam + 2G instead of E / (1 - nu^2) (Poisson thickness locking), unless the kind
+        carries a second derivative across the thickness (r_zz of ANCF-3833): its thickness
+        strain then varies across the thickness, which frees the bending of that locking."""
         if nu == 0 or self.energy.structural:  # a cable's 1D law has no Poisson part
+            return None
+        across = [a for a in range(self.dim) if a not in self.mesh_axes]
+        if self.domain.name == "plate" and any(vector_axes(name) == (a, a) for name in
+                                               self.vectors for a in across):
             return None
         if self.domain.name == "beam":
             return "beams", (1 - nu) / ((1 + nu) * (1 - 2 * nu)) - 1   # (lam + 2G) / E - 1
