@@ -136,6 +136,25 @@ def test_cholmod_factorises_in_place_and_names_the_failing_column():
         cholesky.factorize(-values)
 
 
+def test_cholmod_releases_its_factor_without_naming_c_types():
+    """The finaliser runs wherever the garbage collector starts, also inside cffi's
+    non-reentrant parser (a kernel's cdef): naming a C type there waited forever."""
+    pattern = _grid_pattern(3)
+    cholesky = cholmod.Cholesky(pattern)
+    cholesky.factorize(_values(pattern, np.random.default_rng(2), 40.0))
+    cholesky.solve(np.ones(pattern.shape[0]))   # solution buffers to free too
+
+    class OnlyNull:                    # the cffi module with every type-naming call refused
+        NULL = cholesky._ffi.NULL
+
+        def __getattr__(self, name):
+            raise AssertionError(f"__del__ called ffi.{name}")
+
+    cholesky._ffi = OnlyNull()
+    cholesky.__del__()
+    cholesky.factor = OnlyNull.NULL     # freed: the collector's call returns at once
+
+
 def test_the_choice_rejects_unknown_solvers_naming_the_key():
     with pytest.raises(ValueError, match=r"solver.linear_solver: expected one of banded"):
         linear.choose(_grid_pattern(3), "cholesky")

@@ -176,6 +176,10 @@ class Cholesky:
             raise MemoryError("CHOLMOD: the symbolic analysis failed (out of memory)")
         #: CHOLMOD's solution buffers, allocated by the first solve and reused
         self.handles = ffi.new("cholmod_dense *[3]")
+        #: the factor's handle for ``__del__``, made here: a finaliser runs wherever the
+        #: garbage collector starts, possibly inside cffi's (non-reentrant) parser, so it
+        #: must not name C types (``ffi.new("...")`` there waits for itself forever)
+        self._factor_handle = ffi.new("cholmod_factor **", self.factor)
 
     def column_counts(self) -> np.ndarray:
         """Entries of each column of the factor L (n,), diagonal included, from the symbolic
@@ -216,5 +220,5 @@ class Cholesky:
         for k in range(3):
             if self.handles[k] != ffi.NULL:
                 lib.cholmod_free_dense(self.handles + k, self.common)
-        lib.cholmod_free_factor(ffi.new("cholmod_factor **", self.factor), self.common)
+        lib.cholmod_free_factor(self._factor_handle, self.common)
         lib.cholmod_finish(self.common)
