@@ -17,11 +17,12 @@ from runtime.app.simulation import run_scene
 from runtime.element.reference import arc_reference
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body, Material
-from runtime.model.items.constraints import Clamp
+from runtime.model.items.constraints import Clamp, Hub
 from runtime.model.items.loads import PointForce
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
-from runtime.model.settings import Static
+from runtime.model.settings import Dynamic, Static
+from runtime.model.time_laws import ConstantRate
 from runtime.solve.modal import modal
 from runtime.solve.static import solve_static
 from runtime.studies import locking
@@ -189,3 +190,23 @@ def test_arc_reference_carries_the_curvature_vector():
     # over this 0.6 rad element)
     np.testing.assert_allclose(kappa[[0, -1]], 1 / radius, rtol=1e-12)
     np.testing.assert_allclose(kappa, 1 / radius, rtol=1e-4)
+
+
+@pytest.mark.parametrize("engine", ["python", "compiled"])
+def test_prescribed_rotation_turns_r_x_and_leaves_the_curvature_free(engine):
+    """A hub holds r and turns r_x (``ElementKind.held_vectors``); r_xx of the hub node is a
+    free coordinate, which the spinning cable bends (both engines)."""
+    scene = Scene(title="quintic hub", materials=[Material("steel", E_MODULUS, 0.0, RHO)],
+                  bodies=[Body("beam", "cable2d_quintic", "steel", 0.01, 0.01, 2, (0.0, 0.0),
+                               (1.0, 0.0))],
+                  constraints=[Hub("beam:0", ConstantRate(omega=2.0))],
+                  dynamic=Dynamic(t_end=0.05, step=1e-3))
+    model = Model(scene)
+    assert np.isin(model.node_dofs(0, "r_x"), model.prescribed).all()
+    assert np.isin(model.node_dofs(0, "r_xx"), model.free).all()
+    result = run_scene(scene, engine=engine, progress=False, store_states=True)
+    t, q = result.states.t[-1], result.states.q[-1]
+    turned = 2.0 * t
+    np.testing.assert_allclose(q[model.node_dofs(0, "r_x")],
+                               (math.cos(turned), math.sin(turned)), atol=1e-12)
+    assert np.abs(q[model.node_dofs(0, "r_xx")]).max() > 0
