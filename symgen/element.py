@@ -57,7 +57,7 @@ class ElementSpec:
     description: one line for listings.
     energy: the strain energy (``symgen.energies.ENERGIES``): ``continuum`` (the Green-Lagrange
         strain of the full deformation gradient with a material law, the default) or
-        ``cable`` (axial strain and bending of a structural beam carrying r, r_x).
+        ``cable`` (axial strain and bending of a structural beam carrying r, r_x[, r_xx]).
     """
 
     name: str

@@ -2,8 +2,9 @@
 
 * ``continuum`` (the default): ``U = int_V0 W(E) dV0`` with the Green-Lagrange strain of the
   full deformation gradient and the density ``W`` of a material law (``symgen.laws.LAWS``).
-* ``cable``: a structural beam for elements whose nodes carry r and r_x only (the
-  gradient-deficient ANCF cable; Berzeri and Shabana's simple bending model):
+* ``cable``: a structural beam for elements whose nodes carry r and r_x (the
+  gradient-deficient ANCF cable; Berzeri and Shabana's simple bending model), or r, r_x and
+  r_xx (the quintic cable, ``CABLE_VECTORS``):
 
       U = EA/2 int eps^2 dx + EI/2 int r_xx . r_xx dx,    eps = (r_x . r_x - 1) / 2,
 
@@ -106,6 +107,10 @@ CABLE_LAWS: dict[str, CableLaw] = {
         _cable_svk, bending="exact_curvature"),
 }
 
+#: The nodal vectors a cable's nodes may carry: the cubic cable's r, r_x and the quintic
+#: one's r, r_x, r_xx (the curvature; ``symgen/elements/cable2d_quintic.py``).
+CABLE_VECTORS = (("r", "r_x"), ("r", "r_x", "r_xx"))
+
 _CABLE_REFUSES = ("law {name!r} does not apply to the cable energy: it corrects the shear "
                   "and Poisson strains of a continuum, which a cable (axial strain and bending "
                   "of r, r_x) has not")
@@ -118,9 +123,9 @@ def check(spec) -> None:
                          f"{spec.energy!r}")
     if spec.energy != "cable":
         return
-    if spec.domain.name != "beam" or tuple(spec.vectors) != ("r", "r_x"):
+    if spec.domain.name != "beam" or tuple(spec.vectors) not in CABLE_VECTORS:
         raise ValueError(f"element {spec.name!r}: the cable energy needs a beam domain and "
-                         "nodes carrying r, r_x")
+                         "nodes carrying " + " or ".join(", ".join(v) for v in CABLE_VECTORS))
     if any(s.free_symbols & set(spec.coordinates[1:]) for s in spec.shape_functions):
         raise ValueError(f"element {spec.name!r}: cable shape functions depend on x only")
 

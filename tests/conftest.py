@@ -82,18 +82,25 @@ def degenerate_reference(kind: str) -> np.ndarray:
     return q.ravel()
 
 
-def _nodal_reference(kind: str, position, frame) -> np.ndarray:
-    """e0 from the node points of the kind: ``position(p)`` and ``frame(p)`` (columns
-    dr0/dx, dr0/dy[, dr0/dz]) at each node's local point p; higher derivatives (r_zz) zero
-    (the straight fibres of every reference here)."""
+def _nodal_reference(kind: str, position, frame, curvature=None) -> np.ndarray:
+    """e0 from the node points of the kind: ``position(p)``, ``frame(p)`` (columns
+    dr0/dx, dr0/dy[, dr0/dz]) and ``curvature(p)`` (d^2 r0/dx^2, the r_xx of a quintic
+    cable; zero when None) at each node's local point p; other higher derivatives (r_zz)
+    zero (the straight fibres of every reference here)."""
     info = element_kind(kind)
     vectors = []
     for point in info.node_points(LENGTH, HEIGHT, WIDTH):
         columns = frame(point)
         for name in info.vectors:
             axes = vector_axes(name)
-            vectors.append(position(point) if not axes else columns[:, axes[0]]
-                           if len(axes) == 1 else np.zeros(info.dim))
+            if not axes:
+                vectors.append(position(point))
+            elif len(axes) == 1:
+                vectors.append(columns[:, axes[0]])
+            elif axes == (0, 0) and curvature is not None:
+                vectors.append(curvature(point))
+            else:
+                vectors.append(np.zeros(info.dim))
     return np.concatenate(vectors)
 
 
@@ -136,7 +143,11 @@ def arc_reference(kind: str, radius: float = ARC_RADIUS, angle: float = ARC_ANGL
         columns = np.column_stack([[np.cos(t), np.sin(t), 0.0], [-np.sin(t), np.cos(t), 0.0],
                                    [0.0, 0.0, 1.0]])
         return columns[:d, :d]
-    return _nodal_reference(kind, position, frame)
+
+    def curvature(p):
+        t = p[0] / radius
+        return np.array([-np.sin(t), np.cos(t), 0.0])[:d] / radius
+    return _nodal_reference(kind, position, frame, curvature)
 
 
 def reference(kind: str, curved: bool) -> np.ndarray:

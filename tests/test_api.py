@@ -427,7 +427,10 @@ def random_scene(rng: random.Random) -> Scene:
         held[(bodies[0].name, 0)] = kind
     chain = [b for b in bodies if b is not plate]
     for a, b in zip(chain, chain[1:], strict=False):
-        full = all(len(element_kind(x.element).vectors) == dim + 1 for x in (a, b))
+        # nodes carrying r and every first gradient, nothing else (not r_xx of a quintic cable)
+        full = all(element_kind(x.element).vectors == ("r", *element_kind(x.element)
+                                                       .first_gradients)
+                   and len(element_kind(x.element).first_gradients) == dim for x in (a, b))
         joints = [Spherical] + ([Weld] if full else []) + ([Revolute] if dim == 2 or full
                                                           else [])
         joint = rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0)))

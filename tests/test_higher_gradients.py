@@ -96,10 +96,16 @@ def test_bent_panel_keeps_straight_fibres_and_refuses_curvature_vectors():
     normals = (e0[:, 0] - centre) * [1, 0, 1] / radius
     np.testing.assert_allclose(e0[:, 1], -normals, atol=1e-15)
     assert np.all(e0[:, 2] == 0)
-    # a kind with a derivative along its curved axis (r_xx of a beam) is refused
+    # a kind with a derivative along its curved axis (r_xx of a beam) is refused where the
+    # placement does not compute the curvature (a file mesh), taken where it does (arcs);
+    # other derivatives along it (r_xy) are refused everywhere
     beam = dataclasses.replace(element_kind("beam3d_3node"), vectors=("r", "r_y", "r_xx"))
     with pytest.raises(ValueError, match="carries r_xx, derivatives along the curved axis"):
-        geometry.curved_reference_check(beam, "arc")
+        geometry.curved_reference_check(beam, "file mesh")
+    geometry.curved_reference_check(beam, "arc", curvature=True)
+    mixed = dataclasses.replace(beam, vectors=("r", "r_y", "r_xy"))
+    with pytest.raises(ValueError, match="carries r_xy"):
+        geometry.curved_reference_check(mixed, "arc", curvature=True)
 
 
 def test_node_frames_are_made_of_first_gradients_only():

@@ -8,32 +8,49 @@ import numpy as np
 
 from runtime.kernels.kind import ElementKind, is_first_gradient, vector_axes
 
+#: The axes of the second derivative along the local x, r_xx: the curvature vector of a
+#: line (a quintic cable's nodal vector), which the curved placements compute.
+CURVATURE_AXES = (0, 0)
 
-def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """e0 (ndof,) from node positions (nodes, dim) and node frames (nodes, dim, dim).
+
+def frame_reference(kind: ElementKind, positions: np.ndarray, frames: np.ndarray,
+                    curvatures: np.ndarray | None = None) -> np.ndarray:
+    """e0 (ndof,) from node positions (nodes, dim), node frames (nodes, dim, dim) and, for a
+    placement curved along its local x, the curvature vectors (nodes, dim).
 
     frames[i][:, a] is the gradient dr0/dx_a at node i (a unit-speed parameterisation has
-    orthonormal frames).  Nodal vectors are taken in the kind's storage order; higher
-    derivatives (r_zz, r_xy, ...) are zero: the reference is linear in the local
-    coordinates around each node (straight, flat, or with straight fibres across a curved
-    axis: ``curved_reference_check``).
+    orthonormal frames); curvatures[i] is d^2 r0 / dx^2 at node i (1/m; -(1/R) times the
+    radial unit vector on an arc of radius R), the r_xx a kind may carry (zero when None: a
+    straight axis).  Nodal vectors are taken in the kind's storage order; other higher
+    derivatives (r_zz, r_xy, ...) are zero: the reference is linear across the section or the
+    thickness (straight fibres: ``curved_reference_check``).
     """
     e0 = []
     zero = np.zeros(kind.dim)
-    for position, frame in zip(positions, frames, strict=True):
+    for i, (position, frame) in enumerate(zip(positions, frames, strict=True)):
         for name in kind.vectors:
             axes = vector_axes(name)
-            e0.extend(position if not axes else frame[:, axes[0]] if len(axes) == 1 else zero)
+            if not axes:
+                e0.extend(position)
+            elif len(axes) == 1:
+                e0.extend(frame[:, axes[0]])
+            elif axes == CURVATURE_AXES and curvatures is not None:
+                e0.extend(curvatures[i])
+            else:
+                e0.extend(zero)
     return np.array(e0, dtype=float)
 
 
-def curved_reference_check(kind: ElementKind, what: str) -> None:
+def curved_reference_check(kind: ElementKind, what: str, curvature: bool = False) -> None:
     """Raise ValueError if ``kind`` carries a higher derivative along a meshed axis (r_xx,
-    r_xz of a beam or shell): on a reference curved along that axis it is the curvature,
-    which these placements do not compute.  Derivatives across the section or the thickness
-    only (r_zz of a shell) are zero on them: their fibres are straight."""
+    r_xz of a beam or shell) that the placement does not compute: on a reference curved
+    along that axis it is not zero.  A placement that computes the curvature of its local x
+    (``curvature``: arcs, bent elements) gives r_xx.  Derivatives across the section or the
+    thickness only (r_zz of a shell) are zero on them: their fibres are straight."""
+    computed = {CURVATURE_AXES} if curvature else set()
     curved = [name for name in kind.vectors if len(vector_axes(name)) > 1
-              and set(vector_axes(name)) & set(kind.mesh_axes)]
+              and set(vector_axes(name)) & set(kind.mesh_axes)
+              and vector_axes(name) not in computed]
     if curved:
         raise ValueError(f"{what} element: {kind.name} carries {', '.join(curved)}, "
                          "derivatives along the curved axis that this placement does not "
@@ -120,9 +137,9 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
     a circle of ``radius`` (x is arc length): beams in the x-y plane from the origin towards
     +y (r_y pointing to the centre); plates into a cylindrical panel about an axis parallel
     to y, towards +z (r_z the outward normal of the flat panel turned with it)."""
-    curved_reference_check(kind, "bent")
+    curved_reference_check(kind, "bent", curvature=True)
     points = kind.node_points(*geometry)
-    positions, frames = [], []
+    positions, frames, curvatures = [], [], []
     plate = kind.mesh_axes == [0, 1]
     for p in points:
         t = p[0] / radius
@@ -130,12 +147,17 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
         if plate:
             positions.append([radius * s, p[1], radius * (1 - c)])
             frames.append(np.column_stack([[c, 0, s], [0, 1, 0], [-s, 0, c]]))
+            curvatures.append(np.array([-s, 0.0, c]) / radius)
         else:
             position = radius * np.array([s, 1 - c, 0.0]) + p[1] * np.array([-s, c, 0.0])
             frame = np.column_stack([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+            # d^2/dx^2 of the position: (1/R) (1 - y/R) towards the centre (0, R)
+            curvature = (1 - p[1] / radius) / radius * np.array([-s, c, 0.0])
             positions.append(position[: kind.dim])
             frames.append(frame[: kind.dim, : kind.dim])
-    return frame_reference(kind, np.array(positions, float), np.array(frames, float))
+            curvatures.append(curvature[: kind.dim])
+    return frame_reference(kind, np.array(positions, float), np.array(frames, float),
+                           np.array(curvatures, float))
 
 
 def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
@@ -148,11 +170,12 @@ def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
     """
     if kind.mesh_axes != [0]:
         raise ValueError(f"arc element: {kind.name} is not a line element")
-    curved_reference_check(kind, "arc")
+    curved_reference_check(kind, "arc", curvature=True)
     center = np.asarray(center, float)[: kind.dim]
     positions, frames = [], []
     sign = 1.0 if angle > 0 else -1.0
-    for theta in start_angle + angle * kind.node_fractions[:, 0]:
+    thetas = start_angle + angle * kind.node_fractions[:, 0]
+    for theta in thetas:
         radial = np.array([np.cos(theta), np.sin(theta)])
         tangent = sign * np.array([-np.sin(theta), np.cos(theta)])
         normal = -sign * radial
@@ -164,4 +187,7 @@ def arc_reference(kind: ElementKind, center, radius: float, start_angle: float,
             positions.append(np.append(position, center[2]))
             frames.append(np.column_stack([np.append(tangent, 0), np.append(normal, 0),
                                            [0.0, 0.0, 1.0]]))
-    return frame_reference(kind, np.stack(positions), np.stack(frames))
+    # d^2 r / ds^2 = -(1/R) times the radial unit vector, whichever way the arc turns
+    radial = np.column_stack([np.cos(thetas), np.sin(thetas), np.zeros_like(thetas)])
+    return frame_reference(kind, np.stack(positions), np.stack(frames),
+                           -radial[:, : kind.dim] / radius)

@@ -276,6 +276,16 @@ class ElementKind:
         """The first gradients its nodes carry (r_x, r_y, r_z), in storage order."""
         return tuple(v for v in self.vectors if is_first_gradient(v))
 
+    @property
+    def held_vectors(self) -> tuple[str, ...]:
+        """The nodal vectors a clamp (and a prescribed rotation) holds, in storage order: the
+        position, the first gradients (the node's frame) and the derivatives across the
+        section only (r_zz of a shell: the clamped section keeps its shape).  A derivative
+        along a meshed axis (r_xx of the quintic cable, the curvature) is the bending of the
+        clamped end, which stays free."""
+        return tuple(v for v in self.vectors if v == "r" or is_first_gradient(v)
+                     or not set(vector_axes(v)) & set(self.mesh_axes))
+
     def frame_gap(self) -> str | None:
         """Why a node of this kind cannot carry an orthonormal frame (None when it can): the
         gradients it carries must fix every axis, r_x, r_y and r_z completed from two in 3D,

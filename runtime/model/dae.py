@@ -124,8 +124,8 @@ class DAESystem:
 
     def _hub(self, node: int, law, axis: np.ndarray) -> Hub:
         m = self.model
-        coordinates = m.node_dofs(node).reshape(-1, self.dim)
-        rotated = np.array([name != "r" for name in m.node_vectors(node)])
+        coordinates = m.held_dofs(node).reshape(-1, self.dim)
+        rotated = np.array([name != "r" for name in m.body_of(node).kind.held_vectors])
         return Hub(coordinates, m.reference[coordinates], rotated, law,
                    np.asarray(axis, float) / np.linalg.norm(axis))
 

@@ -218,6 +218,13 @@ class Model:
         k = body.kind.vectors.index(vector)
         return np.arange(start + k * self.dim, start + (k + 1) * self.dim)
 
+    def held_dofs(self, node: int) -> np.ndarray:
+        """Coordinates of a node that a clamp or a prescribed rotation holds, in storage
+        order: its ``ElementKind.held_vectors`` (position, first gradients; a cable's
+        curvature r_xx stays free)."""
+        return np.concatenate([self.node_dofs(node, vector)
+                               for vector in self.body_of(node).kind.held_vectors])
+
     def position_dofs(self) -> np.ndarray:
         """Coordinates of the positions r of every node, (nodes, dim), in node order."""
         if not self.bodies:
@@ -286,7 +293,7 @@ class Model:
         self.hubs = built.hubs  # (node, angle law, axis (3,))
         prescribed = np.zeros(self.size, bool)
         for node, _, _ in self.hubs:
-            prescribed[self.node_dofs(node)] = True
+            prescribed[self.held_dofs(node)] = True
         prescribed[[coordinate for coordinate, _ in self.drivers]] = True
         fixed &= ~prescribed
         self.fixed = np.flatnonzero(fixed)

@@ -82,14 +82,14 @@ def check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
     memory = LIMITS["memory_bytes"]
     elements = sum(b.elements for b in bodies)
     dim = bodies[0].dim if bodies else 3
-    per_node = {b.name: element_kind(b.element).per_node for b in bodies}
+    kinds = {b.name: element_kind(b.element) for b in bodies}
     coordinates = _coordinates(bodies) + rigid_coordinates
     model_bytes = _model_bytes(bodies)
-    held = sum(c.held(dim, per_node[node.body]) for c in constraints
+    held = sum(c.held(kinds[node.body]) for c in constraints
                if isinstance(c, NodeConstraint) for node in c.targets())
     free = coordinates - held
     joints = [c for c in constraints if isinstance(c, Joint)]
-    dofs = free - sum(c.rows(dim, per_node[c.nodes[0].body]) for c in joints)
+    dofs = free - sum(c.rows(dim, kinds[c.nodes[0].body].per_node) for c in joints)
     if dofs <= 0:
         raise SceneError(f"constraint: the constraints hold all {coordinates} coordinates of "
                          f"the model; expected at least one free coordinate")

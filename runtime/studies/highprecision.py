@@ -115,10 +115,23 @@ def _cable() -> list[sp.Expr]:
             L * (xi**3 - xi**2)]
 
 
+def _quintic_cable() -> list[sp.Expr]:
+    """Quintic Hermite functions (r, r_x, r_xx at both ends) in their factored form:
+    (1 - xi)^3 (1 + 3 xi + 6 xi^2), L xi (1 - xi)^3 (1 + 3 xi), L^2 xi^2 (1 - xi)^3 / 2 at
+    x = 0 and xi^3 (10 - 15 xi + 6 xi^2), L xi^3 (1 - xi) (3 xi - 4), L^2 xi^3 (1 - xi)^2 / 2
+    at x = L."""
+    xi = X / L
+    return [(1 - xi)**3 * (1 + 3 * xi + 6 * xi**2), L * xi * (1 - xi)**3 * (1 + 3 * xi),
+            L**2 * xi**2 * (1 - xi)**3 / 2, xi**3 * (10 - 15 * xi + 6 * xi**2),
+            L * xi**3 * (1 - xi) * (3 * xi - 4), L**2 * xi**3 * (1 - xi)**2 / 2]
+
+
 #: kind: its shape functions typed from the literature, node-major, in X, Y, Z, L, H, W.
 LITERATURE = {
     "cable2d": _cable,
     "cable3d": _cable,
+    "cable2d_quintic": _quintic_cable,
+    "cable3d_quintic": _quintic_cable,
     "beam2d": lambda: _beam_2node(2),
     "beam3d": lambda: _beam_2node(3),
     "beam2d_3node": lambda: _beam_3node(2),

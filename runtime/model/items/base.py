@@ -68,6 +68,9 @@ class ModelView(Protocol):
     def node_dofs(self, node: int, vector: str | None = None) -> np.ndarray:
         """Coordinates of a node (all, or one nodal vector such as "r")."""
 
+    def held_dofs(self, node: int) -> np.ndarray:
+        """Coordinates of a node that a clamp holds (``ElementKind.held_vectors``)."""
+
     def node_frame(self, q: np.ndarray, node: int) -> np.ndarray:
         """Orthonormal frame (dim, dim) of a node's gradients at coordinates ``q``."""
 

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from runtime.kernels.kind import is_first_gradient
+from runtime.kernels.kind import ElementKind, is_first_gradient
 from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items.base import ModelView
@@ -80,17 +80,18 @@ class Constraint(Record):
 @dataclass(frozen=True)
 class NodeConstraint(Constraint):
     """A constraint on one node (``"BODY:INDEX"``, or a NodeRef); ``holds_gradients``: it
-    holds the node's gradients as well as its position; ``holds_position``: it holds the
-    whole position (not some components of it, as ``symmetry`` and ``fix``)."""
+    holds the node's gradients (``ElementKind.held_vectors``: the first gradients and the
+    derivatives across the section, not a cable's curvature r_xx) as well as its position;
+    ``holds_position``: it holds the whole position (not some components of it, as
+    ``symmetry`` and ``fix``)."""
 
     holds_gradients: ClassVar[bool] = True
     holds_position: ClassVar[bool] = True
     node: NodeRef | str = key(node_key)
 
-    def held(self, dim: int, per_node: int) -> int:
-        """Number of coordinates it holds per node (a node has ``per_node``, its position
-        ``dim``)."""
-        return per_node if self.holds_gradients else dim
+    def held(self, kind: ElementKind) -> int:
+        """Number of coordinates it holds per node of ``kind``."""
+        return len(kind.held_vectors) * kind.dim if self.holds_gradients else kind.dim
 
     def targets(self) -> list[NodeRef]:
         """The nodes it holds."""
@@ -127,14 +128,16 @@ class HeldNodes(NodeConstraint):
         return "node" if self.edge is None else "edge"
 
     def apply(self, model: ModelView, built: Built) -> None:
-        vector = None if self.holds_gradients else "r"
-        for node in self.targets():
-            built.fixed[model.node_dofs(model.node_index(node), vector)] = True
+        for ref in self.targets():
+            node = model.node_index(ref)
+            held = model.held_dofs(node) if self.holds_gradients else model.node_dofs(node, "r")
+            built.fixed[held] = True
 
 
 @dataclass(frozen=True)
 class Clamp(HeldNodes):
-    """Holds every coordinate of the node(s) (position and gradients)."""
+    """Holds the position and the gradients of the node(s) (``ElementKind.held_vectors``;
+    a quintic cable's curvature r_xx stays free: the clamped end bends)."""
 
     type: ClassVar[str] = "clamp"
 
@@ -212,7 +215,7 @@ def gradient_map(model: ModelView, node: int, vector: np.ndarray,
     node's gradient vectors G that is ``vector`` (3,) at the reference: it turns and
     stretches with the node's section.  SceneError (``what`` names the vector) when
     ``vector`` is not in the span of the node's gradients."""
-    names = [name for name in model.node_vectors(node) if name != "r"]
+    names = [name for name in model.node_vectors(node) if is_first_gradient(name)]
     gradients = np.array([model.reference[model.node_dofs(node, name)] for name in names]).T
     combination, *_ = np.linalg.lstsq(gradients, vector, rcond=None)
     if np.abs(gradients @ combination - vector).max() > 1e-9:

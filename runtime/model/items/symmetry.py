@@ -34,7 +34,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from runtime.kernels.kind import is_first_gradient, vector_axes
+from runtime.kernels.kind import ElementKind, is_first_gradient, vector_axes
 from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, HeldNodes
@@ -197,8 +197,8 @@ class Symmetry(HeldNodes):
     holds_position: ClassVar[bool] = False
     normal: tuple[float, ...] = key(_normal_key, kw_only=True)
 
-    def held(self, dim: int, per_node: int) -> int:
-        return per_node // dim           # at least one row per nodal vector
+    def held(self, kind: ElementKind) -> int:
+        return len(kind.vectors)         # at least one row per nodal vector
 
     def apply(self, model: ModelView, built: Built) -> None:
         normal = np.asarray(self.normal, float)
@@ -228,7 +228,7 @@ class Fix(HeldNodes):
     holds_position: ClassVar[bool] = False
     components: tuple[str, ...] = key(_components_key, kw_only=True)
 
-    def held(self, dim: int, per_node: int) -> int:
+    def held(self, kind: ElementKind) -> int:
         return len(self.components)
 
     def apply(self, model: ModelView, built: Built) -> None:
