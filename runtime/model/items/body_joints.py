@@ -16,7 +16,8 @@ A revolute joint's ``angle`` law theta(t) adds the rheonomic row sin(theta - phi
 body's rotation phi about the axis relative to the other side (``angle_forms``), a
 prismatic joint's ``displacement`` law d(t) the row a . (r_P - r_Q) - d(t) = 0; their time
 coefficients are driver coordinates of the model (``runtime.model.holonomic.DrivenBlock``).
-The prismatic joint slides on the ground or, with ``other``, on another rigid body.
+The prismatic joint slides on the ground or, with ``other``, on another rigid body, or,
+with ``node``, on a node's frame (``runtime.model.items.body_vectors``).
 """
 
 from __future__ import annotations
@@ -84,9 +85,7 @@ class BodySpherical(Constraint):
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
-        if "node" in data and "other" in data:
-            raise SceneError(f"{path}.other: expected a node or another body (or neither: "
-                             "the ground), got both")
+        vectors.exclusive_sides(data, path)
         if "other_point" in data and "other" not in data:
             raise SceneError(f"{path}.other_point: a point of another body needs other")
         joint = super().parse(data, path, context)
@@ -295,11 +294,13 @@ class BodyPrismatic(Constraint):
     point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
     rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
     and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
-    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) the
-    axis and the line are fixed in that body (their place at t = 0) and the orientation is
-    kept relative to it: the same rows with the other body's directions (``dot_rows``:
-    bilinear).  With a ``displacement`` law d(t) (m), the travel along the axis from t = 0
-    is prescribed (a rheonomic row)."""
+    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) or
+    ``node`` (a node with the three gradients of a frame) the axis and the line are fixed in
+    that side (their place at t = 0) and the orientation is kept relative to it: the rows
+    of ``body_vectors.frame_rows``, the slide along the side's normals of the axis and the
+    small relative rotation (bilinear, symmetric in the two sides).  With a
+    ``displacement`` law d(t) (m), the travel along the axis from t = 0 is prescribed (a
+    rheonomic row)."""
 
     type: ClassVar[str] = "body_prismatic"
     dims: ClassVar[tuple[int, ...]] = (3,)
@@ -309,10 +310,13 @@ class BodyPrismatic(Constraint):
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
     displacement: Law | None = key(_motion_key("a displacement in m"), None)
     other: str | None = key(rigid_key, None)
+    node: NodeRef | str | None = key(node_key, None)
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
+        vectors.exclusive_sides(data, path)
         joint = super().parse(data, path, context)
+        vectors.check_frame_node(joint.node, path, context, f"a {cls.type} holds")
         if joint.other is not None:
             if joint.other == joint.body:
                 raise SceneError(f"{path}.other: expected another body than "
@@ -327,14 +331,15 @@ class BodyPrismatic(Constraint):
         return () if self.displacement is None else (Driver(self.displacement),)
 
     def targets(self) -> list[NodeRef]:
-        return []
+        """The node it slides on (its ``node``, if any)."""
+        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:
         return "body"
 
     def apply(self, model: ModelView, built: Built) -> None:
-        if self.other is not None:
+        if self.other is not None or self.node is not None:
             self._between(model, built)
             return
         dofs, position = model.rigid_point(self.body, self.point)
@@ -361,22 +366,16 @@ class BodyPrismatic(Constraint):
                                for c in range(3) if axes[b, c] != 0.0})
 
     def _between(self, model: ModelView, built: Built) -> None:
-        """The slide on the ``other`` body (class docstring)."""
-        owner = f"{self.type} of {self.body} on {self.other}"
-        here = vectors.body_point(model, self.body, self.point)
-        slide = here - vectors.point(model, self.other, here.at(model.reference))
+        """The slide on the ``other`` body or the ``node`` (class docstring)."""
+        side = vectors.side_of(self)
+        owner = f"{self.type} of {self.body} on {side}"
         axis = np.asarray(self.axis)
-        pairs = [(slide, vectors.direction(model, self.other, n)) for n in normals_of(axis)]
-        rigid = model.rigid[self.body]
-        if rigid.dofs.size == 12:          # e_a . e_b0 = 0 with e_b0 fixed in the other
-            axes = rigid.item.frame.T
-            pairs += [(vectors.direction(model, self.body, axes[a]),
-                       vectors.direction(model, self.other, axes[b]))
-                      for a, b in ((0, 1), (1, 2), (2, 0))]
-        built.blocks.append(vectors.dot_rows(owner, pairs))
+        turns = model.rigid[self.body].dofs.size == 12       # a rigid body, not a point mass
+        built.blocks.append(vectors.frame_rows(model, self.body, self.point, side,
+                                               normals_of(axis), turns, owner))
         if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
-            along = vectors.dot_rows(f"{owner} (displacement)",
-                                     [(slide, vectors.direction(model, self.other, axis))])
+            along = vectors.frame_rows(model, self.body, self.point, side, axis[None, :],
+                                       False, f"{owner} (displacement)")
             k = along.dofs.size
             unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
                                   np.zeros((1, k)), -np.ones(1))
