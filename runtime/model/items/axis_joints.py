@@ -126,8 +126,8 @@ class BodyUniversal(AxisJoint):
     def apply(self, model: ModelView, built: Built) -> None:
         slide, axis = self._frame(model)
         side = vectors.side_of(self)
-        theirs = vectors.side_frame(model, side) @ np.asarray(self.other_axis)
         owner = f"{self.type} of {self.body}"
+        theirs = vectors.side_axis(model, side, self.other_axis, f"{owner}: other_axis")
         if self.node is not None:
             _check_normal(axis, theirs, f"{owner}: other_axis (the node's reference frame)")
         unit = [vectors.direction(model, None, e) for e in np.eye(3)]

@@ -27,7 +27,7 @@ from runtime.model.items.rigid import natural_map
 from runtime.model.schema import Context, NodeRef
 
 __all__ = ["Affine", "Side", "body_point", "check_frame_node", "combined", "direction", "dot_rows",
-           "exclusive_sides", "frame_deflection", "frame_rows", "point", "side_frame",
+           "exclusive_sides", "frame_deflection", "frame_rows", "point", "side_axis",
            "side_of"]
 
 #: the other side of a joint: the ground (None), a rigid body (its name) or a node
@@ -35,6 +35,8 @@ Side = str | NodeRef | None
 
 #: a frame fixed in a node needs its gradients to span 3D: r_x, r_y and r_z
 FRAME_GRADIENTS = 3
+#: an axis given in the frame of a node with one gradient lies along it to this (cosine)
+ALONG = 1e-12
 
 
 @dataclass(frozen=True)
@@ -85,14 +87,29 @@ def check_frame_node(node: NodeRef | None, path: str, context: Context, needs: s
                          "a gradient (body_revolute, body_universal), not for a frame")
 
 
-def side_frame(model: ModelView, side: Side) -> np.ndarray:
-    """The axes (3, 3; columns) of the ``side`` at t = 0: the global axes for the ground, a
-    rigid body's axes, a node's orthonormalised gradients (``ModelView.node_frame``)."""
+def side_axis(model: ModelView, side: Side, local: tuple[float, ...], what: str) -> np.ndarray:
+    """The direction (3,) at t = 0 of the unit vector ``local`` given in the ``side``'s axes:
+    global for the ground, a rigid body's axes, a node's reference frame (its gradients
+    orthonormalised, ``ModelView.node_frame``).  A node whose one gradient fixes a single
+    axis (a 3D cable's r_x) has that axis only: SceneError naming ``what`` unless ``local``
+    lies along it."""
+    local = np.asarray(local, float)
     if side is None:
-        return np.eye(3)
-    if isinstance(side, NodeRef):
-        return model.node_frame(model.reference, model.node_index(side))
-    return np.asarray(model.rigid[side].item.frame, float)
+        return local
+    if not isinstance(side, NodeRef):
+        return np.asarray(model.rigid[side].item.frame, float) @ local
+    node = model.node_index(side)
+    kind = model.bodies[side.body].kind
+    if kind.frame_gap() is None:
+        return model.node_frame(model.reference, node) @ local
+    gradient = kind.first_gradients[0]
+    axis = "xyz".index(gradient[-1])
+    if abs(local[axis]) < 1.0 - ALONG:
+        raise SceneError(f"{what}: node {show(side.spelled())} of body {show(side.body)} "
+                         f"({kind.name}) has only {gradient} of a frame: expected an axis "
+                         f"along its local {gradient[-1]}, got {tuple(float(x) for x in local)}")
+    tangent = model.reference[model.node_dofs(node, gradient)]
+    return np.sign(local[axis]) * tangent / np.linalg.norm(tangent)
 
 
 def point(model: ModelView, side: Side, world: np.ndarray,
