@@ -31,8 +31,8 @@ from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
-from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
+from runtime.model.items.constraints import Built, Constraint, normals_of
+from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     Context,
     NodeRef,
@@ -166,23 +166,6 @@ def _motion_key(what: str):
     return parse
 
 
-def _direction_map(direction: np.ndarray) -> np.ndarray:
-    """The map (3, 12) from a body's natural coordinates to its vector ``direction``
-    (body coordinates): [0, d_1 I, d_2 I, d_3 I]."""
-    return natural_map(direction) - natural_map(np.zeros(3))
-
-
-def _bilinear(first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    """The Hessian (k1 + k2, k1 + k2) of (A y_1) . (B y_2) for the maps first = A (3, k1)
-    and second = B (3, k2) over y = [y_1, y_2]."""
-    n = first.shape[1]
-    coupling = first.T @ second
-    hessian = np.zeros((n + second.shape[1],) * 2)
-    hessian[:n, n:] = coupling
-    hessian[n:, :n] = coupling.T
-    return hessian
-
-
 def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str | None,
                 node: NodeRef | None, owner: str) -> QuadraticBlock:
     """The rotation phi of the rigid ``body`` about its ``axis`` (body coordinates)
@@ -190,27 +173,12 @@ def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str
     [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
     axis, e' and f' = a x e' the other side's vectors that are e and a x e at t = 0: fixed
     on the ground (linear rows), fixed combinations of the ``other`` body's axes or of the
-    ``node``'s gradients (bilinear rows)."""
-    rigid = model.rigid[body]
-    frame = rigid.item.frame
-    reference = normals_of(frame @ np.asarray(axis))      # e' and f' at t = 0 (2, 3)
-    mine = _direction_map(frame.T @ reference[0])         # e = E y_body (3, 12)
-    if node is None and other is None:
-        dofs = rigid.dofs
-        return QuadraticBlock(owner, dofs, np.zeros((2, dofs.size, dofs.size)),
-                              reference @ mine, np.zeros(2))
-    if other is not None:
-        side = model.rigid[other]
-        other_dofs = side.dofs
-        maps = [_direction_map(side.item.frame.T @ vector) for vector in reference]
-    else:
-        index = model.node_index(node)
-        found = [gradient_map(model, index, vector, f"{owner}: the reference direction")
-                 for vector in reference]
-        other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
-    dofs = np.concatenate([rigid.dofs, other_dofs])
-    return QuadraticBlock(owner, dofs, np.array([_bilinear(mine, m) for m in maps]),
-                          np.zeros((2, dofs.size)), np.zeros(2))
+    ``node``'s gradients (bilinear rows; ``body_vectors.direction``)."""
+    reference = normals_of(model.rigid[body].item.frame @ np.asarray(axis))  # e', f' at t = 0
+    side = node if node is not None else other
+    mine = vectors.direction(model, body, reference[0])
+    return vectors.dot_rows(owner, [(mine, vectors.direction(
+        model, side, vector, f"{owner}: the reference direction")) for vector in reference])
 
 
 def _row(block: QuadraticBlock, row: int, sign: float) -> QuadraticBlock:
@@ -258,30 +226,19 @@ class BodyRevolute(BodySpherical):
         frame = body.item.frame
         axis_world = frame @ np.asarray(self.axis)
         normals = normals_of(axis_world)
-        # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
-        axis_map = _direction_map(np.asarray(self.axis))
+        mine = vectors.direction(model, self.body, axis_world)      # the body's axis a
         if self.node is None and self.other is None:      # normals fixed: linear rows
             for normal in normals:
-                coefficients = normal @ axis_map
+                coefficients = normal @ mine.map
                 built.rows.append({int(i): float(v) for i, v in zip(dofs, coefficients,
                                                                    strict=True) if v != 0.0})
             return
-        if self.other is not None:       # the other body's normals: b_k = B_k q_other
-            other = model.rigid[self.other]
-            other_dofs = other.dofs
-            local = other.item.frame.T @ normals.T          # (3, 2) body components
-            maps = [_direction_map(local[:, k]) for k in range(2)]
-            first_map, first_dofs = axis_map, dofs
+        if self.other is not None:       # the other body's normals b_k
+            pairs = [(mine, vectors.direction(model, self.other, n)) for n in normals]
         else:                           # the node's axis a = G c, the body's normals
-            first_dofs, first_map = gradient_map(model, model.node_index(self.node),
-                                                 axis_world, f"{self.type}: the axis")
-            local = frame.T @ normals.T
-            maps = [_direction_map(local[:, k]) for k in range(2)]
-            other_dofs = dofs
-        joined = np.concatenate([first_dofs, other_dofs])
-        hessians = np.array([_bilinear(first_map, normal_map) for normal_map in maps])
-        built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
-                                           np.zeros((2, joined.size)), np.zeros(2)))
+            theirs = vectors.direction(model, self.node, axis_world, f"{self.type}: the axis")
+            pairs = [(theirs, vectors.direction(model, self.body, n)) for n in normals]
+        built.blocks.append(vectors.dot_rows(f"{self.type} of {self.body}", pairs))
 
 
 def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
