@@ -553,7 +553,8 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
                  sensors: list, held: dict) -> list:
     """Rigid bodies and point masses (3D) with their joints, loads and sensors, appended to
     ``constraints``, ``loads`` and ``sensors``: a body on the chain's last node, a body
-    turning about a ground axis, a particle and a mass on a node."""
+    turning about a ground axis, a particle and a mass on a node; the joints and the
+    bushing take the chain's last node as their other side where it carries a frame."""
     frame, _ = np.linalg.qr(np.array([_vector(rng, 3) for _ in range(3)]))
     if np.linalg.det(frame) < 0:
         frame[:, 0] *= -1
@@ -578,20 +579,25 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 3), axis=_vector(rng, 3),
                                     angle=rng.choice([None, SpinUp(_number(rng, -9, 9),
                                                                    _number(rng, 0.1, 2))])))
+    # the chain's last node as the other side where its gradients carry a frame
+    framed = len(element_kind(end.element).first_gradients) == 3
+    node = [{"node": f"{end.name}:-1"}] if framed else []
     constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 3), displacement=rng.choice(
         [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]),
-        other=rng.choice([None, "wheel"])))
+        **rng.choice([{}, {"other": "wheel"}, *node])))
     constraints.append(BodyCylindrical(body="wheel", point=_vector(rng, 3),
-                                       axis=_vector(rng, 3), other=rng.choice([None, "crank"])))
+                                       axis=_vector(rng, 3),
+                                       **rng.choice([{}, {"other": "crank"}, *node])))
     constraints.append(BodyUniversal(body="wheel", point=_vector(rng, 3), axis=(0.0, 0.0, 1.0),
-                                     other_axis=rng.choice([(1.0, 0.0, 0.0), (0.6, 0.8, 0.0)])))
+                                     other_axis=rng.choice([(1.0, 0.0, 0.0), (0.6, 0.8, 0.0)]),
+                                     **rng.choice([{}, *node])))
     loads.append(BodyForce(body="crank", force=_vector(rng, 3, 10), point=_vector(rng, 3)))
     loads.append(SpringDamper(End(body="bob"), rng.choice([
         End(anchor=_vector(rng, 3, 9.0)), End(node=NodeRef(chain[0].name, 0)),
         End(body="wheel", point=_vector(rng, 3))]), _number(rng, 0, 1e4),
         _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
     loads.append(Bushing(body="crank", stiffness=tuple(_number(rng, 0, 1e3) for _ in range(6)),
-                         point=_vector(rng, 3), other=rng.choice([None, "wheel"]),
+                         point=_vector(rng, 3), **rng.choice([{}, {"other": "wheel"}, *node]),
                          damping=rng.choice([None, tuple(_number(rng, 0, 5) for _ in range(6))])))
     loads.append(TorsionalSpring(body="wheel", stiffness=_number(rng, 0, 100),
                                  other=rng.choice([None, "crank"]), axis=_vector(rng, 3),

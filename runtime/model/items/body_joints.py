@@ -16,7 +16,8 @@ A revolute joint's ``angle`` law theta(t) adds the rheonomic row sin(theta - phi
 body's rotation phi about the axis relative to the other side (``angle_forms``), a
 prismatic joint's ``displacement`` law d(t) the row a . (r_P - r_Q) - d(t) = 0; their time
 coefficients are driver coordinates of the model (``runtime.model.holonomic.DrivenBlock``).
-The prismatic joint slides on the ground or, with ``other``, on another rigid body.
+The prismatic joint slides on the ground or, with ``other``, on another rigid body, or,
+with ``node``, on a node's frame (``runtime.model.items.body_vectors``).
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint, gradient_map, normals_of
-from runtime.model.items.rigid import RigidBody, natural_map, rigid_key
+from runtime.model.items.constraints import Built, Constraint, normals_of
+from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     Context,
     NodeRef,
@@ -84,9 +85,7 @@ class BodySpherical(Constraint):
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
-        if "node" in data and "other" in data:
-            raise SceneError(f"{path}.other: expected a node or another body (or neither: "
-                             "the ground), got both")
+        vectors.exclusive_sides(data, path)
         if "other_point" in data and "other" not in data:
             raise SceneError(f"{path}.other_point: a point of another body needs other")
         joint = super().parse(data, path, context)
@@ -167,23 +166,6 @@ def _motion_key(what: str):
     return parse
 
 
-def _direction_map(direction: np.ndarray) -> np.ndarray:
-    """The map (3, 12) from a body's natural coordinates to its vector ``direction``
-    (body coordinates): [0, d_1 I, d_2 I, d_3 I]."""
-    return natural_map(direction) - natural_map(np.zeros(3))
-
-
-def _bilinear(first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    """The Hessian (k1 + k2, k1 + k2) of (A y_1) . (B y_2) for the maps first = A (3, k1)
-    and second = B (3, k2) over y = [y_1, y_2]."""
-    n = first.shape[1]
-    coupling = first.T @ second
-    hessian = np.zeros((n + second.shape[1],) * 2)
-    hessian[:n, n:] = coupling
-    hessian[n:, :n] = coupling.T
-    return hessian
-
-
 def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str | None,
                 node: NodeRef | None, owner: str) -> QuadraticBlock:
     """The rotation phi of the rigid ``body`` about its ``axis`` (body coordinates)
@@ -191,27 +173,12 @@ def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str
     [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
     axis, e' and f' = a x e' the other side's vectors that are e and a x e at t = 0: fixed
     on the ground (linear rows), fixed combinations of the ``other`` body's axes or of the
-    ``node``'s gradients (bilinear rows)."""
-    rigid = model.rigid[body]
-    frame = rigid.item.frame
-    reference = normals_of(frame @ np.asarray(axis))      # e' and f' at t = 0 (2, 3)
-    mine = _direction_map(frame.T @ reference[0])         # e = E y_body (3, 12)
-    if node is None and other is None:
-        dofs = rigid.dofs
-        return QuadraticBlock(owner, dofs, np.zeros((2, dofs.size, dofs.size)),
-                              reference @ mine, np.zeros(2))
-    if other is not None:
-        side = model.rigid[other]
-        other_dofs = side.dofs
-        maps = [_direction_map(side.item.frame.T @ vector) for vector in reference]
-    else:
-        index = model.node_index(node)
-        found = [gradient_map(model, index, vector, f"{owner}: the reference direction")
-                 for vector in reference]
-        other_dofs, maps = found[0][0], [found[0][1], found[1][1]]
-    dofs = np.concatenate([rigid.dofs, other_dofs])
-    return QuadraticBlock(owner, dofs, np.array([_bilinear(mine, m) for m in maps]),
-                          np.zeros((2, dofs.size)), np.zeros(2))
+    ``node``'s gradients (bilinear rows; ``body_vectors.direction``)."""
+    reference = normals_of(model.rigid[body].item.frame @ np.asarray(axis))  # e', f' at t = 0
+    side = node if node is not None else other
+    mine = vectors.direction(model, body, reference[0])
+    return vectors.dot_rows(owner, [(mine, vectors.direction(
+        model, side, vector, f"{owner}: the reference direction")) for vector in reference])
 
 
 def _row(block: QuadraticBlock, row: int, sign: float) -> QuadraticBlock:
@@ -259,30 +226,19 @@ class BodyRevolute(BodySpherical):
         frame = body.item.frame
         axis_world = frame @ np.asarray(self.axis)
         normals = normals_of(axis_world)
-        # the body's axis a = [0, a_1 I, a_2 I, a_3 I] q (its direction (3, 12) map)
-        axis_map = _direction_map(np.asarray(self.axis))
+        mine = vectors.direction(model, self.body, axis_world)      # the body's axis a
         if self.node is None and self.other is None:      # normals fixed: linear rows
             for normal in normals:
-                coefficients = normal @ axis_map
+                coefficients = normal @ mine.map
                 built.rows.append({int(i): float(v) for i, v in zip(dofs, coefficients,
                                                                    strict=True) if v != 0.0})
             return
-        if self.other is not None:       # the other body's normals: b_k = B_k q_other
-            other = model.rigid[self.other]
-            other_dofs = other.dofs
-            local = other.item.frame.T @ normals.T          # (3, 2) body components
-            maps = [_direction_map(local[:, k]) for k in range(2)]
-            first_map, first_dofs = axis_map, dofs
+        if self.other is not None:       # the other body's normals b_k
+            pairs = [(mine, vectors.direction(model, self.other, n)) for n in normals]
         else:                           # the node's axis a = G c, the body's normals
-            first_dofs, first_map = gradient_map(model, model.node_index(self.node),
-                                                 axis_world, f"{self.type}: the axis")
-            local = frame.T @ normals.T
-            maps = [_direction_map(local[:, k]) for k in range(2)]
-            other_dofs = dofs
-        joined = np.concatenate([first_dofs, other_dofs])
-        hessians = np.array([_bilinear(first_map, normal_map) for normal_map in maps])
-        built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", joined, hessians,
-                                           np.zeros((2, joined.size)), np.zeros(2)))
+            theirs = vectors.direction(model, self.node, axis_world, f"{self.type}: the axis")
+            pairs = [(theirs, vectors.direction(model, self.body, n)) for n in normals]
+        built.blocks.append(vectors.dot_rows(f"{self.type} of {self.body}", pairs))
 
 
 def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -295,11 +251,13 @@ class BodyPrismatic(Constraint):
     point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
     rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
     and a rigid body keeps its orientation (three linear rows u . v0 = v . w0 = w . u0 = 0,
-    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) the
-    axis and the line are fixed in that body (their place at t = 0) and the orientation is
-    kept relative to it: the same rows with the other body's directions (``dot_rows``:
-    bilinear).  With a ``displacement`` law d(t) (m), the travel along the axis from t = 0
-    is prescribed (a rheonomic row)."""
+    the infinitesimal rotations about w0, u0 and v0).  With ``other`` (a rigid body) or
+    ``node`` (a node with the three gradients of a frame) the axis and the line are fixed in
+    that side (their place at t = 0) and the orientation is kept relative to it: the rows
+    of ``body_vectors.frame_rows``, the slide along the side's normals of the axis and the
+    small relative rotation (bilinear, symmetric in the two sides).  With a
+    ``displacement`` law d(t) (m), the travel along the axis from t = 0 is prescribed (a
+    rheonomic row)."""
 
     type: ClassVar[str] = "body_prismatic"
     dims: ClassVar[tuple[int, ...]] = (3,)
@@ -309,10 +267,13 @@ class BodyPrismatic(Constraint):
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
     displacement: Law | None = key(_motion_key("a displacement in m"), None)
     other: str | None = key(rigid_key, None)
+    node: NodeRef | str | None = key(node_key, None)
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
+        vectors.exclusive_sides(data, path)
         joint = super().parse(data, path, context)
+        vectors.check_frame_node(joint.node, path, context, f"a {cls.type} holds")
         if joint.other is not None:
             if joint.other == joint.body:
                 raise SceneError(f"{path}.other: expected another body than "
@@ -327,14 +288,15 @@ class BodyPrismatic(Constraint):
         return () if self.displacement is None else (Driver(self.displacement),)
 
     def targets(self) -> list[NodeRef]:
-        return []
+        """The node it slides on (its ``node``, if any)."""
+        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:
         return "body"
 
     def apply(self, model: ModelView, built: Built) -> None:
-        if self.other is not None:
+        if self.other is not None or self.node is not None:
             self._between(model, built)
             return
         dofs, position = model.rigid_point(self.body, self.point)
@@ -361,22 +323,16 @@ class BodyPrismatic(Constraint):
                                for c in range(3) if axes[b, c] != 0.0})
 
     def _between(self, model: ModelView, built: Built) -> None:
-        """The slide on the ``other`` body (class docstring)."""
-        owner = f"{self.type} of {self.body} on {self.other}"
-        here = vectors.body_point(model, self.body, self.point)
-        slide = here - vectors.point(model, self.other, here.at(model.reference))
+        """The slide on the ``other`` body or the ``node`` (class docstring)."""
+        side = vectors.side_of(self)
+        owner = f"{self.type} of {self.body} on {side}"
         axis = np.asarray(self.axis)
-        pairs = [(slide, vectors.direction(model, self.other, n)) for n in normals_of(axis)]
-        rigid = model.rigid[self.body]
-        if rigid.dofs.size == 12:          # e_a . e_b0 = 0 with e_b0 fixed in the other
-            axes = rigid.item.frame.T
-            pairs += [(vectors.direction(model, self.body, axes[a]),
-                       vectors.direction(model, self.other, axes[b]))
-                      for a, b in ((0, 1), (1, 2), (2, 0))]
-        built.blocks.append(vectors.dot_rows(owner, pairs))
+        turns = model.rigid[self.body].dofs.size == 12       # a rigid body, not a point mass
+        built.blocks.append(vectors.frame_rows(model, self.body, self.point, side,
+                                               normals_of(axis), turns, owner))
         if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
-            along = vectors.dot_rows(f"{owner} (displacement)",
-                                     [(slide, vectors.direction(model, self.other, axis))])
+            along = vectors.frame_rows(model, self.body, self.point, side, axis[None, :],
+                                       False, f"{owner} (displacement)")
             k = along.dofs.size
             unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
                                   np.zeros((1, k)), -np.ones(1))

@@ -1,11 +1,15 @@
-"""Points and directions of rigid bodies as affine functions of the model's coordinates, and
-constraint rows that are their dot products (quadratic blocks, ``runtime.model.holonomic``).
+"""Points and directions of the sides of joints as affine functions of the model's
+coordinates, and constraint rows that are their dot products (quadratic blocks,
+``runtime.model.holonomic``).
 
-In natural coordinates a body point and a body direction are linear in the body's 12
-coordinates (``runtime.model.items.rigid.natural_map``), a point or direction of the ground
-is a constant; so ``a . b`` of two of them is a quadratic form with a constant Hessian:
-the rows of the joints whose axes are fixed in both bodies (cylindrical, universal,
-prismatic between two bodies).
+A side is the ground (None), a rigid body (its name) or a node of a meshed body (a
+``NodeRef``).  In natural coordinates a body point and a body direction are linear in the
+body's 12 coordinates (``runtime.model.items.rigid.natural_map``); a node's point and
+direction are fixed combinations r + G c and G c of its position r and its gradients G
+(r_x, r_y, r_z: its section's frame, ``gradient_map``), c fixed at t = 0; a point or
+direction of the ground is a constant.  So ``a . b`` of two of them is a quadratic form
+with a constant Hessian: the rows of the joints whose axes are fixed in both sides
+(cylindrical, universal, prismatic off the ground) and the deflection of a bushing.
 """
 
 from __future__ import annotations
@@ -14,12 +18,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from runtime.kernels.kind import element_kind
+from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.base import ModelView
+from runtime.model.items.constraints import gradient_map
 from runtime.model.items.rigid import natural_map
+from runtime.model.schema import Context, NodeRef
 
-__all__ = ["Affine", "body_point", "combined", "direction", "dot_rows", "frame_deflection",
-           "point"]
+__all__ = ["Affine", "Side", "body_point", "check_frame_node", "combined", "direction", "dot_rows",
+           "exclusive_sides", "frame_deflection", "frame_rows", "point", "side_axis",
+           "side_of"]
+
+#: the other side of a joint: the ground (None), a rigid body (its name) or a node
+Side = str | NodeRef | None
+
+#: a frame fixed in a node needs its gradients to span 3D: r_x, r_y and r_z
+FRAME_GRADIENTS = 3
+#: an axis given in the frame of a node with one gradient lies along it to this (cosine)
+ALONG = 1e-12
 
 
 @dataclass(frozen=True)
@@ -40,13 +57,78 @@ class Affine:
         return self.map @ q[self.dofs] + self.constant
 
 
-def point(model: ModelView, body: str | None, world: np.ndarray) -> Affine:
-    """The point of the rigid ``body`` (None: the ground) that is at ``world`` (3,) at
-    t = 0."""
-    if body is None:
-        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), np.asarray(world, float))
-    rigid = model.rigid[body]
-    local = rigid.item.frame.T @ (np.asarray(world, float) - np.asarray(rigid.item.position))
+def side_of(item) -> Side:
+    """The other side of a joint or force element ``item``: its ``node``, else its rigid
+    body ``other`` (None: the ground)."""
+    node = getattr(item, "node", None)
+    return node if node is not None else getattr(item, "other", None)
+
+
+def exclusive_sides(data: dict, path: str) -> None:
+    """SceneError when the table ``data`` names both a ``node`` and another body
+    ``other`` as the other side."""
+    if "node" in data and "other" in data:
+        raise SceneError(f"{path}.other: expected a node or another body (or neither: "
+                         "the ground), got both")
+
+
+def check_frame_node(node: NodeRef | None, path: str, context: Context, needs: str) -> None:
+    """SceneError when the ``node`` (None: no node side) lacks the gradients of a frame
+    fixed in it (r_x, r_y and r_z spanning 3D; a 3D cable node's r_x fixes one direction
+    only); ``needs`` says what needs the frame, as "a body_prismatic holds"."""
+    if node is None:
+        return
+    kind = element_kind(context.node.bodies[node.body].element)
+    if len(kind.first_gradients) < FRAME_GRADIENTS:
+        raise SceneError(f"{path}.node: {needs} the node's frame, which needs its three "
+                         f"gradients r_x, r_y, r_z (a beam3d or plate3d node); node "
+                         f"{show(node.spelled())} of body {show(node.body)} ({kind.name}) "
+                         f"carries only {', '.join(kind.vectors)}: enough for an axis along "
+                         "a gradient (body_revolute, body_universal), not for a frame")
+
+
+def side_axis(model: ModelView, side: Side, local: tuple[float, ...], what: str) -> np.ndarray:
+    """The direction (3,) at t = 0 of the unit vector ``local`` given in the ``side``'s axes:
+    global for the ground, a rigid body's axes, a node's reference frame (its gradients
+    orthonormalised, ``ModelView.node_frame``).  A node whose one gradient fixes a single
+    axis (a 3D cable's r_x) has that axis only: SceneError naming ``what`` unless ``local``
+    lies along it."""
+    local = np.asarray(local, float)
+    if side is None:
+        return local
+    if not isinstance(side, NodeRef):
+        return np.asarray(model.rigid[side].item.frame, float) @ local
+    node = model.node_index(side)
+    kind = model.bodies[side.body].kind
+    if kind.frame_gap() is None:
+        return model.node_frame(model.reference, node) @ local
+    gradient = kind.first_gradients[0]
+    axis = "xyz".index(gradient[-1])
+    if abs(local[axis]) < 1.0 - ALONG:
+        raise SceneError(f"{what}: node {show(side.spelled())} of body {show(side.body)} "
+                         f"({kind.name}) has only {gradient} of a frame: expected an axis "
+                         f"along its local {gradient[-1]}, got {tuple(float(x) for x in local)}")
+    tangent = model.reference[model.node_dofs(node, gradient)]
+    return np.sign(local[axis]) * tangent / np.linalg.norm(tangent)
+
+
+def point(model: ModelView, side: Side, world: np.ndarray,
+          what: str = "the joint's point") -> Affine:
+    """The point of the ``side`` (module docstring) that is at ``world`` (3,) at t = 0; on a
+    node r + G c with G c the offset from the node at t = 0 (SceneError naming ``what``
+    when the offset is not in the span of the node's gradients)."""
+    world = np.asarray(world, float)
+    if side is None:
+        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), world)
+    if isinstance(side, NodeRef):
+        node = model.node_index(side)
+        offset = world - model.reference[model.node_dofs(node, "r")]
+        dofs, mapping = gradient_map(model, node, offset, f"{what}: its offset from the node")
+        start = 3 * model.node_vectors(node).index("r")
+        mapping[:, start:start + 3] += np.eye(3)
+        return Affine(dofs, mapping, np.zeros(3))
+    rigid = model.rigid[side]
+    local = rigid.item.frame.T @ (world - np.asarray(rigid.item.position))
     return Affine(rigid.dofs, natural_map(local), np.zeros(3))
 
 
@@ -56,16 +138,20 @@ def body_point(model: ModelView, body: str, local: tuple[float, ...]) -> Affine:
     return Affine(dofs, mapping, np.zeros(3))
 
 
-def direction(model: ModelView, body: str | None, world: np.ndarray) -> Affine:
-    """The direction fixed in the rigid ``body`` (None: the ground) that is ``world`` (3,)
-    at t = 0."""
-    if body is None:
-        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), np.asarray(world, float))
-    rigid = model.rigid[body]
-    local = rigid.item.frame.T @ np.asarray(world, float)
+def direction(model: ModelView, side: Side, world: np.ndarray,
+              what: str = "the joint's direction") -> Affine:
+    """The direction fixed in the ``side`` (module docstring) that is ``world`` (3,) at
+    t = 0; on a node a fixed combination G c of its gradients (SceneError naming ``what``
+    when ``world`` is not in their span)."""
+    world = np.asarray(world, float)
+    if side is None:
+        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), world)
+    if isinstance(side, NodeRef):
+        dofs, mapping = gradient_map(model, model.node_index(side), world, what)
+        return Affine(dofs, mapping, np.zeros(3))
+    rigid = model.rigid[side]
+    local = rigid.item.frame.T @ world
     return Affine(rigid.dofs, natural_map(local) - natural_map(np.zeros(3)), np.zeros(3))
-
-
 def dot_rows(owner: str, pairs: list[tuple[Affine, Affine]],
              constants: list[float] | None = None) -> QuadraticBlock:
     """The rows ``a . b + constant`` of the ``pairs`` (a, b) over the union of their
@@ -96,24 +182,37 @@ def combined(block: QuadraticBlock, matrix: np.ndarray) -> QuadraticBlock:
                           matrix @ block.linear, matrix @ block.constant)
 
 
-def frame_deflection(model: ModelView, body: str, local: tuple[float, ...],
-                     other: str | None, owner: str) -> QuadraticBlock:
-    """Six rows: the displacement of the point ``local`` of the rigid ``body`` from the
-    other side's point that is there at t = 0 (in m, along the other side's directions
-    b_k that are the body's axes a_k at t = 0) and the small rotation of the body's axes
-    relative to them (rad, the axial vector of the skew part of [a_k . b_j]:
-    theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...); all 0 at t = 0, bilinear."""
+def frame_rows(model: ModelView, body: str, local: tuple[float, ...], side: Side,
+               along: np.ndarray, rotation: bool, owner: str) -> QuadraticBlock:
+    """The displacement (m) of the point ``local`` of the rigid body or point mass ``body``
+    from the ``side``'s point Q that is there at t = 0, along the side's directions b_k
+    that are the rows of ``along`` (n, 3) at t = 0: n rows (r_P - r_Q) . b_k; with
+    ``rotation`` (a rigid body) three more, the small rotation of the body's axes a_k
+    relative to the side's directions b_k that are a_k at t = 0 (rad, the axial vector of
+    the skew part of [a_i . b_j]: theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...; it changes
+    sign when the sides swap).  All 0 at t = 0, bilinear (linear to the ground)."""
     here = body_point(model, body, local)
-    slide = here - point(model, other, here.at(model.reference))
+    slide = here - point(model, side, here.at(model.reference), f"{owner}: the point")
+    pairs = [(slide, direction(model, side, d, f"{owner}: the direction")) for d in along]
+    n = len(pairs)
+    if not rotation:
+        return dot_rows(owner, pairs)
     axes = model.rigid[body].item.frame.T                 # a_k at t = 0 (rows)
     mine = [direction(model, body, a) for a in axes]
-    theirs = [direction(model, other, a) for a in axes]
-    pairs = [(slide, b) for b in theirs]
+    theirs = [direction(model, side, a, f"{owner}: the axis") for a in axes]
     for i, j in ((1, 2), (2, 0), (0, 1)):                 # a_i . b_j and a_j . b_i
         pairs += [(mine[i], theirs[j]), (mine[j], theirs[i])]
-    rows = dot_rows(owner, pairs)
-    matrix = np.zeros((6, 9))
-    matrix[:3, :3] = np.eye(3)
+    matrix = np.zeros((n + 3, n + 6))
+    matrix[:n, :n] = np.eye(n)
     for k in range(3):
-        matrix[3 + k, 3 + 2 * k], matrix[3 + k, 4 + 2 * k] = 0.5, -0.5
-    return combined(rows, matrix)
+        matrix[n + k, n + 2 * k], matrix[n + k, n + 1 + 2 * k] = 0.5, -0.5
+    return combined(dot_rows(owner, pairs), matrix)
+
+
+def frame_deflection(model: ModelView, body: str, local: tuple[float, ...], side: Side,
+                     owner: str) -> QuadraticBlock:
+    """Six rows (``frame_rows``): the displacement of the point ``local`` of the rigid
+    ``body`` from the ``side``'s point there at t = 0 along the side's directions that are
+    the body's axes at t = 0 (m), and the small rotation of the body's axes relative to
+    them (rad); all 0 at t = 0."""
+    return frame_rows(model, body, local, side, model.rigid[body].item.frame.T, True, owner)

@@ -21,7 +21,12 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import load_points
 from runtime.model.items.base import ModelView
 from runtime.model.items.body_joints import angle_forms
-from runtime.model.items.body_vectors import frame_deflection
+from runtime.model.items.body_vectors import (
+    check_frame_node,
+    exclusive_sides,
+    frame_deflection,
+    side_of,
+)
 from runtime.model.items.follower import FrameLoad, Patches, PressureLoad
 from runtime.model.items.force_elements import (
     BodyTorqueForce,
@@ -464,9 +469,7 @@ class TorsionalSpring(RigidForceElement):
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
-        if "node" in data and "other" in data:
-            raise SceneError(f"{path}.other: expected a node or another body (or neither: "
-                             "the ground), got both")
+        exclusive_sides(data, path)
         return super().parse(data, path, context)
 
     def state_force(self, model: ModelView) -> TorsionalSpringForce:
@@ -499,9 +502,10 @@ def _bushing_matrix_key(value: Any, path: str, context: Context) -> tuple[tuple[
 @dataclass(frozen=True)
 class Bushing(RigidForceElement):
     """A linear bushing between the frame of the rigid ``body`` at its ``point`` (body
-    coordinates) and the other side's frame there at t = 0: the rigid body ``other`` or
-    the ground.  Its deflection delta (6,) is the displacement (m) along and the small
-    rotation (rad) about the body's axes at t = 0 fixed in the other side
+    coordinates) and the other side's frame there at t = 0: the rigid body ``other``, the
+    frame of a ``node`` (its gradients r_x, r_y, r_z: a node with the three) or the ground.
+    Its deflection delta (6,) is the displacement (m) along and the small rotation (rad)
+    about the body's axes at t = 0 fixed in the other side
     (``body_vectors.frame_deflection``), its force and moment K delta + C delta' with the
     6 x 6 ``stiffness`` K and ``damping`` C (default 0), exact Jacobians
     (``runtime.model.items.force_elements``), times its ``time_law``.  The rotations are
@@ -512,10 +516,18 @@ class Bushing(RigidForceElement):
     stiffness: tuple[tuple[float, ...], ...] = key(_bushing_matrix_key)
     point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
     other: str | None = key(rigid_key, None)
+    node: NodeRef | str | None = key(node_key, None)
     damping: tuple[tuple[float, ...], ...] | None = key(_bushing_matrix_key, None)
 
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        exclusive_sides(data, path)
+        load = super().parse(data, path, context)
+        check_frame_node(load.node, path, context, "a bushing turns with")
+        return load
+
     def state_force(self, model: ModelView) -> BushingForce:
-        forms = frame_deflection(model, self.body, self.point, self.other,
+        forms = frame_deflection(model, self.body, self.point, side_of(self),
                                  f"{self.type} of {self.body}")
         damping = np.zeros((6, 6)) if self.damping is None else np.array(self.damping)
         return BushingForce(forms, np.array(self.stiffness), damping)
