@@ -29,6 +29,7 @@ from conftest import (
     degenerate_reference,
     dim_of,
     element,
+    kind_seed,
 )
 
 from runtime import Element
@@ -48,7 +49,7 @@ class Setup:
     def __post_init__(self) -> None:
         self.el = element(self.kind, "gram", self.backend)
         self.dim, self.ndof = dim_of(self.kind), self.el.ndof
-        rng = np.random.default_rng(KINDS.index(self.kind))
+        rng = np.random.default_rng(kind_seed(self.kind))
         self.batch = self.el.e0 + 1e-3 * rng.standard_normal((3, self.ndof))
         self.e = self.batch[0].copy()
 
