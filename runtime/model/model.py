@@ -103,6 +103,16 @@ class RigidCoordinates:
         return np.arange(self.first, self.first + self.item.coordinates)
 
 
+def _entries(position: np.ndarray, dofs: np.ndarray):
+    """(rows, cols, keep), each (sets * k * k,): the places among the unknowns (``position``
+    (size,), -1 where not free) of every entry (i, j) of each coordinate set of ``dofs``
+    (sets, k), set by set and row-major, and whether both coordinates are free."""
+    k = dofs.shape[1]
+    rows = position[np.repeat(dofs, k, axis=1)].ravel()
+    cols = position[np.tile(dofs, (1, k))].ravel()
+    return rows, cols, (rows >= 0) & (cols >= 0)
+
+
 def node_references(kind: ElementKind, mesh: meshing.Mesh, e0s: np.ndarray) -> np.ndarray:
     """Reference coordinates (nodes * per_node,) of the mesh's nodes from its elements'
     references (elements, ndof) (a node shared by elements takes the last one's value)."""
@@ -298,7 +308,9 @@ class Model:
         fixed &= ~prescribed
         self.fixed = np.flatnonzero(fixed)
         self.prescribed = np.flatnonzero(prescribed)
-        self.free = self._bandwidth_order(np.flatnonzero(~fixed & ~prescribed), built.blocks)
+        #: the sets of coordinates the Jacobian couples (``_coupled_groups``)
+        self._coupled = self._coupled_groups(built.blocks)
+        self.free = self._bandwidth_order(np.flatnonzero(~fixed & ~prescribed))
         rows = np.repeat(np.arange(len(built.rows)), [len(row) for row in built.rows])
         cols = [i for row in built.rows for i in row]
         vals = np.array([v for row in built.rows for v in row.values()], float)
@@ -367,7 +379,7 @@ class Model:
             load.coupled_dofs(self)[None, :] for load in self.scene.loads
             if hasattr(load, "coupled_dofs")]
 
-    def _bandwidth_order(self, free: np.ndarray, blocks: list) -> np.ndarray:
+    def _bandwidth_order(self, free: np.ndarray) -> np.ndarray:
         """The free coordinates ``free`` (nf,) in the order of the unknowns: their global
         order, or the reverse Cuthill-McKee order of the Jacobian's graph where that at
         least halves the bandwidth (rigid bodies, numbered after the meshes, joined to
@@ -376,10 +388,8 @@ class Model:
         position = np.full(self.size, -1, np.int64)
         position[free] = np.arange(free.size)
         rows, cols = [], []
-        for dofs in self._coupled_groups(blocks):
-            p = position[dofs]
-            r, c = np.repeat(p, p.shape[1], axis=1).ravel(), np.tile(p, (1, p.shape[1])).ravel()
-            keep = (r >= 0) & (c >= 0)
+        for dofs in self._coupled:
+            r, c, keep = _entries(position, dofs)
             rows.append(r[keep])
             cols.append(c[keep])
         rows, cols = np.concatenate(rows), np.concatenate(cols)
@@ -403,13 +413,10 @@ class Model:
         position = self.free_position
         nf = self.free.size
         keeps, flats = [], []
-        for dofs in self._coupled_groups(self.holonomic.blocks):
-            ndof = dofs.shape[1]
-            r = position[np.repeat(dofs, ndof, axis=1)]
-            c = position[np.tile(dofs, (1, ndof))]
-            keep = (r >= 0) & (c >= 0)
-            keeps.append(keep.ravel())
-            flats.append((r.astype(np.int64) * nf + c)[keep])
+        for dofs in self._coupled:
+            r, c, keep = _entries(position, dofs)
+            keeps.append(keep)
+            flats.append((r * nf + c)[keep])
         unique, slots = np.unique(np.concatenate(flats), return_inverse=True)
         self._pattern_keys = unique
         rows, cols = unique // nf, unique % nf

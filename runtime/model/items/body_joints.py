@@ -166,16 +166,15 @@ def _motion_key(what: str):
     return parse
 
 
-def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], other: str | None,
-                node: NodeRef | None, owner: str) -> QuadraticBlock:
+def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], side: vectors.Side,
+                owner: str) -> QuadraticBlock:
     """The rotation phi of the rigid ``body`` about its ``axis`` (body coordinates)
-    relative to the other side since t = 0, as two quadratic rows [e . e', e . f'] =
+    relative to the other ``side`` since t = 0, as two quadratic rows [e . e', e . f'] =
     [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
-    axis, e' and f' = a x e' the other side's vectors that are e and a x e at t = 0: fixed
-    on the ground (linear rows), fixed combinations of the ``other`` body's axes or of the
-    ``node``'s gradients (bilinear rows; ``body_vectors.direction``)."""
+    axis, e' and f' = a x e' the side's vectors that are e and a x e at t = 0: fixed on the
+    ground (linear rows), fixed combinations of another body's axes or of a node's
+    gradients (bilinear rows; ``body_vectors.direction``)."""
     reference = normals_of(model.rigid[body].item.frame @ np.asarray(axis))  # e', f' at t = 0
-    side = node if node is not None else other
     mine = vectors.direction(model, body, reference[0])
     return vectors.dot_rows(owner, [(mine, vectors.direction(
         model, side, vector, f"{owner}: the reference direction")) for vector in reference])
@@ -212,7 +211,7 @@ class BodyRevolute(BodySpherical):
     def _drive(self, model: ModelView, built: Built) -> None:
         """The row sin(theta) cos(phi) - cos(theta) sin(phi) = sin(theta - phi), with
         cos(phi) and sin(phi) the bilinear forms of ``angle_forms``."""
-        forms = angle_forms(model, self.body, self.axis, self.other, self.node,
+        forms = angle_forms(model, self.body, self.axis, vectors.side_of(self),
                             f"{self.type} of {self.body} (angle)")
         cosine, sine = built.drivers
         built.blocks.append(DrivenBlock(forms.owner, (_row(forms, 0, 1.0),

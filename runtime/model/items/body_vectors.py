@@ -152,6 +152,8 @@ def direction(model: ModelView, side: Side, world: np.ndarray,
     rigid = model.rigid[side]
     local = rigid.item.frame.T @ world
     return Affine(rigid.dofs, natural_map(local) - natural_map(np.zeros(3)), np.zeros(3))
+
+
 def dot_rows(owner: str, pairs: list[tuple[Affine, Affine]],
              constants: list[float] | None = None) -> QuadraticBlock:
     """The rows ``a . b + constant`` of the ``pairs`` (a, b) over the union of their

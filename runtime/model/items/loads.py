@@ -473,7 +473,7 @@ class TorsionalSpring(RigidForceElement):
         return super().parse(data, path, context)
 
     def state_force(self, model: ModelView) -> TorsionalSpringForce:
-        forms = angle_forms(model, self.body, self.axis, self.other, self.node,
+        forms = angle_forms(model, self.body, self.axis, side_of(self),
                             f"{self.type} of {self.body}")
         return TorsionalSpringForce(forms, self.stiffness, self.damping, self.angle)
 
