@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse
 
+from runtime.model.sliding_rows import SlidingBlock
 from runtime.model.time_laws import Law
 
 __all__ = ["Driver", "DrivenBlock", "HolonomicConstraints", "QuadraticBlock"]
@@ -79,6 +80,11 @@ class QuadraticBlock:
     def terms(self) -> tuple[tuple[QuadraticBlock, int], ...]:
         """Its rows as terms (quadratic rows, coordinate of their factor; -1: 1)."""
         return ((self, -1),)
+
+    @property
+    def coupled(self) -> np.ndarray:
+        """The coordinate sets its Hessian couples (1, k): all of its coordinates."""
+        return self.dofs[None, :]
 
 
 @dataclass(frozen=True)
@@ -134,6 +140,11 @@ class DrivenBlock:
     def terms(self) -> tuple[tuple[QuadraticBlock, int], ...]:
         return tuple(zip(self.parts, self.factors, strict=True))
 
+    @property
+    def coupled(self) -> np.ndarray:
+        """The coordinate sets its Hessian couples (1, k): all of its coordinates."""
+        return self.dofs[None, :]
+
     def _split(self, x: np.ndarray, constant: float) -> tuple[np.ndarray, list[float]]:
         """(y, the factor of every term) of x = q[dofs] (or of velocities: ``constant``
         0, the rate of the factor 1)."""
@@ -178,7 +189,11 @@ class DrivenBlock:
         return out
 
 
-Block = QuadraticBlock | DrivenBlock
+#: the block types: quadratic rows, rheonomic rows, a point sliding on a line body
+#: (``runtime.model.sliding_rows``: not polynomial in the coordinates, its parameter
+#: eliminated); each has ``dofs``, ``rows``, ``coupled``, ``terms`` and value, jacobian,
+#: curvature and hessian at x = q[dofs]
+Block = QuadraticBlock | DrivenBlock | SlidingBlock
 
 
 class HolonomicConstraints:

@@ -33,6 +33,7 @@ from runtime.model.holonomic import Driver, HolonomicConstraints
 from runtime.model.items.constraints import Built, HeldNodes
 from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
+from runtime.model.sliding_rows import SlidingBlock
 from runtime.model.schema import NodeRef
 
 
@@ -375,7 +376,7 @@ class Model:
         constraint ``blocks`` (their geometric stiffness) and of force elements."""
         return [body.element_dofs for body in self.groups] + [
             rigid.dofs[None, :] for rigid in self.rigid.values() if rigid.dofs.size] + [
-            block.dofs[None, :] for block in blocks] + [
+            block.coupled for block in blocks] + [
             load.coupled_dofs(self)[None, :] for load in self.scene.loads
             if hasattr(load, "coupled_dofs")]
 
@@ -427,8 +428,10 @@ class Model:
         bounds = np.cumsum([0] + [f.size for f in flats])
         self._jac_targets = [(keep, slots[bounds[i]:bounds[i + 1]])
                              for i, keep in enumerate(keeps)][:len(self.groups)]
-        #: slots (k, k) of every quadratic block's geometric stiffness (-1: not free)
-        self.holonomic_slots = [self.slots(block.dofs) for block in self.holonomic.blocks]
+        #: slots (k, k) of every quadratic block's geometric stiffness (-1: not free; -2
+        #: outside the pattern: a sliding block's element pairs, where its Hessian is 0)
+        self.holonomic_slots = [self.slots(block.dofs, isinstance(block, SlidingBlock))
+                                for block in self.holonomic.blocks]
         # banded (upper) storage of LAPACK: entry (i, j), i <= j, at [u + i - j, j]
         self.bandwidth = int(np.abs(rows - cols).max(initial=0))
         upper = rows <= cols

@@ -16,10 +16,11 @@ from runtime.model.items.constraints import (
     Spherical,
     Weld,
 )
+from runtime.model.items.sliding import Sliding
 from runtime.model.items.symmetry import Fix, Symmetry
 from runtime.model.schema import registry
 
 CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Symmetry, Fix, Hub, Spherical,
                                                     Revolute, Weld, BodySpherical,
                                                     BodyRevolute, BodyPrismatic, BodyWeld,
-                                                    BodyCylindrical, BodyUniversal)
+                                                    BodyCylindrical, BodyUniversal, Sliding)
