@@ -25,6 +25,7 @@ from runtime.model.dae import DAESystem
 from runtime.model.items.force_elements import FORCE_LAWS
 from runtime.model.model import Model
 from runtime.model.settings import Dynamic
+from runtime.model.sliding_rows import SlideError, SlidingBlock
 from runtime.model.time_laws import LoadFunctionError
 from runtime.solve import cholmod, lapack, linear, newton_cost
 from runtime.solve.linear import single_threaded_blas
@@ -120,6 +121,11 @@ ELASTIC = ("force", "force_jacobian")
 DAMPING = ("damping_force", "damped_force_jacobians")
 
 
+def sliding_blocks(dae: DAESystem) -> list[SlidingBlock]:
+    """The sliding joints' blocks of ``dae``'s constraint rows (a callback of the step)."""
+    return [block for block in dae.holonomic.blocks if isinstance(block, SlidingBlock)]
+
+
 def render(dae: DAESystem, integrator: str, solver: str = "banded",
            kkt: bool = False) -> tuple[str, str]:
     """(C source, cffi declarations) of the stepper of ``dae`` with ``integrator`` and the
@@ -154,7 +160,8 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded",
               f"{', KKT joints' if kkt else ''}. Do not edit.")
     state = {"follower": bool(dae.state_loads),
              "follower_callback": bool(dae.state_loads.called),
-             "force_elements": bool(dae.state_loads.compiled)}
+             "force_elements": bool(dae.state_loads.compiled),
+             "sliding": bool(sliding_blocks(dae))}
     header = env.get_template("stepper_header.h.j2").render(
         banner=banner, groups=groups, slots=slots_needed, holonomic=dae.nonlinear, **state)
     source = env.get_template("stepper.c.j2").render(
@@ -298,6 +305,8 @@ class CompiledEngine:
         for name, address in lapack.functions().items():
             setattr(m, name, self._ffi.cast("void *", address))
         m.y = self._work(nj)
+        if sliding_blocks(dae):
+            self._sliding(m, ld, bw)
         m.saved_lam = self._work(nj)
         return m
 
@@ -453,6 +462,81 @@ class CompiledEngine:
         self._callback_error = None
         self._project_callback = self._ffi.callback("int(void)", project, error=-1)
         m.project = self._project_callback
+
+    def _sliding(self, m, ld: int, bw: int) -> None:
+        """Bind the sliding joints' rows (``runtime.model.sliding_rows``: not quadratic, their
+        parameter eliminated by a closest-point search): a Python callback of the step,
+        after ``quadratic_rows``, that writes their values (mode 2: Phi_q a + v^T Phi_qq v)
+        into holonomic_value, their Jacobian into their constraint CSR entries and, with
+        ``jacobian``, their geometric stiffness -coef lam_i phi_i,xx into the band or the
+        sparse values; it returns -1 (the step stops: non-finite) when a point left its
+        body, the error raised after the call."""
+        dae, ffi = self.dae, self._ffi
+        model, h = dae.model, dae.holonomic
+        size, nj, nlin = dae.size, dae.constraint_rows, dae.joints
+        offset = dae.joints_free.nnz
+        view = lambda pointer, count: np.frombuffer(ffi.buffer(pointer, 8 * count))  # noqa: E731
+        value = view(m.holonomic_value, h.rows)
+        af = view(m.af_data, int(self._af_data.size))
+        a_full = view(m.a_full, size)
+        sparse = self.linear_solver == "sparse"
+        matrix = view(m.values, int(m.nnz)) if sparse else view(m.band, dae.free.size * ld)
+        q_full, v_full = self._q_full, self._v_full
+        entries = []     # (block, its first row, its free columns, per element targets)
+        first = 0
+        for block in h.blocks:
+            if isinstance(block, SlidingBlock):
+                entries.append((block, first, np.flatnonzero(model.free_position[block.dofs]
+                                                             >= 0), {}))
+            first += block.rows
+
+        def targets(block: SlidingBlock, cache: dict, element: int) -> tuple:
+            """(keep, index) of the local Hessian entries of ``element`` in ``matrix``."""
+            if element not in cache:
+                dofs = block.dofs[block.element_coordinates(element)]
+                if sparse:
+                    slots = model.slots(dofs)
+                    cache[element] = (slots >= 0, slots)
+                else:
+                    p = model.free_position[dofs]
+                    rows, cols = p[:, None] + 0 * p[None, :], 0 * p[:, None] + p[None, :]
+                    keep = (rows >= 0) & (cols >= 0) & (rows <= cols)
+                    cache[element] = (keep, cols * ld + bw + rows - cols)
+            return cache[element]
+
+        def evaluate(mode: int, jacobian: int, coef: float, lam_pointer) -> int:
+            try:
+                lam = view(lam_pointer, nj)
+                for block, row, free, cache in entries:
+                    x = q_full[block.dofs]
+                    local = block.local(x)
+                    columns = local.columns
+                    if mode == 2:
+                        w = v_full[block.dofs][columns]
+                        value[row:row + block.rows] = (
+                            local.jacobian @ a_full[block.dofs][columns]
+                            + np.einsum("mij,i,j->m", local.hessian, w, w))
+                    else:
+                        value[row:row + block.rows] = local.value
+                    full = np.zeros((block.rows, block.dofs.size))
+                    full[:, columns] = local.jacobian
+                    for r in range(block.rows):
+                        start = offset + h.free_indptr[row + r]
+                        af[start:start + free.size] = full[r, free]
+                    if jacobian:
+                        keep, index = targets(block, cache, local.element)
+                        stiffness = np.tensordot(-coef * lam[nlin + row:nlin + row
+                                                               + block.rows],
+                                                 local.hessian, 1)
+                        np.add.at(matrix, index[keep], stiffness[keep])
+                return 0
+            except Exception as error:   # reported after the call
+                self._callback_error = error
+                return -1
+
+        self._sliding_callback = ffi.callback("int(int, int, double, const double *)",
+                                              evaluate, error=-1)
+        m.sliding = self._sliding_callback
 
     def raise_callback_error(self) -> None:
         """Raise what a follower load's evaluation raised during the last call, if any."""
@@ -642,10 +726,11 @@ class CompiledEngine:
                                         *map(self._block_array, block), stride, steps,
                                         *map(self._block_array, (out_q, out_v, out_dissipated)))
         self._sync(s)
+        failure = None
         try:
             self.raise_callback_error()
-        except LoadFunctionError as error:   # a Python load failed at s.failed_at
-            raise Divergence(s.failed_at, str(error)) from None
+        except (LoadFunctionError, SlideError) as error:   # a Python load failed, or a
+            failure = Divergence(s.failed_at, str(error))    # sliding point left its body
         done = first - 1 + (s.steps - before)
         written = int(np.count_nonzero(output_steps <= done))
         if written:
@@ -653,6 +738,8 @@ class CompiledEngine:
             self._emit(observe_block, output_steps[:written] * step, out_q[:written],
                        out_v[:written], out_dissipated[:written],
                        (block[0][rows], block[1][rows]))
+        if failure is not None:
+            raise failure
         if status:
             raise Divergence(s.failed_at, self._cause(status, s))
         return done

@@ -38,6 +38,7 @@ from runtime import catalog
 from runtime.catalog import NEWTON_MODES
 from runtime.model.dae import DAESystem
 from runtime.model.model import Model
+from runtime.model.sliding_rows import SlideError
 from runtime.model.time_laws import LoadFunctionError
 from runtime.solve import cholmod, linear, newton_cost
 from runtime.solve.linear import SchurSolver, single_threaded_blas
@@ -495,8 +496,8 @@ class Integrator:
                 self._full_step = True
                 self._schedule_full_steps()
                 state = self.step(state, t, h, prescribed, loads)
-        except LoadFunctionError as error:   # a Python load or time law failed at t
-            raise Divergence(t, str(error)) from None
+        except (LoadFunctionError, SlideError) as error:   # a Python load or time law
+            raise Divergence(t, str(error)) from None       # failed, a point left its body
         finally:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
