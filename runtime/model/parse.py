@@ -42,6 +42,7 @@ from runtime.model.items.sensors import (
     MaterialPointSensor,
     SectionForce,
     Sensor,
+    Slide,
     check_reactions,
 )
 from runtime.model.mesh_file import FileMesh, check_shapes
@@ -550,6 +551,12 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     _check_material_points(sensors, bodies, materials)
     for i, sensor in enumerate(sensors):
         index = getattr(sensor, "constraint", None)
+        if isinstance(sensor, Slide):
+            if index >= len(constraints) or constraints[index].type != "sliding":
+                raise SceneError(f"sensor[{i}].constraint: expected the index of a sliding "
+                                 f"joint among the {len(constraints)} [[constraint]] tables, "
+                                 f"got {index}")
+            continue
         if index is not None and (index >= len(constraints) or sensor.body not in (
                 getattr(constraints[index], "body", None),
                 getattr(constraints[index], "other", None))):

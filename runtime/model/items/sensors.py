@@ -42,7 +42,7 @@ from runtime.model.schema import (
 __all__ = ["ENERGY_TYPES", "SENSORS", "Acceleration", "ConstraintViolation", "DissipatedEnergy",
            "Displacement", "KineticEnergy", "Position", "PotentialEnergy", "Reaction", "Samples",
            "SectionForce", "Sensor", "Sensors", "StrainEnergy", "Strain", "Stress",
-           "TotalEnergy", "Velocity", "check_reactions"]
+           "Slide", "TotalEnergy", "Velocity", "check_reactions"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -423,6 +423,59 @@ class BodyReaction(Sensor):
         return _component(moment, self.component)
 
 
+def _slide_quantity_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, ("parameter", "rate", "reaction"), "quantity")
+
+
+@dataclass(frozen=True)
+class Slide(Sensor):
+    """The sliding joint ``constraint`` (its index among the [[constraint]] tables, a
+    ``sliding`` one): its point's curve parameter s along the body (``quantity``
+    "parameter", m: element index times the element length plus the local coordinate, the
+    reference arc length on straight elements), its rate ds/dt ("rate", m/s), or the force
+    the joint applies to the point ("reaction", N: -(d phi / d r_P)^T lambda from the rows'
+    multipliers, normal to the line), one ``component`` (x | y | z | norm)."""
+
+    type: ClassVar[str] = "slide"
+    energy: ClassVar[bool] = False
+    constraint: int = key(_constraint_index_key)
+    quantity: str = key(_slide_quantity_key, "parameter")
+    component: str = key(_component_key, "norm")
+
+    @property
+    def unit(self) -> str:   # type: ignore[override]
+        return {"parameter": "m", "rate": "m/s", "reaction": "N"}[self.quantity]
+
+    @property
+    def dynamics(self) -> bool:   # type: ignore[override]
+        return self.quantity == "reaction"
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        rows = model.constraint_multipliers[self.constraint]
+        joints = model.joints.shape[0]
+        block = next(b for b, first in _blocks(model) if first + joints == rows[0])
+        out = []
+        for k, q in enumerate(samples.q):
+            x = q[block.dofs]
+            if self.quantity == "parameter":
+                out.append(block.parameter(x))
+            elif self.quantity == "rate":
+                out.append(block.rate(x, samples.v[k][block.dofs]))
+            else:
+                out.append(block.force(x, samples.multipliers[k][rows]))
+        if self.quantity != "reaction":
+            return np.array(out)
+        return _component(np.array(out), self.component)
+
+
+def _blocks(model: ModelView):
+    """(block, its first row among the quadratic rows) of the model's constraint blocks."""
+    first = 0
+    for block in model.holonomic.blocks:
+        yield block, first
+        first += block.rows
+
+
 def check_reactions(sensors: tuple[Sensor, ...], constraints: tuple) -> None:
     """SceneError naming a reaction sensor whose node no constraint holds or joins."""
     held = {ref for c in constraints for ref in
@@ -706,7 +759,7 @@ class ConstraintViolation(Sensor):
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce, BodyPosition, BodyVelocity, BodyReaction)
+    SectionForce, BodyPosition, BodyVelocity, BodyReaction, Slide)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
