@@ -33,8 +33,8 @@ from runtime.model.holonomic import Driver, HolonomicConstraints
 from runtime.model.items.constraints import Built, HeldNodes
 from runtime.model.items.rigid import RigidItem
 from runtime.model.scene import Scene
-from runtime.model.sliding_rows import SlidingBlock
 from runtime.model.schema import NodeRef
+from runtime.model.sliding_rows import SlidingBlock
 
 
 @dataclass

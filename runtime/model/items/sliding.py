@@ -15,7 +15,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from runtime.kernels.kind import element_kind
 from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint
