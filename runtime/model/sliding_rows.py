@@ -54,6 +54,19 @@ class SlideError(ValueError):
     end) or no closest point was found; the message names the joint."""
 
 
+def left_the_body(owner: str, end: str, parameter: float, line: CentreLine) -> str:
+    """The cause of a point that left its body at its ``end`` ("start" | "end") at the
+    curve ``parameter`` (m), worded identically by both engines."""
+    return (f"{owner}: the point left the body at its {end} (curve parameter "
+            f"{parameter:.6g} m, the body is {line.elements * line.length:.6g} m long)")
+
+
+def no_closest_point(owner: str) -> str:
+    """The cause of a closest-point search that did not converge (both engines)."""
+    return (f"{owner}: no closest point of the body's centre line to the point (Newton on "
+            f"the curve parameter did not converge)")
+
+
 class CentreLine:
     """The centre line of a line body's elements (all of one shape): ``derivatives(xi)``
     gives the position maps N_j (4, dim, ndof) of d^j c / d xi^j, j = 0..3, at a local
@@ -83,6 +96,12 @@ class CentreLine:
         for j in range(4):
             self._derived[j] = current / self.length**j
             current = np.vstack([(powers[1:, None] * current[1:]), np.zeros((1, self.n_shape))])
+
+    @property
+    def polynomials(self) -> np.ndarray:
+        """(4, D + 1, n_shape) coefficients in u = xi / l of the xi-derivatives 0..3 of the
+        shape functions on the axis (the compiled step's data)."""
+        return self._derived
 
     def derivatives(self, xi: float) -> np.ndarray:
         """N_j (4, dim, ndof) at xi: d^j c / d xi^j = N_j q_e (node-major coordinates)."""
@@ -205,16 +224,12 @@ class SlidingBlock:
                 xi += line.length
                 element -= 1
             if xi > line.length * (1 + 1e-12) or xi < -line.length * 1e-12:
-                end = "end" if xi > 0 else "start"
-                raise SlideError(
-                    f"{self.owner}: the point left the body at its {end} (curve parameter "
-                    f"{element * line.length + xi:.6g} m, the body is "
-                    f"{line.elements * line.length:.6g} m long)")
+                raise SlideError(left_the_body(self.owner, "end" if xi > 0 else "start",
+                                               element * line.length + xi, line))
             if abs(step) <= PARAMETER_TOLERANCE * line.length:
                 self._last[:] = [element, xi]
                 return element, xi
-        raise SlideError(f"{self.owner}: no closest point of the body's centre line to the "
-                         f"point (Newton on the curve parameter did not converge)")
+        raise SlideError(no_closest_point(self.owner))
 
     def local(self, x: np.ndarray) -> Local:
         """The rows at x = q[dofs] (k,) on the element the point is on (``Local``)."""

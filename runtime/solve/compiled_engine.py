@@ -25,7 +25,15 @@ from runtime.model.dae import DAESystem
 from runtime.model.items.force_elements import FORCE_LAWS
 from runtime.model.model import Model
 from runtime.model.settings import Dynamic
-from runtime.model.sliding_rows import SlideError, SlidingBlock
+from runtime.model.sliding_rows import (
+    DEGREE,
+    PARAMETER_ITERATIONS,
+    PARAMETER_TOLERANCE,
+    SlideError,
+    SlidingBlock,
+    left_the_body,
+    no_closest_point,
+)
 from runtime.model.time_laws import LoadFunctionError
 from runtime.solve import cholmod, lapack, linear, newton_cost
 from runtime.solve.linear import single_threaded_blas
@@ -168,7 +176,9 @@ def render(dae: DAESystem, integrator: str, solver: str = "banded",
         banner=banner, header=header, groups=groups, integrator=integrator, chunk=CHUNK,
         bandwidth=dae.bandwidth, damped=any(g["damped"] for g in groups), **state,
         sparse=solver == "sparse", kkt=kkt, cholmod_structs=cholmod.STRUCTS.strip(),
-        lapack_band=dae.bandwidth >= lapack.LAPACK_BANDWIDTH, holonomic=dae.nonlinear)
+        lapack_band=dae.bandwidth >= lapack.LAPACK_BANDWIDTH, holonomic=dae.nonlinear,
+        dim=dae.dim, sliding_degree=DEGREE, sliding_iterations=PARAMETER_ITERATIONS,
+        sliding_tolerance=repr(PARAMETER_TOLERANCE))
     return source, header
 
 
@@ -465,78 +475,89 @@ class CompiledEngine:
 
     def _sliding(self, m, ld: int, bw: int) -> None:
         """Bind the sliding joints' rows (``runtime.model.sliding_rows``: not quadratic, their
-        parameter eliminated by a closest-point search): a Python callback of the step,
-        after ``quadratic_rows``, that writes their values (mode 2: Phi_q a + v^T Phi_qq v)
-        into holonomic_value, their Jacobian into their constraint CSR entries and, with
-        ``jacobian``, their geometric stiffness -coef lam_i phi_i,xx into the band or the
-        sparse values; it returns -1 (the step stops: non-finite) when a point left its
-        body, the error raised after the call."""
-        dae, ffi = self.dae, self._ffi
+        parameter eliminated by a closest-point search) as data for the step's
+        ``sliding_rows`` (the header says the layout): per joint its point and its map, its
+        line's elements and the polynomial coefficients of their shape functions on the
+        axis, its rows' directions, and per element the constraint CSR entries and the
+        iteration-matrix slots of its local coordinates."""
+        dae = self.dae
         model, h = dae.model, dae.holonomic
-        size, nj, nlin = dae.size, dae.constraint_rows, dae.joints
         offset = dae.joints_free.nnz
-        view = lambda pointer, count: np.frombuffer(ffi.buffer(pointer, 8 * count))  # noqa: E731
-        value = view(m.holonomic_value, h.rows)
-        af = view(m.af_data, int(self._af_data.size))
-        a_full = view(m.a_full, size)
         sparse = self.linear_solver == "sparse"
-        matrix = view(m.values, int(m.nnz)) if sparse else view(m.band, dae.free.size * ld)
-        q_full, v_full = self._q_full, self._v_full
-        entries = []     # (block, its first row, its free columns, per element targets)
-        first = 0
+        names = ("row", "pptr", "pdof", "pmapptr", "elements", "ndof", "edofptr", "edof",
+                 "polyptr", "nptr", "order", "afptr", "af", "targetptr", "target", "afstart",
+                 "afcount")
+        longs: dict[str, list] = {name: [] for name in names}
+        reals: dict[str, list] = {name: [] for name in ("pmap", "length", "poly", "turn",
+                                                        "offset", "state")}
+        longs["pptr"].append(0)
+        first, work = 0, 0
         for block in h.blocks:
             if isinstance(block, SlidingBlock):
-                entries.append((block, first, np.flatnonzero(model.free_position[block.dofs]
-                                                             >= 0), {}))
-            first += block.rows
-
-        def targets(block: SlidingBlock, cache: dict, element: int) -> tuple:
-            """(keep, index) of the local Hessian entries of ``element`` in ``matrix``."""
-            if element not in cache:
-                dofs = block.dofs[block.element_coordinates(element)]
-                if sparse:
-                    slots = model.slots(dofs)
-                    cache[element] = (slots >= 0, slots)
-                else:
-                    p = model.free_position[dofs]
-                    rows, cols = p[:, None] + 0 * p[None, :], 0 * p[:, None] + p[None, :]
-                    keep = (rows >= 0) & (cols >= 0) & (rows <= cols)
-                    cache[element] = (keep, cols * ld + bw + rows - cols)
-            return cache[element]
-
-        def evaluate(mode: int, jacobian: int, coef: float, lam_pointer) -> int:
-            try:
-                lam = view(lam_pointer, nj)
-                for block, row, free, cache in entries:
-                    x = q_full[block.dofs]
-                    local = block.local(x)
-                    columns = local.columns
-                    if mode == 2:
-                        w = v_full[block.dofs][columns]
-                        value[row:row + block.rows] = (
-                            local.jacobian @ a_full[block.dofs][columns]
-                            + np.einsum("mij,i,j->m", local.hessian, w, w))
-                    else:
-                        value[row:row + block.rows] = local.value
-                    full = np.zeros((block.rows, block.dofs.size))
-                    full[:, columns] = local.jacobian
+                line, p = block.line, block.point_size
+                kl = p + line.ndof
+                free = model.free_position[block.dofs] >= 0
+                rank = np.cumsum(free) - 1            # place among the block's free columns
+                longs["row"].append(first)
+                longs["pmapptr"].append(len(reals["pmap"]))
+                longs["pdof"].extend(block.dofs[:p])
+                longs["pptr"].append(len(longs["pdof"]))
+                reals["pmap"].extend(block.point_map.ravel())
+                longs["elements"].append(line.elements)
+                longs["ndof"].append(line.ndof)
+                longs["edofptr"].append(len(longs["edof"]))
+                longs["edof"].extend(block.dofs[block.element_columns].ravel())
+                reals["length"].append(line.length)
+                longs["polyptr"].append(len(reals["poly"]))
+                reals["poly"].extend(line.polynomials.ravel())
+                longs["nptr"].append(len(longs["order"]))
+                for normal in block.normals:
+                    longs["order"].append(normal.order)
+                    reals["turn"].extend(normal.turn.ravel())
+                    reals["offset"].extend(normal.offset)
+                reals["state"].extend(block.start)
+                longs["afstart"].append(offset + int(h.free_indptr[first]))
+                longs["afcount"].append(int(h.free_indptr[first + block.rows]
+                                            - h.free_indptr[first]))
+                longs["afptr"].append(len(longs["af"]))
+                longs["targetptr"].append(len(longs["target"]))
+                for element in range(line.elements):
+                    columns = block.element_coordinates(element)
                     for r in range(block.rows):
-                        start = offset + h.free_indptr[row + r]
-                        af[start:start + free.size] = full[r, free]
-                    if jacobian:
-                        keep, index = targets(block, cache, local.element)
-                        stiffness = np.tensordot(-coef * lam[nlin + row:nlin + row
-                                                               + block.rows],
-                                                 local.hessian, 1)
-                        np.add.at(matrix, index[keep], stiffness[keep])
-                return 0
-            except Exception as error:   # reported after the call
-                self._callback_error = error
-                return -1
+                        start = offset + int(h.free_indptr[first + r])
+                        longs["af"].extend(np.where(free[columns], start + rank[columns],
+                                                    -1))
+                    dofs = block.dofs[columns]
+                    if sparse:
+                        longs["target"].extend(model.slots(dofs).ravel())
+                    else:
+                        place = model.free_position[dofs]
+                        rows, cols = np.meshgrid(place, place, indexing="ij")
+                        keep = (rows >= 0) & (cols >= 0) & (rows <= cols)
+                        longs["target"].extend(np.where(keep, cols * ld + bw + rows - cols,
+                                                        -1).ravel())
+                work = max(work, 4 * line.ndof + 10 * kl + 4 * kl * kl + 9 * 3 * kl)
+            first += block.rows
+        m.nsliding = len(longs["row"])
+        for name, values in longs.items():
+            setattr(m, f"sl_{name}", self._buffer(np.array(values, np.int64), "long"))
+        for name, values in reals.items():
+            setattr(m, f"sl_{name}", self._buffer(np.array(values, float)))
+        self._sliding_failure = np.zeros(3)
+        m.sl_failure = self._buffer(self._sliding_failure)
+        m.sl_work = self._work(work)
 
-        self._sliding_callback = ffi.callback("int(int, int, double, const double *)",
-                                              evaluate, error=-1)
-        m.sliding = self._sliding_callback
+    def _sliding_failed(self) -> SlideError | None:
+        """The sliding joint failure of the step's last evaluation of the rows, if any."""
+        if not hasattr(self, "_sliding_failure") or not self._sliding_failure[0]:
+            return None
+        kind, joint, parameter = self._sliding_failure
+        self._sliding_failure[:] = 0.0
+        block = sliding_blocks(self.dae)[int(joint)]
+        if kind == 3:
+            return SlideError(no_closest_point(block.owner))
+        return SlideError(left_the_body(block.owner, "end" if kind == 2 else "start",
+                                        parameter, block.line))
 
     def raise_callback_error(self) -> None:
         """Raise what a follower load's evaluation raised during the last call, if any."""
@@ -729,8 +750,11 @@ class CompiledEngine:
         failure = None
         try:
             self.raise_callback_error()
-        except (LoadFunctionError, SlideError) as error:   # a Python load failed, or a
-            failure = Divergence(s.failed_at, str(error))    # sliding point left its body
+        except LoadFunctionError as error:   # a Python load failed at s.failed_at
+            failure = Divergence(s.failed_at, str(error))
+        slide = self._sliding_failed() if status else None
+        if slide is not None:                # a sliding joint's point left its body
+            failure = Divergence(s.failed_at, str(slide))
         done = first - 1 + (s.steps - before)
         written = int(np.count_nonzero(output_steps <= done))
         if written:

@@ -488,7 +488,7 @@ class Integrator:
             loads = self.dae.load_factors([t])[0]
             try:
                 state = self.step(state, t, h, prescribed, loads)
-            except Divergence:
+            except (Divergence, SlideError):     # (as the compiled step: a non-finite step)
                 if self.newton != "auto" or self._full_step:
                     raise
                 # the kept Jacobian could not carry the step: again from its start with
