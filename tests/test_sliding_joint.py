@@ -430,6 +430,40 @@ def test_the_engines_agree_on_the_shipped_scene(integrator):
     assert reaction < 10 * max(difference, 1e-16) * 2.1e11 * 4e-4 * 8
 
 
+def test_the_kkt_path_of_many_rows_and_the_schur_path_agree():
+    """With eight free rigid bodies beside the bead (50 rows) the joints go through the
+    sparse KKT system (``linear.KKT_ROWS``): its run matches the banded solver's Schur
+    complement, in both engines."""
+    bodies = "".join(f'[[body]]\ntype = "rigid"\nname = "b{k}"\nmass = 1.0\n'
+                     f'inertia = [0.1, 0.2, 0.25]\nposition = [{k}.0, 5.0, 0.0]\n'
+                     for k in range(8))
+    text = RAIL.format(E=2.1e11, rho=7800.0, t_end=0.05, integrator="generalized_alpha",
+                       held="")
+    scene = scene_of(text.replace("[[constraint]]", bodies + "[[constraint]]", 1))
+    banded = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver,
+                                                                   linear_solver="banded"))
+    *_, schur, q_schur = _run(banded)
+    assert schur.kkt is None
+    for engine in ("python", "compiled"):
+        *_, stepper, q = _run(scene, engine)
+        assert stepper.kkt
+        assert np.abs(q - q_schur).max() < 1e-12
+
+
+def test_a_sliding_joint_that_repeats_a_joint_is_named():
+    """The bead held at its place by a body_spherical, then put on a rail held at every
+    node: the sliding rows repeat what the spherical joint holds (singular multipliers; on
+    a flexible rail they would hold the rail to the bead instead)."""
+    rigid = RAIL.format(E=2.1e11, rho=7800.0, t_end=0.1, integrator="generalized_alpha",
+                        held=RIGID)
+    scene = scene_of(rigid.replace('[[constraint]]\ntype = "sliding"',
+                                 '[[constraint]]\ntype = "body_spherical"\nbody = "bead"\n'
+                                 '[[constraint]]\ntype = "sliding"').replace(
+                                     "constraint = 2\n", "constraint = 3\n"))
+    with pytest.raises(SceneError, match=r"constraint\[3\]: redundant: a row of this sliding"):
+        Model(scene)
+
+
 def test_the_shipped_scene_round_trips_through_toml():
     scene = load_scene(scene_path("sliding_bead"))
     assert parse_scene(tomllib.loads(scene.to_toml())) == scene
