@@ -594,6 +594,8 @@ BAD = RAIL.format(E=2.1e11, rho=7800.0, t_end=0.1, integrator="generalized_alpha
      r"constraint\[2\]\.node: expected a node of another body"),
     (("constraint = 2\n", "constraint = 1\n"), r"sensor\[0\]\.constraint: expected the index "
                                                r"of a sliding joint"),
+    (("position = [0.08, 0.0, -0.06]", 'node = "rail:2"'),
+     r"constraint\[2\]\.body: the point mass \"bead\" sits on a node of the beam"),
 ])
 def test_bad_sliding_joints_name_the_key(change, culprit):
     with pytest.raises(SceneError, match=culprit):
@@ -605,6 +607,14 @@ def test_a_point_off_the_line_at_the_start_names_the_constraint():
                                  "position = [0.08, 0.01, -0.06]"))
     with pytest.raises(SceneError, match=r"constraint\[2\]: point: the sliding point must be "
                                          r"on the centre line .* 0\.01 m from it"):
+        Model(scene)
+
+
+def test_a_normal_along_the_tangent_names_the_key():
+    scene = scene_of(BAD.replace('body = "bead"\n[[load]]',
+                                 'body = "bead"\nnormal = [0.8, 0.0, -0.6]\n[[load]]'))
+    with pytest.raises(SceneError, match=r"constraint\[2\]: normal: expected a direction "
+                                         r"across the line"):
         Model(scene)
 
 

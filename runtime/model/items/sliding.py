@@ -29,6 +29,8 @@ __all__ = ["Sliding"]
 ON_LINE = 1e-6
 #: samples per element of the search for the point's closest element at t = 0
 SEARCH_SAMPLES = 9
+#: the 3D rows' normal must make at least this sine with the tangent at t = 0
+NORMAL_ANGLE = 0.1
 
 
 def _line_body_key(value: Any, path: str, context: Context) -> str:
@@ -75,6 +77,10 @@ class Sliding(Constraint):
         if joint.node is not None and joint.node.body == joint.beam:
             raise SceneError(f"{path}.node: expected a node of another body than the beam "
                              f"{show(joint.beam)}")
+        carrier = getattr(context.rigid.get(joint.body), "node", None)
+        if carrier is not None and carrier.body == joint.beam:
+            raise SceneError(f"{path}.body: the point mass {show(joint.body)} sits on a node "
+                             f"of the beam {show(joint.beam)} itself; expected a point off it")
         return joint
 
     def targets(self) -> list[NodeRef]:
@@ -150,6 +156,11 @@ class Sliding(Constraint):
             return (Normal(np.array([[0.0, -1.0], [1.0, 0.0]]), 1, np.zeros(2)),)
         e = np.asarray(self.normal, float) if self.normal is not None else \
             _default_normal(line, elements, start)
+        tangent = line.derivatives(start[1])[1] @ elements[start[0]]
+        if np.linalg.norm(np.cross(e, tangent)) < NORMAL_ANGLE * np.linalg.norm(tangent):
+            raise SceneError(f"normal: expected a direction across the line, got "
+                             f"{show(self.normal)} along its tangent "
+                             f"{tuple(round(float(c), 6) for c in tangent)} at the point")
         cross = np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
         return Normal(cross, 1, np.zeros(3)), Normal(np.zeros((3, 3)), 1, e)
 
