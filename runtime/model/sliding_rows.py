@@ -165,7 +165,8 @@ class SlidingBlock:
 
     @property
     def terms(self) -> tuple:
-        """No quadratic terms (the compiled step evaluates these rows by a callback)."""
+        """No quadratic terms (the compiled step evaluates these rows from their own data:
+        ``sliding_rows`` in templates/stepper.c.j2)."""
         return ()
 
     @property
@@ -185,18 +186,17 @@ class SlidingBlock:
         """The block's columns (p + ndof,) of the point and of element ``element``."""
         return np.concatenate([np.arange(self.point_size), self.element_columns[element]])
 
-    def _maps(self, x: np.ndarray, element: int, xi: float):
-        """(D_i, A_i per normal, G_i, columns): the maps (dim, kl) of d, of the normals and
-        of the tangent and their xi-derivatives (i = 0..2, 3 for the tangent's), on the
-        coordinates y = x[columns] of the point and the element: d = D_0 y + 0,
-        n = A_0 y + b."""
+    def _maps(self, element: int, xi: float):
+        """(D_i, A_i per normal, T_i, columns): the maps (dim, kl) of d, of the normals and
+        of the tangent and their xi-derivatives (i = 0..2), on the coordinates
+        y = x[columns] of the point and the element: d = D_0 y, n = A_0 y + b, t = T_0 y."""
         columns = self.element_coordinates(element)
         n = self.line.derivatives(xi)                              # (4, dim, ndof)
         p, dim = self.point_size, self.line.dim
         zeros = np.zeros((dim, p))
         d_maps = [np.hstack([self.point_map, -n[0]])] + [np.hstack([zeros, -n[i]])
-                                                          for i in (1, 2, 3)]
-        normal_maps = [[np.hstack([zeros, normal.turn @ n[min(normal.order + i, 3)]])
+                                                          for i in (1, 2)]
+        normal_maps = [[np.hstack([zeros, normal.turn @ n[normal.order + i]])
                         if normal.order + i <= 3 else np.zeros((dim, p + self.line.ndof))
                         for i in range(3)] for normal in self.normals]
         tangent = [np.hstack([zeros, n[1 + i]]) for i in range(3)]
@@ -209,7 +209,7 @@ class SlidingBlock:
         element, xi = int(self._last[0]), float(self._last[1])
         line = self.line
         for _ in range(PARAMETER_ITERATIONS):
-            d_maps, _, tangent, columns = self._maps(x, element, xi)
+            d_maps, _, tangent, columns = self._maps(element, xi)
             y = x[columns]
             d, t, t_xi = d_maps[0] @ y, tangent[0] @ y, tangent[1] @ y
             slope = t_xi @ d - t @ t
@@ -237,7 +237,7 @@ class SlidingBlock:
         if key in self._cache:
             return self._cache[key]
         element, xi = self._locate(x)
-        d_maps, normal_maps, tangent, columns = self._maps(x, element, xi)
+        d_maps, normal_maps, tangent, columns = self._maps(element, xi)
         y = x[columns]
         g = _form(tangent, np.zeros(self.line.dim), d_maps, y)
         s_x = -g[1] / g[2]
