@@ -18,7 +18,7 @@ def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
         shares = r["kernel_share"] + r["factorisation_share"] + r["solve_share"]
         assert 0.0 < shares <= 1.0 and r["step_ms"] > 0
         # the joints' Schur complement is a part of the factorisations and solves
-        joints = r["case"].startswith("joint chain")
+        joints = r["case"].startswith("joint chain")     # "free links": the same, no joints
         assert (r["constraint_share"] > 0.0) == joints
         assert r["constraint_share"] <= r["factorisation_share"] + r["solve_share"]
         assert r["factorisations_per_step"] <= r["newton_per_step"]
@@ -28,6 +28,18 @@ def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
     assert text.count("\n") == len(rows) + 2 and "banded (auto)" in text
     bench_steps.plot(rows, tmp_path / "steps.png")
     assert (tmp_path / "steps.png").stat().st_size > 1000
+
+
+def test_constraint_share_of_a_kkt_step_is_measured_against_the_free_links():
+    def row(case, step_ms, share=float("nan"), newton="full"):
+        return {"case": case, "step_ms": step_ms, "constraint_share": share, "newton": newton}
+    kkt = row("joint chain 200", 20.0)
+    rows = [kkt, row("free links 200", 15.0), row("free links 200", 5.0, newton="auto")]
+    assert bench_steps.constraint_share(kkt, rows) == 0.25
+    schur = row("joint chain 50", 10.0, share=0.6)
+    assert bench_steps.constraint_share(schur, rows) == 0.6
+    # no free links measured: nothing to compare with
+    assert bench_steps.constraint_share(kkt, [kkt]) != bench_steps.constraint_share(kkt, [kkt])
 
 
 def test_bench_steps_refuses_a_bad_size(capsys):

@@ -662,9 +662,12 @@ class GeneralizedAlpha(Integrator):
         q = state.q + h * state.v + h * h * (0.5 - beta) * abar
         v = state.v + h * (1 - gamma) * abar
         abar_new = (af * state.a - am * abar) / (1 - am)
-        q = q + h * h * beta * abar_new
-        v = v + h * gamma * abar_new
-        a = np.zeros_like(state.a)
+        # the predictor: the new accelerations start at the last ones (a_n), so the first
+        # correction is O(h) of them, not all of them (Arnold and Bruls' a = 0)
+        a = state.a.copy()
+        start = abar_new + (1 - af) / (1 - am) * a
+        q = q + h * h * beta * start
+        v = v + h * gamma * start
         lam = state.multipliers.copy()
         beta_prime = (1 - am) / (h * h * beta * (1 - af))
         gamma_prime = gamma / (h * beta)
