@@ -473,9 +473,11 @@ def test_a_sliding_joint_that_repeats_a_joint_is_named():
         Model(scene)
 
 
-def test_the_shipped_scene_round_trips_through_toml():
-    scene = load_scene(scene_path("sliding_bead"))
-    assert parse_scene(tomllib.loads(scene.to_toml())) == scene
+def test_the_scenes_round_trip_through_toml():
+    """The shipped scene (a point mass, a normal) and a node on a rail (2D)."""
+    for scene in (load_scene(scene_path("sliding_bead")),
+                  scene_of(ROLLER.replace("ENGINE", "python"))):
+        assert parse_scene(tomllib.loads(scene.to_toml())) == scene
 
 
 def test_a_point_that_leaves_its_body_ends_the_run_with_its_time():
