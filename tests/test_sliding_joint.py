@@ -439,6 +439,25 @@ def test_the_engines_agree_on_the_shipped_scene(integrator):
     assert reaction < 10 * max(difference, 1e-16) * 2.1e11 * 4e-4 * 8
 
 
+def test_two_beads_on_one_rail_move_alike_in_both_engines():
+    """Two sliding joints (the compiled step's data of each joint at its own offsets): a
+    second bead further down the same flexible rail, and a rigid body's point on a beam
+    beside it, in one model."""
+    text = RAIL.format(E=2.1e11, rho=7800.0, t_end=0.05, integrator="generalized_alpha",
+                       held="")
+    text = text.replace("[[constraint]]", '[[body]]\ntype = "point_mass"\nname = "bead2"\n'
+                        'mass = 0.2\nposition = [0.48, 0.0, -0.36]\n[[constraint]]', 1)
+    text += ('[[constraint]]\ntype = "sliding"\nbeam = "rail"\nbody = "bead2"\n'
+             + ROD[ROD.index("[[body]]"):ROD.index("[[load]]")].replace('"rail"', '"rod"'))
+    scene = scene_of(text)
+    model = Model(scene)
+    assert sum(isinstance(b, SlidingBlock) for b in model.holonomic.blocks) == 3
+    (_, _, first, q_python), (_, _, second, q_compiled) = (
+        _run(scene, engine) for engine in ("python", "compiled"))
+    assert first.counters == second.counters
+    assert np.abs(q_python - q_compiled).max() < 1e-12
+
+
 def test_the_kkt_path_of_many_rows_and_the_schur_path_agree():
     """With eight free rigid bodies beside the bead (50 rows) the joints go through the
     sparse KKT system (``linear.KKT_ROWS``): its run matches the banded solver's Schur
