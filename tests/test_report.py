@@ -13,9 +13,11 @@ def test_quick_report(tmp_path, capsys):
     for section in ("## 1. Kernel cost", "## 2. Closed-form against quadrature",
                     "## 3. The paper's Tables I and II", "## 4. Shipped scenes",
                     "## 5. Whole runs and the cost of a step", "## 6. Error against run time",
-                    "## 7. Stability"):
+                    "## 7. Stability", "## 8. Fastest to a given accuracy",
+                    "## 9. The cost of a step against model size"):
         assert section in text
     # every image the page shows exists
     for image in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
         assert (tmp_path / image).is_file(), image
     assert "| cantilever | ok |" in text and "| rotating_beam | ok |" in text
+    assert "| free links 3 |" in text and "| plate 4 x 4 |" in text

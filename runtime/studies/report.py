@@ -23,11 +23,11 @@ import sympy
 
 import scenes
 from runtime.app.run import run
-from runtime.catalog import METHODS, generated_kinds
+from runtime.catalog import METHODS, NEWTON_MODES, generated_kinds
 from runtime.kernels import naming
 from runtime.kernels.kind import element_kind
 from runtime.studies import bench_kernels as bench
-from runtime.studies import bench_solvers, error_vs_time, paper, precision, stability
+from runtime.studies import bench_solvers, bench_steps, error_vs_time, paper, precision, stability
 from runtime.studies import invariant_comparison as invariant_report
 
 #: the shipped scenes run for section 4
@@ -152,10 +152,29 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
                                       progress=False), 1),
               "![work precision](figures/precision.png)", ""]
     shutil.copyfile(work / "precision" / "precision.png", figures / "precision.png")
+    parts += step_scaling(figures, quick)
     parts.append(f"\nReport generated in {time.perf_counter() - start:.0f} s.\n")
     path = out / "report.md"
     path.write_text("\n".join(parts))
     return path
+
+
+def step_scaling(figures: Path, quick: bool = False) -> list[str]:
+    """Section 9: the cost of a step against model size per body type and Newton mode, with
+    the linear solver each model chose (``ancf bench steps``), its table and its plot
+    ``figures/step_scaling.png``; dated, so that it can be measured on its own."""
+    cases = bench_steps.plan(
+        plates=(2, 4) if quick else (4, 8, 16, 32, 64), chains=(10,) if quick else
+        (1000, 10_000), solvers=(bench_steps.AUTO,), newtons=NEWTON_MODES,
+        joints=(3,) if quick else (50, 200))
+    rows = bench_steps.measure(cases, repeats=1 if quick else 2, progress=False)
+    bench_steps.plot(rows, figures / "step_scaling.png")
+    date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    return ["## 9. The cost of a step against model size (`ancf bench steps`)", "",
+            f"Measured on {date}: each model with the linear solver it chooses, every Newton "
+            "mode, min of the repeats; the constraint share of a KKT step (many joints) is "
+            "measured against the same links without joints (`free links`).", "",
+            bench_steps.table(rows), "![cost per element-step](figures/step_scaling.png)", ""]
 
 
 def _demote(markdown: str, levels: int) -> str:
