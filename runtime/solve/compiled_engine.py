@@ -312,6 +312,7 @@ class CompiledEngine:
         m.solve_work = self._work(nf * schur_rows)
         m.schur = self._work(schur_rows * schur_rows)
         m.schur_pivots = self._work(schur_rows, "int")
+        m.schur_y = self._work(schur_rows)
         for name, address in lapack.functions().items():
             setattr(m, name, self._ffi.cast("void *", address))
         m.y = self._work(nj)
