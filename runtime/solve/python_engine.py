@@ -29,6 +29,7 @@ depend on counts and the model's structure only, so both engines take the same.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -325,6 +326,10 @@ class Integrator:
         #: [steps, iterations, factorisations] of the full (True) and modified (False) steps
         self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
         self._tally = {True: [0.0, 0.0, 0.0], False: [0.0, 0.0, 0.0]}
+        self._rebuilt = False      # the last iteration's matrix was built at its iterate
+        #: the largest velocity and acceleration of any free coordinate at the steps so far
+        #: (the kept Jacobian's stop measures their corrections against them)
+        self.velocity_scale = self.acceleration_scale = 0.0
 
     # --- pieces of a Newton iteration --------------------------------------------------
 
@@ -400,6 +405,7 @@ class Integrator:
                 self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
+        self._rebuilt = rebuild
         violation = constraint(q_full)
         start = time.perf_counter()
         solution = self._solver.solve(-residual_of(force, q_full), None if violation is None
@@ -418,22 +424,53 @@ class Integrator:
         return {"dissipated": previous.extra["dissipated"]
                 + h / 2 * (previous.extra["power"] + power), "power": power}
 
-    def converged(self, increment: np.ndarray) -> bool:
-        return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
+    def iterations_left(self, size: float, previous: float | None, v: np.ndarray,
+                        a: np.ndarray) -> float:
+        """Newton's stop (module docstring) after an iteration whose correction of the
+        unknowns has the largest entry ``size`` (``previous``: the step's iteration before,
+        or None), at the velocities ``v`` and accelerations ``a`` it reached: 0 when
+        converged, else the iterations still needed at the corrections' rate of decrease
+        (inf when not measured or not decreasing)."""
+        position, velocity, acceleration = self.correction_factors
+        tolerance = self.settings.tolerance
+        within = position * size <= tolerance * self.scale
+        if self._rebuilt or size == 0.0:   # quadratic convergence overshoots the test
+            return 0.0 if within else math.inf
+        rate = CONTRACTION if previous is None else size / previous
+        if rate >= 1.0:
+            return math.inf
+        left = rate / (1.0 - rate) * size
+        bound = tolerance * min(
+            self.scale / position,
+            max(self.velocity_scale, float(np.abs(v).max(initial=0.0))) / velocity,
+            max(self.acceleration_scale, float(np.abs(a).max(initial=0.0))) / acceleration)
+        if within and left <= bound:
+            return 0.0
+        if previous is None or bound == 0.0:
+            return math.inf
+        return max(math.log(bound / left) / math.log(rate), 1.0)
 
     def newton_loop(self, t: float, iterate) -> None:
-        """Run ``iterate()`` (one Newton iteration, returning its position correction) until
-        it converges; modified Newton marks the Jacobian stale when corrections stall."""
+        """Run ``iterate()`` (one Newton iteration, returning the correction of the
+        unknowns and the velocities and accelerations it reached) until it converges;
+        modified Newton marks the Jacobian stale when a correction is more than
+        ``CONTRACTION`` of the one before or the iterations still needed
+        (``iterations_left``) cost more than a new Jacobian."""
         previous = None
-        for _ in range(self.settings.max_iterations):
-            increment = iterate()
+        for iteration in range(1, self.settings.max_iterations + 1):
+            increment, v, a = iterate()
             size = float(np.abs(increment).max(initial=0.0))
-            if self.converged(increment):
+            left = self.iterations_left(size, previous, v, a)
+            if left == 0.0:
                 return
-            if previous is not None and size > CONTRACTION * previous:
+            if previous is not None and (size > CONTRACTION * previous
+                                         or left > min(self.jacobian_weight + 1.0,
+                                                       self.settings.max_iterations
+                                                       - iteration)):
                 self._refresh = True
             previous = size
-        raise Divergence(t, newton_not_converged(self.settings.max_iterations, size))
+        raise Divergence(t, newton_not_converged(self.settings.max_iterations,
+                                                 self.correction_factors[0] * size))
 
     # --- the loop ----------------------------------------------------------------------
 
@@ -501,6 +538,9 @@ class Integrator:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
+        self.velocity_scale = max(self.velocity_scale, float(np.abs(state.v).max(initial=0.0)))
+        self.acceleration_scale = max(self.acceleration_scale,
+                                      float(np.abs(state.a).max(initial=0.0)))
         if self.newton == "auto" and kept:
             self._count(started_full, self.counters.newton_iterations - iterations,
                         self.counters.factorisations - factorisations)
@@ -555,6 +595,7 @@ class Trapezoidal(Integrator):
         base_q = state.q + h * state.v + h * h / 4 * state.a
         base_v = state.v + h / 2 * state.a
         k = h * h / 4
+        self.correction_factors = (k, h / 2, 1.0)
 
         def constraint(q_full: np.ndarray) -> np.ndarray | None:
             if dae.nonlinear:     # Phi_q a + v^T H v at the iterate
@@ -572,7 +613,7 @@ class Trapezoidal(Integrator):
                                         constraint, lam)
             a = a + da
             lam = lam + dlam
-            return k * da
+            return da, base_v + h / 2 * a, a
 
         self.newton_loop(t, iterate)
         q = base_q + k * a
@@ -668,6 +709,7 @@ class GeneralizedAlpha(Integrator):
         beta_prime = (1 - am) / (h * h * beta * (1 - af))
         gamma_prime = gamma / (h * beta)
         fixed_part = dae.joints_prescribed @ qp + dae.joint_fixed_part
+        self.correction_factors = (1.0, gamma_prime, beta_prime)
 
         def constraint(q_full: np.ndarray) -> np.ndarray | None:
             if dae.nonlinear:
@@ -685,7 +727,7 @@ class GeneralizedAlpha(Integrator):
             v = v + gamma_prime * dq
             a = a + beta_prime * dq
             lam = lam + dlam
-            return dq
+            return dq, v, a
 
         self.newton_loop(t, iterate)
         abar_new = abar_new + (1 - af) / (1 - am) * a
