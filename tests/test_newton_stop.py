@@ -42,9 +42,9 @@ def test_a_kept_jacobian_step_bounds_its_accelerations():
     iterates = []
     iterations_left = stepper.iterations_left
 
-    def record(size, previous, v, a):
-        iterates.append((size, a.copy()))
-        return iterations_left(size, previous, v, a)
+    def record(increment, previous, v, a):
+        iterates.append((np.abs(increment).max(), a.copy()))
+        return iterations_left(increment, previous, v, a)
 
     stepper.iterations_left = record
     factorisations = stepper.counters.factorisations

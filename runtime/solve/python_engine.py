@@ -11,7 +11,8 @@ Both work on the free coordinates of a ``DAESystem``; prescribed ones (hub rotat
 through their known values, rates and accelerations.  Newton is ``full`` (the exact Jacobian
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
-least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate) or
+least ``CONTRACTION`` per iteration, or too slowly for the stop below; then they are
+rebuilt at the current iterate) or
 ``auto``: modified Newton, except that after a step in which the kept
 Jacobian went stale (a factorisation was needed) come steps of full Newton, 1 of them and
 doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale
@@ -20,11 +21,27 @@ tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps)
 weighed by what a new Jacobian costs against an iteration without one
 (``runtime.solve.newton_cost``), and full Newton follows a stale step only while its cost
 per step is the lower (or has not been measured yet).  A modified step that fails (Newton
-not converged, non-finite or singular) is done again from its start with full Newton, as
-stale.  Measured on the shipped scenes (docs/design.md, "Newton modes by measurement"),
-modified Newton is 2-7x faster than full except where the Jacobian changes fast (the
-rotating beam: full is 1.2x faster); ``auto`` follows the faster of the two.  The decisions
-depend on counts and the model's structure only, so both engines take the same.
+not converged, non-finite or singular, or a kept Jacobian's correction larger than the one
+before it) is done again from its start with full Newton, as stale.  ``auto`` is the
+default.  Measured on the shipped scenes (docs/design.md, "Newton modes by measurement"),
+modified Newton is 1.5-3.4x cheaper than full except where the Jacobian changes fast (the
+rotating and spinning beams, the beam spun up on a hub); ``auto`` follows the cheaper of
+the two.  The decisions depend on counts and the model's structure only, so both engines
+take the same.
+
+The stop (``Integrator.iterations_left``, the same in the compiled step): an iteration
+whose matrix was built at its iterate (every one of full Newton) stops when its correction
+of the positions is within ``tolerance`` times the model's length scale L; quadratic
+convergence overshoots that by far.  With a kept Jacobian convergence is linear, and the
+error left after a correction dx is estimated as ``r / (1 - r) |dx|`` with r the ratio of
+the last two corrections (``CONTRACTION`` at a step's first): the step stops when that
+estimate, carried into the positions, the velocities and the accelerations (the
+integrator's factors: h^2/4, h/2, 1 of the accelerations for the trapezoidal rule; 1,
+gamma', beta' of the positions for generalized-alpha), is within ``tolerance`` of each's
+scale: L, and the largest velocity and acceleration of any free coordinate at the steps so
+far or at the iterate.  A kept Jacobian is also marked stale when the iterations that
+estimate still needs at rate r cost more than a new Jacobian (``jacobian_weight`` plus one
+iteration) or than the iterations left.
 """
 
 from __future__ import annotations
@@ -424,13 +441,14 @@ class Integrator:
         return {"dissipated": previous.extra["dissipated"]
                 + h / 2 * (previous.extra["power"] + power), "power": power}
 
-    def iterations_left(self, size: float, previous: float | None, v: np.ndarray,
+    def iterations_left(self, increment: np.ndarray, previous: float | None, v: np.ndarray,
                         a: np.ndarray) -> float:
-        """Newton's stop (module docstring) after an iteration whose correction of the
-        unknowns has the largest entry ``size`` (``previous``: the step's iteration before,
+        """Newton's stop (module docstring) after an iteration that corrected the unknowns
+        by ``increment`` (``previous``: the largest entry of the step's correction before,
         or None), at the velocities ``v`` and accelerations ``a`` it reached: 0 when
         converged, else the iterations still needed at the corrections' rate of decrease
         (inf when not measured or not decreasing)."""
+        size = float(np.abs(increment).max(initial=0.0))
         position, velocity, acceleration = self.correction_factors
         tolerance = self.settings.tolerance
         within = position * size <= tolerance * self.scale
@@ -460,9 +478,15 @@ class Integrator:
         for iteration in range(1, self.settings.max_iterations + 1):
             increment, v, a = iterate()
             size = float(np.abs(increment).max(initial=0.0))
-            left = self.iterations_left(size, previous, v, a)
+            left = self.iterations_left(increment, previous, v, a)
             if left == 0.0:
                 return
+            if (self.newton == "auto" and not self._full_step and not self._rebuilt
+                    and previous is not None and size > previous):
+                # a kept Jacobian that drives the iterates away: the step is redone with
+                # full Newton (``advance``) rather than carried on from where it went
+                raise Divergence(t, newton_not_converged(iteration,
+                                                         self.correction_factors[0] * size))
             if previous is not None and (size > CONTRACTION * previous
                                          or left > min(self.jacobian_weight + 1.0,
                                                        self.settings.max_iterations
