@@ -8,26 +8,25 @@ engine: the readable reference of the compiled one in ``runtime.solve.compiled_e
   Bruls, Newton on the positions, numerical damping set by the spectral radius ``rho_inf``.
 
 Both work on the free coordinates of a ``DAESystem``; prescribed ones (hub rotations) enter
-through their known values, rates and accelerations.  Newton is ``full`` (the exact Jacobian
+through their known values, rates and accelerations. Newton is ``full`` (the exact Jacobian
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
 least ``CONTRACTION`` per iteration, or too slowly for the stop below; then they are
-rebuilt at the current iterate) or
-``auto``: modified Newton, except that after a step in which the kept
-Jacobian went stale (a factorisation was needed) come steps of full Newton, 1 of them and
-doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale
-again, back to 1 once one does not - when full Newton pays: each mode's recent steps are
-tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps) and
-weighed by what a new Jacobian costs against an iteration without one
+rebuilt at the current iterate) or ``auto``: modified Newton, except that after a step in
+which the kept Jacobian went stale (a factorisation was needed) come steps of full Newton,
+1 of them and doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them
+goes stale again, back to 1 once one does not - when full Newton pays: each mode's recent
+steps are tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps)
+and weighed by what a new Jacobian costs against an iteration without one
 (``runtime.solve.newton_cost``), and full Newton follows a stale step only while its cost
-per step is the lower (or has not been measured yet).  A modified step that fails (Newton
-not converged, non-finite or singular, or a kept Jacobian's correction larger than the one
-before it) is done again from its start with full Newton, as stale.  ``auto`` is the
-default.  Measured on the shipped scenes (docs/design.md, "Newton modes by measurement"),
-modified Newton is 1.5-3.4x cheaper than full except where the Jacobian changes fast (the
-rotating and spinning beams, the beam spun up on a hub); ``auto`` follows the cheaper of
-the two.  The decisions depend on counts and the model's structure only, so both engines
-take the same.
+per step is the lower (before it is measured: while modified Newton's is above one
+iteration with a new Jacobian, the least a step of full Newton costs). A modified step that
+fails (Newton not converged, non-finite or singular) is done again from its start with full
+Newton, as stale. ``auto`` is the default. Measured on the shipped scenes (docs/design.md,
+"Newton modes by measurement"), modified Newton is 1.5-3.4x cheaper than full except where
+the Jacobian changes fast (the rotating and spinning beams, the beam spun up on a hub);
+``auto`` follows the cheaper of the two. The decisions depend on counts and the model's
+structure only, so both engines take the same.
 
 The stop (``Integrator.iterations_left``, the same in the compiled step): an iteration
 whose matrix was built at its iterate (every one of full Newton) stops when its correction
@@ -41,7 +40,9 @@ gamma', beta' of the positions for generalized-alpha), is within ``tolerance`` o
 scale: L, and the largest velocity and acceleration of any free coordinate at the steps so
 far or at the iterate.  A kept Jacobian is also marked stale when the iterations that
 estimate still needs at rate r cost more than a new Jacobian (``jacobian_weight`` plus one
-iteration) or than the iterations left.
+iteration) or than the iterations left; a kept Jacobian's correction larger than the one
+before it is taken back, and the Jacobian rebuilt at the iterate before it (found on a stiff
+PD-driven arm, where carrying on from the diverged iterate led Newton to another root).
 """
 
 from __future__ import annotations
@@ -468,12 +469,13 @@ class Integrator:
             return math.inf
         return max(math.log(bound / left) / math.log(rate), 1.0)
 
-    def newton_loop(self, t: float, iterate) -> None:
+    def newton_loop(self, t: float, iterate, undo) -> None:
         """Run ``iterate()`` (one Newton iteration, returning the correction of the
-        unknowns and the velocities and accelerations it reached) until it converges;
-        modified Newton marks the Jacobian stale when a correction is more than
-        ``CONTRACTION`` of the one before or the iterations still needed
-        (``iterations_left``) cost more than a new Jacobian."""
+        unknowns and the velocities and accelerations it reached) until it converges.  With
+        a kept Jacobian, a correction larger than the one before is taken back (``undo()``)
+        and the Jacobian rebuilt at the iterate before it; modified Newton marks the
+        Jacobian stale when a correction is more than ``CONTRACTION`` of the one before or
+        the iterations still needed (``iterations_left``) cost more than a new Jacobian."""
         previous = None
         for iteration in range(1, self.settings.max_iterations + 1):
             increment, v, a = iterate()
@@ -481,12 +483,11 @@ class Integrator:
             left = self.iterations_left(increment, previous, v, a)
             if left == 0.0:
                 return
-            if (self.newton == "auto" and not self._full_step and not self._rebuilt
-                    and previous is not None and size > previous):
-                # a kept Jacobian that drives the iterates away: the step is redone with
-                # full Newton (``advance``) rather than carried on from where it went
-                raise Divergence(t, newton_not_converged(iteration,
-                                                         self.correction_factors[0] * size))
+            if not self._rebuilt and previous is not None and size > previous:
+                # a kept Jacobian that drives the iterates away: not carried on from there
+                undo()
+                self._refresh, previous = True, None
+                continue
             if previous is not None and (size > CONTRACTION * previous
                                          or left > min(self.jacobian_weight + 1.0,
                                                        self.settings.max_iterations
@@ -588,12 +589,14 @@ class Integrator:
 
     def _full_newton_pays(self) -> bool:
         """``auto``: whether full Newton's cost per step (iterations plus factorisations
-        times ``jacobian_weight``) is below modified Newton's, or not measured yet."""
+        times ``jacobian_weight``) is below modified Newton's; before it is measured,
+        whether modified Newton's is above the least full Newton can cost (one iteration
+        with a new Jacobian a step)."""
         (full_steps, full_iterations, full_factorisations) = self._tally[True]
         (steps, iterations, factorisations) = self._tally[False]
-        if full_steps == 0.0:
-            return True
         weight = self.jacobian_weight
+        if full_steps == 0.0:
+            return iterations + weight * factorisations > (1.0 + weight) * steps
         return ((full_iterations + weight * full_factorisations) * steps
                 < (iterations + weight * factorisations) * full_steps)
 
@@ -628,7 +631,9 @@ class Trapezoidal(Integrator):
                     dae.full_accelerations(a, ap))
             return dae.joints_free @ a + dae.joints_prescribed @ ap if dae.joints else None
 
-        def iterate() -> np.ndarray:
+        last = []
+
+        def iterate() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             nonlocal a, lam
             da, dlam = self.linear_step(base_q + k * a, base_v + h / 2 * a, t, prescribed,
                                         loads, (1.0, -k, -h / 2),
@@ -637,9 +642,15 @@ class Trapezoidal(Integrator):
                                         constraint, lam)
             a = a + da
             lam = lam + dlam
+            last[:] = da, dlam
             return da, base_v + h / 2 * a, a
 
-        self.newton_loop(t, iterate)
+        def undo() -> None:
+            nonlocal a, lam
+            a = a - last[0]
+            lam = lam - last[1]
+
+        self.newton_loop(t, iterate, undo)
         q = base_q + k * a
         v = state.v + h / 2 * (state.a + a)
         if dae.nonlinear:
@@ -740,7 +751,9 @@ class GeneralizedAlpha(Integrator):
                 return dae.violation(q_full)
             return dae.joints_free @ q + fixed_part if dae.joints else None
 
-        def iterate() -> np.ndarray:
+        last = []
+
+        def iterate() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             nonlocal q, v, a, lam
             dq, dlam = self.linear_step(q, v, t, prescribed, loads,
                                         (beta_prime, -1.0, -gamma_prime),
@@ -751,9 +764,17 @@ class GeneralizedAlpha(Integrator):
             v = v + gamma_prime * dq
             a = a + beta_prime * dq
             lam = lam + dlam
+            last[:] = dq, dlam
             return dq, v, a
 
-        self.newton_loop(t, iterate)
+        def undo() -> None:
+            nonlocal q, v, a, lam
+            q = q - last[0]
+            v = v - gamma_prime * last[0]
+            a = a - beta_prime * last[0]
+            lam = lam - last[1]
+
+        self.newton_loop(t, iterate, undo)
         abar_new = abar_new + (1 - af) / (1 - am) * a
         return State(t, q, v, a, lam, {"abar": abar_new,
                                        **self.dissipation(state, q, v, prescribed, h)})
