@@ -83,7 +83,7 @@ def test_engines_agree_on_the_shipped_scenes(name):
 
 
 @pytest.mark.parametrize("name", ["cantilever", "rotating_beam", "double_pendulum",
-                                  "spinning_beam", "plate_cantilever"])
+                                  "spinning_beam", "plate_cantilever", "four_bar"])
 def test_engines_agree_with_auto_newton_on_the_shipped_scenes(name):
     # The same decisions from the same counts, which differ only where an engine stops one
     # iteration apart at the tolerance; the rotating beam (full and modified Newton cost

@@ -147,7 +147,7 @@ step = 1e-3
 """)
     # full Newton: a kept Jacobian stops at the tolerance, and its bias of 1e-10 per step
     # adds up to 1.2e-4 of the energy over these 3000 steps (2e-7 at tolerance 1e-12)
-    t, q, v, _ = run(scene, integrator="trapezoidal", newton="full")
+    t, q, v, _ = run(scene, integrator="trapezoidal")
     _, inertia = scene.rigid_bodies[0].mass_properties()
     moments = np.diag(inertia)
 
@@ -286,8 +286,10 @@ axis = [0.6, 0.0, 0.8]
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_on_the_double_pendulum(integrator):
     scene = load_scene(scene_path("double_pendulum"))
-    python = run(scene, "python", integrator=integrator, t_end=0.1)
-    compiled = run(scene, "compiled", integrator=integrator, t_end=0.1)
+    # full Newton, for equal counters (a kept Jacobian may stop a step one iteration apart
+    # in the two engines: tests/scenes_small.py, counts_agree)
+    python = run(scene, "python", integrator=integrator, t_end=0.1, newton="full")
+    compiled = run(scene, "compiled", integrator=integrator, t_end=0.1, newton="full")
     assert np.abs(python[1] - compiled[1]).max() <= 1e-10
     assert np.abs(python[2] - compiled[2]).max() <= 1e-8
     assert python[3].counters == compiled[3].counters
@@ -451,9 +453,12 @@ def test_a_mass_on_a_spring_oscillates_at_sqrt_k_over_m():
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_on_springs_between_a_particle_and_a_spinning_body(integrator):
+    # full Newton, for equal counters: with a kept Jacobian a step whose error estimate
+    # ends within round-off of the tolerance stops one iteration apart in the two engines
+    # (generalized-alpha: at 0.995 of it in step 143, 1641 against 1642 iterations)
     scene = scene_of(SPRING)
-    python = run(scene, "python", integrator=integrator, t_end=0.3)
-    compiled = run(scene, "compiled", integrator=integrator, t_end=0.3)
+    python = run(scene, "python", integrator=integrator, t_end=0.3, newton="full")
+    compiled = run(scene, "compiled", integrator=integrator, t_end=0.3, newton="full")
     assert np.abs(python[1] - compiled[1]).max() <= 1e-12
     assert np.abs(python[2] - compiled[2]).max() <= 1e-10
     assert python[3].counters == compiled[3].counters
@@ -860,11 +865,13 @@ def test_3d_revolute_between_beam_nodes():
     model = Model(revolute)
     (block,) = model.holonomic.blocks
     _finite_difference_check(block, np.random.default_rng(11))
-    _, q_rev, _, python = run(revolute, "python")
-    _, q_sph, _, _ = run(spherical, "python")
+    # full Newton, for equal counters (a kept Jacobian may stop a step one iteration apart
+    # in the two engines: tests/scenes_small.py, counts_agree)
+    _, q_rev, _, python = run(revolute, "python", newton="full")
+    _, q_sph, _, _ = run(spherical, "python", newton="full")
     assert np.abs(q_rev[-1] - q_rev[0]).max() > 1e-2                  # it swung
     assert np.abs(q_rev - q_sph).max() <= 1e-9
-    compiled = run(revolute, "compiled")
+    compiled = run(revolute, "compiled", newton="full")
     assert np.abs(compiled[1] - q_rev).max() <= 1e-12
     assert compiled[3].counters == python.counters
 

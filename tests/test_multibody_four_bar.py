@@ -39,7 +39,10 @@ def _scene(**dynamic):
 
 @pytest.mark.parametrize("integrator", ["trapezoidal", "generalized_alpha"])
 def test_engines_agree_on_the_four_bar_and_the_loop_stays_closed(integrator):
-    scene = _scene(t_end=0.3, integrator=integrator, output_every=None)
+    # full Newton, for equal counters: with a kept Jacobian a step whose error estimate ends
+    # within round-off of the tolerance stops one iteration apart in the two engines (auto
+    # Newton on the four-bar: tests/test_engines.py)
+    scene = _scene(t_end=0.3, integrator=integrator, output_every=None, newton="full")
     t, q, _, stepper = run(scene, "python")
     compiled = run(scene, "compiled")
     assert np.abs(compiled[1] - q).max() <= 1e-10

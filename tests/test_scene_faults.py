@@ -527,7 +527,7 @@ def test_engine_and_newton_keys():
     scene = parse_scene(scene_data({"solver.engine": "python", f"{DYN}.newton": "modified"}))
     assert scene.solver.engine == "python" and scene.dynamic.newton == "modified"
     default = parse_scene(scene_data({}))
-    assert default.solver.engine is None and default.dynamic.newton == "full"
+    assert default.solver.engine is None and default.dynamic.newton == "auto"
 
 
 def test_valid_edge_cases_still_parse():

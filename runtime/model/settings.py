@@ -60,7 +60,7 @@ class Dynamic:
     """Dynamic analysis from 0 to ``t_end`` (s) with time step ``step`` (s), ``t_end`` an integer
     multiple of ``step``; outputs every ``output_every`` s (a multiple of ``step``; None: every
     step); ``rho_inf`` in [0, 1] for generalized-alpha; ``newton``: ``full`` (a new Jacobian
-    at every iteration, the default), ``modified`` (Jacobian reused) or ``auto`` (modified,
+    at every iteration), ``modified`` (Jacobian reused) or ``auto`` (the default: modified,
     and full for the steps after one that needed a new Jacobian where that is cheaper):
     runtime.solve.python_engine."""
 
@@ -73,7 +73,7 @@ class Dynamic:
     max_iterations: int = 20
     frequency_of: str | None = None    # sensor whose oscillation frequency is measured ...
     frequency_after: float = 0.0       # ... from this time (s) to t_end
-    newton: str = "full"
+    newton: str = "auto"
 
     def to_dict(self) -> dict[str, Any]:
         """The TOML table ``[analysis.dynamic]``."""

@@ -275,6 +275,7 @@ class CompiledEngine:
         m.load_vectors = self._buffer(dae.load_vectors)
         m.h = step
         m.tolerance = self.settings.tolerance * dae.scale
+        m.relative_tolerance, m.length_scale = self.settings.tolerance, dae.scale
         m.contraction = CONTRACTION
         m.alpha_m, m.alpha_f, m.gamma, m.beta = alpha_parameters(self.settings.rho_inf)
         m.max_iterations = self.settings.max_iterations

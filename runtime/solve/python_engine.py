@@ -8,27 +8,46 @@ engine: the readable reference of the compiled one in ``runtime.solve.compiled_e
   Bruls, Newton on the positions, numerical damping set by the spectral radius ``rho_inf``.
 
 Both work on the free coordinates of a ``DAESystem``; prescribed ones (hub rotations) enter
-through their known values, rates and accelerations.  Newton is ``full`` (the exact Jacobian
+through their known values, rates and accelerations. Newton is ``full`` (the exact Jacobian
 and a new factorisation at every iteration, the paper's) or ``modified`` (the Jacobian and
 its factorisation are kept, across steps too, until the corrections stop shrinking by at
-least ``CONTRACTION`` per iteration; then they are rebuilt at the current iterate) or
-``auto``: modified Newton, except that after a step in which the kept
-Jacobian went stale (a factorisation was needed) come steps of full Newton, 1 of them and
-doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them goes stale
-again, back to 1 once one does not - when full Newton pays: each mode's recent steps are
-tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps) and
-weighed by what a new Jacobian costs against an iteration without one
+least ``CONTRACTION`` per iteration, or too slowly for the stop below; then they are
+rebuilt at the current iterate) or ``auto``: modified Newton, except that after a step in
+which the kept Jacobian went stale (a factorisation was needed) come steps of full Newton,
+1 of them and doubling (up to ``MAX_FULL_STEPS``) while the modified step tried after them
+goes stale again, back to 1 once one does not - when full Newton pays: each mode's recent
+steps are tallied (steps, iterations, factorisations, halved every ``TALLY_WINDOW`` steps)
+and weighed by what a new Jacobian costs against an iteration without one
 (``runtime.solve.newton_cost``), and full Newton follows a stale step only while its cost
-per step is the lower (or has not been measured yet).  A modified step that fails (Newton
-not converged, non-finite or singular) is done again from its start with full Newton, as
-stale.  Measured on the shipped scenes (docs/design.md, "Newton modes by measurement"),
-modified Newton is 2-7x faster than full except where the Jacobian changes fast (the
-rotating beam: full is 1.2x faster); ``auto`` follows the faster of the two.  The decisions
-depend on counts and the model's structure only, so both engines take the same.
+per step is the lower (before it is measured: while modified Newton's is above one
+iteration with a new Jacobian, the least a step of full Newton costs). A modified step that
+fails (Newton not converged, non-finite or singular) is done again from its start with full
+Newton, as stale. ``auto`` is the default. Measured on the shipped scenes (docs/design.md,
+"Newton modes by measurement"), modified Newton is 1.5-3.4x cheaper than full except where
+the Jacobian changes fast (the rotating and spinning beams, the beam spun up on a hub);
+``auto`` follows the cheaper of the two. The decisions depend on counts and the model's
+structure only, so both engines take the same.
+
+The stop (``Integrator.iterations_left``, the same in the compiled step): an iteration
+whose matrix was built at its iterate (every one of full Newton) stops when its correction
+of the positions is within ``tolerance`` times the model's length scale L; quadratic
+convergence overshoots that by far.  With a kept Jacobian convergence is linear, and the
+error left after a correction dx is estimated as ``r / (1 - r) |dx|`` with r the ratio of
+the last two corrections (``CONTRACTION`` at a step's first): the step stops when that
+estimate, carried into the positions, the velocities and the accelerations (the
+integrator's factors: h^2/4, h/2, 1 of the accelerations for the trapezoidal rule; 1,
+gamma', beta' of the positions for generalized-alpha), is within ``tolerance`` of each's
+scale: L, and the largest velocity and acceleration of any free coordinate at the steps so
+far or at the iterate.  A kept Jacobian is also marked stale when the iterations that
+estimate still needs at rate r cost more than a new Jacobian (``jacobian_weight`` plus one
+iteration) or than the iterations left; a kept Jacobian's correction larger than the one
+before it is taken back, and the Jacobian rebuilt at the iterate before it (found on a stiff
+PD-driven arm, where carrying on from the diverged iterate led Newton to another root).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -326,6 +345,10 @@ class Integrator:
         #: [steps, iterations, factorisations] of the full (True) and modified (False) steps
         self.jacobian_weight = newton_cost.jacobian_weight(self.dae, self.linear)
         self._tally = {True: [0.0, 0.0, 0.0], False: [0.0, 0.0, 0.0]}
+        self._rebuilt = False      # the last iteration's matrix was built at its iterate
+        #: the largest velocity and acceleration of any free coordinate at the steps so far
+        #: (the kept Jacobian's stop measures their corrections against them)
+        self.velocity_scale = self.acceleration_scale = 0.0
 
     # --- pieces of a Newton iteration --------------------------------------------------
 
@@ -401,6 +424,7 @@ class Integrator:
                 self.timing["factorisation_s"] += time.perf_counter() - start
             self.counters.factorisations += 1
             self._refresh = False
+        self._rebuilt = rebuild
         violation = constraint(q_full)
         start = time.perf_counter()
         solution = self._solver.solve(-residual_of(force, q_full), None if violation is None
@@ -419,22 +443,60 @@ class Integrator:
         return {"dissipated": previous.extra["dissipated"]
                 + h / 2 * (previous.extra["power"] + power), "power": power}
 
-    def converged(self, increment: np.ndarray) -> bool:
-        return float(np.abs(increment).max(initial=0.0)) <= self.settings.tolerance * self.scale
+    def iterations_left(self, increment: np.ndarray, previous: float | None, v: np.ndarray,
+                        a: np.ndarray) -> float:
+        """Newton's stop (module docstring) after an iteration that corrected the unknowns
+        by ``increment`` (``previous``: the largest entry of the step's correction before,
+        or None), at the velocities ``v`` and accelerations ``a`` it reached: 0 when
+        converged, else the iterations still needed at the corrections' rate of decrease
+        (inf when not measured or not decreasing)."""
+        size = float(np.abs(increment).max(initial=0.0))
+        position, velocity, acceleration = self.correction_factors
+        tolerance = self.settings.tolerance
+        within = position * size <= tolerance * self.scale
+        if self._rebuilt or size == 0.0:   # quadratic convergence overshoots the test
+            return 0.0 if within else math.inf
+        rate = CONTRACTION if previous is None else size / previous
+        if rate >= 1.0:
+            return math.inf
+        left = rate / (1.0 - rate) * size
+        bound = tolerance * min(
+            self.scale / position,
+            max(self.velocity_scale, float(np.abs(v).max(initial=0.0))) / velocity,
+            max(self.acceleration_scale, float(np.abs(a).max(initial=0.0))) / acceleration)
+        if within and left <= bound:
+            return 0.0
+        if previous is None or bound == 0.0:
+            return math.inf
+        return max(math.log(bound / left) / math.log(rate), 1.0)
 
-    def newton_loop(self, t: float, iterate) -> None:
-        """Run ``iterate()`` (one Newton iteration, returning its position correction) until
-        it converges; modified Newton marks the Jacobian stale when corrections stall."""
+    def newton_loop(self, t: float, iterate, undo) -> None:
+        """Run ``iterate()`` (one Newton iteration, returning the correction of the
+        unknowns and the velocities and accelerations it reached) until it converges.  With
+        a kept Jacobian, a correction larger than the one before is taken back (``undo()``)
+        and the Jacobian rebuilt at the iterate before it; modified Newton marks the
+        Jacobian stale when a correction is more than ``CONTRACTION`` of the one before or
+        the iterations still needed (``iterations_left``) cost more than a new Jacobian."""
         previous = None
-        for _ in range(self.settings.max_iterations):
-            increment = iterate()
+        for iteration in range(1, self.settings.max_iterations + 1):
+            increment, v, a = iterate()
             size = float(np.abs(increment).max(initial=0.0))
-            if self.converged(increment):
+            left = self.iterations_left(increment, previous, v, a)
+            if left == 0.0:
                 return
-            if previous is not None and size > CONTRACTION * previous:
+            if not self._rebuilt and previous is not None and size > previous:
+                # a kept Jacobian that drives the iterates away: not carried on from there
+                undo()
+                self._refresh, previous = True, None
+                continue
+            if previous is not None and (size > CONTRACTION * previous
+                                         or left > min(self.jacobian_weight + 1.0,
+                                                       self.settings.max_iterations
+                                                       - iteration)):
                 self._refresh = True
             previous = size
-        raise Divergence(t, newton_not_converged(self.settings.max_iterations, size))
+        raise Divergence(t, newton_not_converged(self.settings.max_iterations,
+                                                 self.correction_factors[0] * size))
 
     # --- the loop ----------------------------------------------------------------------
 
@@ -502,6 +564,9 @@ class Integrator:
             self.timing["steps_s"] += time.perf_counter() - start
             self.timing["kernel_s"] += self.dae.model.kernel_seconds - kernels
         self.counters.steps += 1
+        self.velocity_scale = max(self.velocity_scale, float(np.abs(state.v).max(initial=0.0)))
+        self.acceleration_scale = max(self.acceleration_scale,
+                                      float(np.abs(state.a).max(initial=0.0)))
         if self.newton == "auto" and kept:
             self._count(started_full, self.counters.newton_iterations - iterations,
                         self.counters.factorisations - factorisations)
@@ -525,12 +590,14 @@ class Integrator:
 
     def _full_newton_pays(self) -> bool:
         """``auto``: whether full Newton's cost per step (iterations plus factorisations
-        times ``jacobian_weight``) is below modified Newton's, or not measured yet."""
+        times ``jacobian_weight``) is below modified Newton's; before it is measured,
+        whether modified Newton's is above the least full Newton can cost (one iteration
+        with a new Jacobian a step)."""
         (full_steps, full_iterations, full_factorisations) = self._tally[True]
         (steps, iterations, factorisations) = self._tally[False]
-        if full_steps == 0.0:
-            return True
         weight = self.jacobian_weight
+        if full_steps == 0.0:
+            return iterations + weight * factorisations > (1.0 + weight) * steps
         return ((full_iterations + weight * full_factorisations) * steps
                 < (iterations + weight * factorisations) * full_steps)
 
@@ -556,6 +623,7 @@ class Trapezoidal(Integrator):
         base_q = state.q + h * state.v + h * h / 4 * state.a
         base_v = state.v + h / 2 * state.a
         k = h * h / 4
+        self.correction_factors = (k, h / 2, 1.0)
 
         def constraint(q_full: np.ndarray) -> np.ndarray | None:
             if dae.nonlinear:     # Phi_q a + v^T H v at the iterate
@@ -564,7 +632,9 @@ class Trapezoidal(Integrator):
                     dae.full_accelerations(a, ap))
             return dae.joints_free @ a + dae.joints_prescribed @ ap if dae.joints else None
 
-        def iterate() -> np.ndarray:
+        last = []
+
+        def iterate() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             nonlocal a, lam
             da, dlam = self.linear_step(base_q + k * a, base_v + h / 2 * a, t, prescribed,
                                         loads, (1.0, -k, -h / 2),
@@ -573,9 +643,15 @@ class Trapezoidal(Integrator):
                                         constraint, lam)
             a = a + da
             lam = lam + dlam
-            return k * da
+            last[:] = da, dlam
+            return da, base_v + h / 2 * a, a
 
-        self.newton_loop(t, iterate)
+        def undo() -> None:
+            nonlocal a, lam
+            a = a - last[0]
+            lam = lam - last[1]
+
+        self.newton_loop(t, iterate, undo)
         q = base_q + k * a
         v = state.v + h / 2 * (state.a + a)
         if dae.nonlinear:
@@ -672,13 +748,16 @@ class GeneralizedAlpha(Integrator):
         beta_prime = (1 - am) / (h * h * beta * (1 - af))
         gamma_prime = gamma / (h * beta)
         fixed_part = dae.joints_prescribed @ qp + dae.joint_fixed_part
+        self.correction_factors = (1.0, gamma_prime, beta_prime)
 
         def constraint(q_full: np.ndarray) -> np.ndarray | None:
             if dae.nonlinear:
                 return dae.violation(q_full)
             return dae.joints_free @ q + fixed_part if dae.joints else None
 
-        def iterate() -> np.ndarray:
+        last = []
+
+        def iterate() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             nonlocal q, v, a, lam
             dq, dlam = self.linear_step(q, v, t, prescribed, loads,
                                         (beta_prime, -1.0, -gamma_prime),
@@ -689,9 +768,17 @@ class GeneralizedAlpha(Integrator):
             v = v + gamma_prime * dq
             a = a + beta_prime * dq
             lam = lam + dlam
-            return dq
+            last[:] = dq, dlam
+            return dq, v, a
 
-        self.newton_loop(t, iterate)
+        def undo() -> None:
+            nonlocal q, v, a, lam
+            q = q - last[0]
+            v = v - gamma_prime * last[0]
+            a = a - beta_prime * last[0]
+            lam = lam - last[1]
+
+        self.newton_loop(t, iterate, undo)
         abar_new = abar_new + (1 - af) / (1 - am) * a
         return State(t, q, v, a, lam, {"abar": abar_new,
                                        **self.dissipation(state, q, v, prescribed, h)})
