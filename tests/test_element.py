@@ -30,6 +30,7 @@ from conftest import (
     element,
     energy_scale,
     force_scale,
+    invariant_rounding,
     inverted_reference,
     kind_seed,
     lame,
@@ -51,17 +52,6 @@ from runtime.studies import highprecision as reference
 EPS = np.finfo(float).eps
 
 
-def invariant_rounding(kind: str) -> float:
-    """How much more the sums over the invariants round for ``kind`` than for the 16 shape
-    functions of the plates, on which the tolerances below were set: their terms are products
-    of two shape-function pairs, (n (n + 1) / 2)^2 of them (136^2 for 16), and the rounding
-    left after their cancellation grows with that count (measured on curved references
-    against the 50-digit reference: the 8-node shell's gram force 4.3e-13, energy 1.7e-13;
-    the 24 shape functions of ANCF-3833, 4.9 times the terms: 2.0e-12 and 3.0e-12, varying
-    by 1.7e-12 with a rigid rotation of the same problem; the quadrature method, which sums
-    no invariants, stays at 1e-15 on both); 1 up to 16 shape functions."""
-    n = element_kind(kind).n_shape
-    return max(1.0, (n * (n + 1) / 2 / 136) ** 2)
 VOLUME = LENGTH * HEIGHT * WIDTH
 SHAPES = ["straight", "curved"]
 

@@ -10,7 +10,10 @@ Cases (trapezoidal, h = 1e-3, gram method, C kernels, loaded from the first step
 * ``joint chain``: a mechanism of N joints, N + 1 beam3d bodies of one element each (the
   cantilever's section and material, 0.1 m long) in a line, the first pinned to the
   ground, each to the next by a spherical joint (3 N + 3 constraint rows), swinging under
-  gravity (generalized-alpha, as mechanisms are run).
+  gravity (generalized-alpha, as mechanisms are run);
+* ``brick block``: a 1 m steel cube of N x N x N brick3d_3843 elements (Chrono's ANCF-3843,
+  96 coordinates each) clamped on its face x = 0 under gravity (``scenes/brick_cantilever.toml``'s
+  body and material), loaded from the first step.
 
 Each case runs ``repeats`` times on one model (min and median per step).  For each case and
 linear solver (``runtime.catalog.LINEAR_SOLVERS``; ``auto`` is the model's
@@ -34,6 +37,7 @@ from runtime.model.items.constraints import Clamp, Pin, Spherical
 from runtime.model.items.loads import Gravity, LineForce
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
+from runtime.model.settings import Dynamic
 from runtime.model.time_laws import Constant, CosineRamp
 from runtime.progress import Bar, enabled
 from runtime.solve import engines
@@ -80,6 +84,18 @@ def joint_chain_scene(joints: int, steps: int) -> Scene:
         scene, bodies=bodies, constraints=constraints, loads=(Gravity((0.0, -9.81, 0.0)),),
         sensors=(), static=None, modal=None,
         dynamic=dataclasses.replace(dynamic, integrator="generalized_alpha"))
+
+
+def block_scene(grid: int, steps: int) -> Scene:
+    """The brick block case with ``grid`` x ``grid`` x ``grid`` elements, ``steps`` steps."""
+    scene = load_scene(scenes.path("brick_cantilever"))
+    body = scene.bodies[0]
+    body = dataclasses.replace(body, elements=None, box=dataclasses.replace(
+        body.box, size=(1.0, 1.0, 1.0), grid=(grid, grid, grid)))
+    return _dynamic(dataclasses.replace(
+        scene, bodies=(body,), constraints=(Clamp(edge=f"{body.name}:x=0"),),
+        loads=(Gravity((0.0, 0.0, -9.81)),), sensors=(),
+        dynamic=Dynamic(t_end=steps * 1e-3, step=1e-3)), steps)
 
 
 def _dynamic(scene: Scene, steps: int) -> Scene:
@@ -129,10 +145,17 @@ def _steps(elements: int) -> int:
     return 50 if elements <= 100 else 10 if elements <= 1000 else 3
 
 
+#: banded brick blocks up to this many elements a side (a block of N^3 bricks has a band of
+#: about 12 (N + 1)^2 coordinates: beyond, seconds per factorisation)
+BANDED_BLOCK_LIMIT = 4
+
+
 def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SOLVERS),
-         newtons=("full",), banded_limit: int = 32, joints=(50, 200)) -> list[tuple]:
+         newtons=("full",), banded_limit: int = 32, joints=(50, 200),
+         blocks=(2, 4, 6)) -> list[tuple]:
     """The cases: (scene maker, size, case label, solver, newton); banded plates up to
-    ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation)."""
+    ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation),
+    banded brick blocks up to ``BANDED_BLOCK_LIMIT``."""
     cases = []
     for grid in plates:
         for solver in solvers:
@@ -146,6 +169,10 @@ def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SO
     for count in joints:
         cases += [(joint_chain_scene, count, f"joint chain {count}", solver, newton)
                   for solver in solvers for newton in newtons]
+    for grid in blocks:
+        cases += [(block_scene, grid, f"brick block {grid} x {grid} x {grid}", solver, newton)
+                  for solver in solvers for newton in newtons
+                  if solver != "banded" or grid <= BANDED_BLOCK_LIMIT]
     return cases
 
 
@@ -156,8 +183,8 @@ def measure(cases: list[tuple], method: str = "gram", repeats: int = 3,
     rows = []
     with enabled(progress), Bar("bench steps", len(cases), "cases") as bar:
         for make, size, label, solver, newton in cases:
-            elements = size * size if make is plate_scene else size + (
-                make is joint_chain_scene)
+            elements = (size * size if make is plate_scene else size**3
+                        if make is block_scene else size + (make is joint_chain_scene))
             rows.append(step_cost(make(size, _steps(elements)), label, solver, newton,
                                   method=method, repeats=repeats))
             bar.advance(f"{label}, {solver}, {newton}")
@@ -192,8 +219,8 @@ def plot(rows: list[dict], path) -> None:
     figure, axes = plt.subplots(figsize=(7, 4.5))
     lines = {}
     for r in rows:
-        body = r["case"].rsplit(" ", 3)[0] if r["case"].startswith("plate") else "beam chain"
-        body = "plate3d" if body.startswith("plate") else "beam3d chain"
+        body = ("plate3d" if r["case"].startswith("plate") else "brick3d_3843 block"
+                if r["case"].startswith("brick") else "beam3d chain")
         key = (body, r["linear_solver"], r["newton"], r["requested"] == AUTO)
         lines.setdefault(key, []).append((r["elements"], r["element_step_us"]))
     for (body, solver, newton, auto), points in sorted(lines.items()):
