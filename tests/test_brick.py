@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import scenes
-from runtime import Element, Modal, load_scene, run_scene
+from runtime import Element, Modal, SceneError, load_scene, run_scene
 from runtime.app.shapes import Shape, write_vtu
 from runtime.catalog import generated_dir
 from runtime.element import invariants as inv
@@ -120,3 +120,83 @@ def test_box_cantilever_writes_hexahedra_through_every_node(cantilever, tmp_path
     np.testing.assert_allclose(
         mesh.point_data["displacement"][shape.node_points],
         (q - model.reference)[model.position_dofs()], atol=1e-12 * np.abs(q).max())
+
+
+def _hexahedra(path, grid, size, turn):
+    """A VTU of grid (nx, ny, nz) hexahedra filling the box ``size`` from the origin, turned
+    by ``turn``, its points numbered z-major (not the box body's order), with the point set
+    "root" (x = 0)."""
+    nx, ny, nz = grid
+    index = {}
+    points = []
+    for i in range(nx + 1):
+        for j in range(ny + 1):
+            for k in range(nz + 1):
+                index[i, j, k] = len(points)
+                points.append(np.multiply((i / nx, j / ny, k / nz), size))
+    cells = [[index[i + a, j + b, k + c] for c, b, a in
+              ((0, 0, 0), (0, 0, 1), (0, 1, 1), (0, 1, 0), (1, 0, 0), (1, 0, 1), (1, 1, 1),
+               (1, 1, 0))]
+             for i in range(nx) for j in range(ny) for k in range(nz)]
+    points = np.array(points)
+    root = (points[:, 0] == 0).astype(np.int64)
+    meshio.write(path, meshio.Mesh(points @ turn.T, [("hexahedron", np.array(cells))],
+                                   point_data={"root": root}))
+    return points @ turn.T
+
+
+def test_hexahedra_from_a_file_give_the_box_bodys_deflection(cantilever, tmp_path):
+    """The cantilever's 40 x 1 x 1 box as a mesh file, numbered otherwise and turned about
+    z: the same tip deflection; a cell that is not a box is refused."""
+    scene, result = cantilever
+    body = scene.bodies[0]
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])   # x -> y
+    points = _hexahedra(tmp_path / "bar.vtu", body.box.grid, body.box.size, turn)
+    length, width, height = body.box.size
+    corners = [int(np.flatnonzero(np.all(np.isclose(points, turn @ (length, y, z)), axis=1))[0])
+               for y in (0.0, width) for z in (0.0, height)]
+    tip = corners[0]
+    loads = "".join(f"""
+[[load]]
+type = "point_force"
+node = "bar:{node}"
+force = [0.0, 0.0, -25.0]
+""" for node in corners)
+    text = f"""[material.steel]
+E = 2.1e11
+nu = 0.0
+rho = 7850.0
+
+[[body]]
+name = "bar"
+element = "{KIND}"
+material = "steel"
+mesh = {{ file = "bar.vtu" }}
+
+[[constraint]]
+type = "clamp"
+edge = "bar:root"
+
+{loads}
+[[sensor]]
+name = "tip_z"
+type = "displacement"
+node = "bar:{tip}"
+component = "z"
+
+[analysis.static]
+"""
+    (tmp_path / "bar.toml").write_text(text)
+    from_file = run_scene(load_scene(tmp_path / "bar.toml"), progress=False)
+    # the same model turned and numbered otherwise: the same deflection, to round-off
+    tip_z = from_file.summary["static"]["sensors"]["tip_z"]
+    assert tip_z == pytest.approx(result.summary["static"]["sensors"]["tip_z_bottom"],
+                                  rel=1e-8)
+    assert from_file.model.n_nodes == result.model.n_nodes
+    # a sheared cell: not a box
+    sheared = points.copy()
+    sheared[tip] += (0.0, 0.0, 0.01)
+    meshio.write(tmp_path / "bar.vtu", meshio.Mesh(sheared, meshio.read(
+        tmp_path / "bar.vtu").cells))
+    with pytest.raises(SceneError, match=r"is not a box with edges along element 0's axes"):
+        load_scene(tmp_path / "bar.toml")
