@@ -6,9 +6,9 @@ a ``[[body]]`` table (the path relative to the scene file).  docs/design.md, sec
   plates and shells, volumes for bricks: boxes of one common frame) make the body, all of one
   type, the type whose nodes are the kind's node layout (``CELL_NODES``: ``line`` for
   2-node beams, ``line3`` for 3-node beams, ``quad`` for plate3d, ``quad8`` for the 8-node
-  shells; ``hexahedron`` for a solid kind with a corner layout).  Cells of other dimensions only name sets.  Each cell's nodes are
-  reordered from meshio's (VTK's) order to the kind's (line3's middle node comes last in
-  meshio, second in a 3-node beam).
+  shells; ``hexahedron`` for a solid kind with a corner layout).  Cells of other dimensions
+  only name sets.  Each cell's nodes are reordered from meshio's (VTK's) order to the kind's
+  (line3's middle node comes last in meshio, second in a 3-node beam).
 * **Nodes**: the file's points that the body's cells use, in the file's order (node k of the
   body is the k-th such point; every point used: the file's own numbering).
 * **Sets** (targets ``"BODY:NAME"``): meshio cell sets; gmsh physical groups (cell data
