@@ -1,8 +1,9 @@
 """Chrono's ANCF-3843 brick (``brick3d_3843``: r, r_x, r_y, r_z at the 8 corners of a box)
 end to end: its storage (no structural zeros, straight invariants by an exact Gauss rule at
-load time instead of closed forms), the shipped box cantilever against Timoshenko's beam and
-its hexahedral VTU cells.  Chrono's unit-test files are checked in tests/test_chrono.py, the
-generic element tests take the kind from the registry (tests/test_element.py)."""
+load time instead of closed forms), the shipped box cantilever against Timoshenko's beam, its
+hexahedral VTU cells, the same bar read from a file of hexahedra, and face forces.  Chrono's
+unit-test files are checked in tests/test_chrono.py, the generic element tests take the kind
+from the registry (tests/test_element.py)."""
 
 from __future__ import annotations
 
