@@ -24,6 +24,7 @@ from runtime.model.items.loads import (
     Bushing,
     DistributedForce,
     End,
+    FaceForce,
     Gravity,
     LineForce,
     LineMoment,
@@ -72,15 +73,15 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition",
-    "BodyPrismatic", "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque",
-    "BodyUniversal", "BodyVelocity", "BodyWeld", "Bushing", "Clamp", "Constant",
-    "ConstantRate", "ConstraintViolation", "CosineRamp", "Displacement", "DissipatedEnergy",
-    "DistributedForce", "Dynamic", "Element", "End", "Fix", "Gravity", "Hub", "KineticEnergy",
-    "LineForce", "LineMoment", "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin",
-    "PointForce", "PointMass", "PointMoment", "Position", "PotentialEnergy", "Pressure",
-    "PythonLaw", "PythonLoad", "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene",
-    "SceneError", "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp",
-    "SpringDamper", "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table",
-    "TorsionalSpring", "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene",
+    "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition", "BodyPrismatic",
+    "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque", "BodyUniversal", "BodyVelocity",
+    "BodyWeld", "Bushing", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
+    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
+    "End", "FaceForce", "Fix", "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment",
+    "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMass",
+    "PointMoment", "Position", "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad",
+    "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
+    "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "SpringDamper",
+    "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table", "TorsionalSpring",
+    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene"
 ]

@@ -283,7 +283,8 @@ def cmd_bench_steps(args) -> int:
         chains=tuple(args.elements if args.elements is not None else (1000, 10_000)),
         solvers=tuple(args.linear_solver or (bench_steps.AUTO, *LINEAR_SOLVERS)),
         newtons=tuple(args.newton or ("full",)), banded_limit=args.banded_limit,
-        joints=tuple(args.joints if args.joints is not None else (50, 200)))
+        joints=tuple(args.joints if args.joints is not None else (50, 200)),
+        blocks=tuple(args.blocks if args.blocks is not None else (2, 4, 6)))
     rows = bench_steps.measure(cases, method=args.method, repeats=args.repeats,
                                progress=not args.quiet)
     text = bench_steps.table(rows)
@@ -408,6 +409,8 @@ def parser() -> argparse.ArgumentParser:
                     convert=_positive, metavar="N")
     add_list_option(steps, "--joints", "spherical joints of the joint-chain mechanism "
                     "(default 50 200)", convert=_positive, metavar="N")
+    add_list_option(steps, "--blocks", "brick3d_3843 blocks N (N x N x N elements; default "
+                    "2 4 6)", convert=_positive, metavar="N")
     add_list_option(steps, "--linear-solver", "linear solvers (default auto banded sparse)",
                     choices=["auto", *LINEAR_SOLVERS])
     add_list_option(steps, "--newton", "Newton modes (default full)", choices=NEWTON_MODES)

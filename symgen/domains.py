@@ -21,7 +21,8 @@ Everything an element derives (invariants, kernels, reference geometry, quadratu
 reads the domain; nothing else in the generator knows which box an element has.
 
 Shipped domains: ``beam(dim)`` (x in [0, l], y in [-h/2, h/2], z in [-w/2, w/2]; in 2D w is
-the thickness) and ``plate()`` (x in [0, a], y in [0, b], z in [-t/2, t/2]).
+the thickness), ``plate()`` (x in [0, a], y in [0, b], z in [-t/2, t/2]) and ``box()`` (x,
+y, z in [0, a] x [0, b] x [0, c], solid elements).
 """
 
 from __future__ import annotations
@@ -266,6 +267,9 @@ length, height, width = sp.symbols("l h w", positive=True)
 #: Plate box parameters: sides a (x) and b (y), thickness t (z).
 side_a, side_b, thickness = sp.symbols("a b t", positive=True)
 
+#: Box parameters of solid elements: sides a (x), b (y) and c (z).
+side_c = sp.symbols("c", positive=True)
+
 HALF = sp.Rational(1, 2)
 
 
@@ -296,3 +300,10 @@ def plate() -> Domain:
             Axis(z, thickness, -HALF, HALF))
     return Domain("plate", axes, (side_a, side_b, thickness), ("length", "height", "width"),
                   None, (("midsurface", ((2, sp.Integer(0)),)),))
+
+
+def box() -> Domain:
+    """x in [0, a], y in [0, b], z in [0, c] (a solid: no lower-dimensional subdomain)."""
+    axes = tuple(Axis(coordinate, scale, sp.Integer(0), sp.Integer(1))
+                 for coordinate, scale in zip(LOCAL, (side_a, side_b, side_c), strict=True))
+    return Domain("box", axes, (side_a, side_b, side_c), ("length", "height", "width"))

@@ -267,6 +267,36 @@ def exact_orders(spec: ElementSpec) -> list[int]:
     return list(spec.domain.exact_orders(tuple(degrees)))
 
 
+#: Closed forms as data (closed.json) up to this many nonzero psi entries (the largest
+#: table): ANCF-3833's 24 shape functions have about 140,000 (3.3 MB); the 32 corner functions
+#: of the ANCF-3843 brick, none of which has a parity, 1.19 million (34 MB).  Above it the
+#: runtime integrates the straight invariants by an exact Gauss rule at load time
+#: (element.json ``straight_invariants``: ``quadrature``; design.md section 13).
+CLOSED_TABLES_MAX_ENTRIES = 500_000
+
+
+def closed_tables_emitted(spec: ElementSpec) -> bool:
+    """Whether the straight closed forms of ``spec`` are written as data (closed.json): for
+    elements whose closed forms are data (``closed_as_data``) whose tables are not too large
+    (``CLOSED_TABLES_MAX_ENTRIES``)."""
+    from symgen import closed
+
+    if not closed_as_data(spec) or closed.factored(spec) is None:
+        return False
+    return all(len(closed.domain_tables(spec, domain).psi) <= CLOSED_TABLES_MAX_ENTRIES
+               for domain in derive.law_domains(spec))
+
+
+def stored_patterns(spec: ElementSpec, variant: str) -> dict:
+    """The storage patterns of ``variant`` as element.json holds them: each the list of its
+    keys, or ``"complete"`` when it is every key (the ``general`` variant; a straight
+    reference without structural zeros), which ``runtime.kernels.kind`` enumerates."""
+    p = derive.patterns(spec, variant)
+    complete = derive.patterns(spec, "general")
+    return {name: ("complete" if getattr(p, name) == getattr(complete, name)
+                   else [list(x) for x in getattr(p, name)]) for name in ("i4", "gram", "cij")}
+
+
 def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
     """What the runtime needs about an element and its kernels, without SymPy."""
     families = {}
@@ -297,13 +327,11 @@ def element_metadata(spec: ElementSpec, built: dict[str, list[Kernel]]) -> dict:
         "nodes": [[_linear_in_parameters(spec, c) for c in node] for node in spec.nodes],
         "exact_orders": exact_orders(spec),
         "gradient_pattern": [list(kc) for kc in derive.gradient_pattern(spec)],
-        "patterns": {
-            v: {"i4": [list(x) for x in p.i4], "gram": [list(x) for x in p.gram],
-                "cij": [list(x) for x in p.cij]}
-            for v in derive.VARIANTS for p in [derive.patterns(spec, v)]
-        },
+        "patterns": {v: stored_patterns(spec, v) for v in derive.VARIANTS},
         "cij_sizes": {v: cij_sizes(spec, v) for v in derive.VARIANTS},
-        "closed_tables": "closed.json" if closed_as_data(spec) else None,
+        "closed_tables": "closed.json" if closed_tables_emitted(spec) else None,
+        **({"straight_invariants": "quadrature"}
+           if closed_as_data(spec) and not closed_tables_emitted(spec) else {}),
         "laws": {
             law.name: {"description": law.description,
                        "parts": [{"name": part.name, "domain": part.domain}
@@ -376,7 +404,7 @@ def generate(spec: ElementSpec, out: Path, backends=BACKENDS, families=None) -> 
                 path = folder / name
                 path.write_text(text)
                 written.append(path)
-    if families is None and closed_as_data(spec):
+    if families is None and closed_tables_emitted(spec):
         path = folder / "closed.json"
         path.write_text(json.dumps(closed_tables(spec), sort_keys=True, separators=(",", ":"))
                         + "\n")

@@ -206,6 +206,9 @@ LOOP_OPS = {
     "rows_product": lambda n, d, p, z, a: 2 * a[2] * (n * d) ** 2,
     # target[(k d + c) ndof + p d + c] += scale G[k n + p]; args (G,)
     "kron_full": lambda n, d, p, z, a: n * n * (d + 1),
+    # target[k n + p] = sum_c left[k d + c] right[p d + c] (the geometric b S b^T from b and
+    # S b); args (left, right)
+    "shape_products": lambda n, d, p, z, a: n * n * 2 * d,
     # target[i] += scale source[i] for i < size; args (source, size)
     "axpy": lambda n, d, p, z, a: 2 * a[1],
     # target[0] += scale sum_i left[i] right[i], i < size; args (left, right, size)

@@ -40,6 +40,7 @@ from runtime import (
     DistributedForce,
     Dynamic,
     End,
+    FaceForce,
     Fix,
     Gravity,
     Hub,
@@ -93,6 +94,7 @@ from runtime.model.items.sensors import (
     Strain,
     Stress,
 )
+from runtime.model.placements import Box
 from runtime.model.scene import parse_scene
 
 STEEL = Material("steel", E=2.1e11, nu=0.3, rho=7800.0)
@@ -253,9 +255,9 @@ def test_unknown_types_are_errors_listing_the_registry():
     data["load"][0]["type"] = "moment"
     message = _message(lambda: parse_scene(data))
     assert message == ('load[0].type: unknown load type "moment"; expected one of '
-                       'point_force, point_moment, gravity, line_force, line_moment, pressure, '
-                       'distributed_force, python, body_force, spring_damper, '
-                       'body_torque, torsional_spring, bushing')
+                       'point_force, point_moment, gravity, line_force, line_moment, '
+                       'face_force, pressure, distributed_force, python, body_force, '
+                       'spring_damper, body_torque, torsional_spring, bushing')
     data["load"][0] = {"acceleration": [0, -9.81, 0]}
     assert _message(lambda: parse_scene(data)).startswith("load[0].type: missing required key")
 
@@ -269,7 +271,8 @@ def test_registries_are_keyed_by_type():
                                  "body_prismatic", "body_weld", "body_cylindrical",
                                  "body_universal"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
-                           "line_moment", "pressure", "distributed_force", "python",
+                           "line_moment", "face_force", "pressure", "distributed_force",
+                           "python",
                            "body_force", "spring_damper", "body_torque", "torsional_spring",
                            "bushing"]
     assert list(SENSORS) == ["displacement", "position", "strain_energy", "kinetic_energy",
@@ -415,6 +418,16 @@ def random_scene(rng: random.Random) -> Scene:
                      thickness=_number(rng, 0.001, 0.05))
         bodies.append(plate)
 
+    solid_kinds = [k for k in generated_kinds() if len(element_kind(k).mesh_axes) == 3]
+    block = None
+    if dim == 3 and solid_kinds and rng.random() < 0.3:   # a block apart from the chain
+        grid = tuple(rng.randint(1, 2) for _ in range(3))
+        block = Body("block", rng.choice(solid_kinds), "solid_steel",
+                     box=Box(tuple(np.add(_vector(rng, 3, 2.0), (0, 0, -10.0))),
+                             tuple(_number(rng, 0.1, 1) for _ in range(3)), grid))
+        materials.append(Material("solid_steel", 2e11, 0.3, 7800.0))
+        bodies.append(block)
+
     constraints, held = [], {}
     first = f"{bodies[0].name}:0"
     kind = rng.choice([Clamp, Pin, Hub, None])
@@ -425,7 +438,7 @@ def random_scene(rng: random.Random) -> Scene:
         constraints.append(kind(first))
     if kind is not None:
         held[(bodies[0].name, 0)] = kind
-    chain = [b for b in bodies if b is not plate]
+    chain = [b for b in bodies if b is not plate and b is not block]
     for a, b in zip(chain, chain[1:], strict=False):
         # nodes carrying r and every first gradient, nothing else (not r_xx of a quintic cable)
         full = all(element_kind(x.element).vectors == ("r", *element_kind(x.element)
@@ -469,6 +482,9 @@ def random_scene(rng: random.Random) -> Scene:
                     rng.sample("xyz"[:dim], rng.randint(1, dim)))))
 
     loads = loads_on_plate if plate is not None else []
+    if block is not None:
+        face = f"block:{rng.choice('xyz')}={rng.choice([0, -1])}"
+        loads.append(FaceForce(face, _vector(rng, 3)))
     for _ in range(rng.randint(0, 3)):
         body = rng.choice(bodies)
         index = rng.randrange(body.n_nodes)
@@ -631,7 +647,7 @@ def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -
     out = [Strain(name, body.name, element, tuple(point), rng.choice(tensors)),
            Stress(name, body.name, element, tuple(point),
                   rng.choice([*tensors, "von_mises"]), rng.choice(["cauchy", "pk2"]))]
-    if body is not plate:
+    if len(kind.mesh_axes) == 1:     # a beam or a cable: a line of elements
         sections = (("N", "M3", "M") if dim == 2 else ("N", "M")) if kind.energy.structural \
             else (("N", "Q2", "M3", "M") if dim == 2 else ("N", "Q2", "Q3", "T", "M2", "M3"))
         out.append(SectionForce(name, body.name, element, point[0], rng.choice(sections)))

@@ -2,7 +2,7 @@
 Kelvin-Voigt damping).
 
 Chrono's unit tests (src/tests/unit_tests/fea/utest_FEA_ANCF{beam_3243,beam_3333,shell_3443,
-shell_3833}_Formulation.cpp) check one element against reference files; copies are in
+shell_3833, hexa_3843}_Formulation.cpp) check one element against reference files; copies are in
 ``tests/data/chrono/`` (BSD-3, with Chrono's licence).  Their setups:
 
 * ANCF-3243 (``beam3d``) and ANCF-3333 (``beam3d_3node``): L = 1 m, a 0.1 x 0.1 m section,
@@ -17,9 +17,14 @@ shell_3833}_Formulation.cpp) check one element against reference files; copies a
   mid-sides (our order), each carrying r, r_z = (0, 0, 1) and r_zz = 0.  Chrono's element
   integrates its force by a reduced 3 x 3 x 2 rule; its reference files are exact (MATLAB),
   as our closed forms and our 5 x 5 x 5 quadrature are.
+* ANCF-3843 (``brick3d_3843``): a 1 x 1 x 1 m cube of the same material (Chrono's
+  ChMaterialHexaANCF, the full 3D St. Venant-Kirchhoff law), corners A, B, C, D at z = 0 and
+  E, F, G, H above them at z = 1 m (our order), each carrying r, r_x, r_y, r_z = the unit
+  vectors.  Our straight invariants are an exact 7 x 7 x 7 Gauss rule at load time (its closed
+  forms would be 34 MB), as are the quadrature method's.
 * "small displacement" puts one node at z = 0.001 m, "small velocity" gives it a z velocity of
-  0.001 m/s (node B of 3243 and 3443, the mid node C of 3333: in every case our node 1), and the
-  damped cases use alpha = 0.01 s.
+  0.001 m/s (node B of 3243, 3443, 3833 and 3843, the mid node C of 3333: in every case our
+  node 1), and the damped cases use alpha = 0.01 s.
 
 Conventions, from Chrono's sources: the mass matrix file is the shape-level matrix (times I_3 it
 is the element's); the gravity file is the generalised gravity force for g = (0, 0, -9.80665)
@@ -69,6 +74,7 @@ CASES = [
     Case("3443", "UT_ANCFShell_3443", "plate3d", (1.0, 1.0, 0.01), "svk", (0, 1, 2, 3)),
     Case("3833", "UT_ANCFShell_3833", "shell3d_3833", (1.0, 1.0, 0.01), "svk",
          tuple(range(8))),
+    Case("3843", "UT_ANCFBrick_3843", "brick3d_3843", (1.0, 1.0, 1.0), "svk", tuple(range(8))),
 ]
 #: Files of integrals of shape-function products only (no material, no state): tighter.
 EXACT_FILES = ("MassMatrix", "Grav")

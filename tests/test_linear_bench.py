@@ -9,7 +9,7 @@ from runtime.studies import bench_steps
 
 def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
     cases = bench_steps.plan(plates=(2,), chains=(4,), solvers=(bench_steps.AUTO, "sparse"),
-                             newtons=("full", "modified"), joints=(3,))
+                             newtons=("full", "modified"), joints=(3,), blocks=(1,))
     rows = bench_steps.measure(cases, repeats=1, progress=False)
     assert [(r["case"], r["requested"], r["newton"]) for r in rows] == [
         (label, solver, newton) for _, _, label, solver, newton in cases]

@@ -1,8 +1,9 @@
 """Box bodies of solid kinds (kinds whose meshes tile three axes): ``box = {corner, size,
 grid}``, node references ``"BODY:I,J,K"``, faces ``"BODY:x=I"`` / ``y=J`` / ``z=K`` as
-constraint targets and hexahedral VTK cells.  No solid kind is generated yet, so the scene
-tests read a stand-in: the node layout of an 8-node brick (r at the corners) as element.json
-states it, without kernels (scenes are read and meshed, never solved)."""
+constraint targets and hexahedral VTK cells.  The scene tests read a stand-in: the node layout
+of an 8-node brick carrying r only (a trilinear brick) as element.json states it, without
+kernels (scenes are read and meshed, never solved); the shipped ANCF-3843 brick is solved in
+tests/test_brick.py."""
 
 from __future__ import annotations
 

@@ -38,8 +38,8 @@ CORNER, SIZE = (0.1, -0.2, 0.3), (1.2, 0.4)
 
 
 def _counts(kind: str) -> list[tuple[int, ...]]:
-    return ([(1, 1), (3, 2), (2, 5), (7, 1)] if len(element_kind(kind).mesh_axes) == 2
-            else [(1,), (2,), (9,)])
+    return {1: [(1,), (2,), (9,)], 2: [(1, 1), (3, 2), (2, 5), (7, 1)],
+            3: [(1, 1, 1), (3, 2, 1), (1, 2, 4)]}[len(element_kind(kind).mesh_axes)]
 
 
 def _placed_nodes(kind: str, counts: tuple[int, ...], sides: tuple[float, ...]) -> set:

@@ -21,3 +21,4 @@ def test_quick_report(tmp_path, capsys):
         assert (tmp_path / image).is_file(), image
     assert "| cantilever | ok |" in text and "| rotating_beam | ok |" in text
     assert "| free links 3 |" in text and "| plate 4 x 4 |" in text
+    assert "| brick block 1 x 1 x 1 |" in text

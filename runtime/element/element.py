@@ -119,7 +119,7 @@ class Element:
         self.shear_correction = self._shear_correction(shear_correction)
         # svk through its own kernels where the kind has them (the 2-node beams), otherwise
         # (closed forms as data, no general svk map, a structural energy) through the law path
-        if self.law == "svk" and not inv.has_closed_tables(self.kind) and (
+        if self.law == "svk" and not inv.through_laws(self.kind) and (
                 not self.kind.energy.structural) and (
                 self.straight or "invariants_general" in self.kind.families):
             self.invariants = self._svk_invariants(builders)
@@ -202,6 +202,9 @@ class Element:
             if inv.has_closed_tables(self.kind):  # exact tables (closed.json), any law
                 return inv.closed_law_invariants(self.kind, self.geometry, coefficients,
                                                  self.rho)
+            if inv.straight_by_quadrature(self.kind):  # an exact Gauss rule, cached
+                return inv.quadrature_law_invariants(self.kind, builders, self.geometry,
+                                                     coefficients, self.rho)
             return inv.straight_law_invariants(laws, self.geometry, coefficients, self.rho,
                                                self._simple_bending_modulus(coefficients))
         if self.kind.energy.structural:  # a curved cable (the planar exact curvature)

@@ -587,6 +587,48 @@ def has_closed_tables(kind: ElementKind) -> bool:
     return bool(kind.closed_tables)
 
 
+def straight_by_quadrature(kind: ElementKind) -> bool:
+    """Whether the kind's straight invariants are integrated at load time by an exact Gauss
+    rule (element.json ``straight_invariants``: its closed forms would be too large to ship)."""
+    return kind.straight_invariants == "quadrature"
+
+
+def through_laws(kind: ElementKind) -> bool:
+    """Whether the kind's svk invariants go through the law path (no generated svk maps):
+    closed forms as data, or straight invariants by quadrature."""
+    return has_closed_tables(kind) or straight_by_quadrature(kind)
+
+
+#: quadrature_law_invariants' results by (kind, backend, geometry, coefficients, density),
+#: at most STRAIGHT_QUADRATURE_CACHED of them (the oldest goes first; 6 MB each for the brick)
+_STRAIGHT_QUADRATURE: dict[tuple, dict[str, np.ndarray]] = {}
+STRAIGHT_QUADRATURE_CACHED = 16
+
+
+def quadrature_law_invariants(kind: ElementKind, family: KernelFamily, geometry,
+                              coefficients: dict[str, np.ndarray],
+                              density: float) -> dict[str, np.ndarray]:
+    """Straight invariants of a law (straight pattern) by the Gauss rule of the kind's
+    ``exact_orders`` on its straight reference of ``geometry``: exact, as the closed forms
+    (the integrands are polynomials).  Cached per kind, geometry, law coefficients and
+    density (a box body's elements share one entry); the arrays are read-only."""
+    geometry = tuple(float(v) for v in geometry)
+    key = (kind.name, family.backend, geometry, float(density),
+           tuple((domain, tuple(np.asarray(value, float).tolist()))
+                 for domain, value in sorted(coefficients.items())))
+    if key not in _STRAIGHT_QUADRATURE:
+        rules = law_rules(kind, family, geometry, kind.straight_reference(*geometry),
+                          kind.exact_orders)
+        out = numeric_law_invariants(kind, family, "straight", geometry, rules,
+                                     coefficients, density)
+        for value in out.values():
+            value.flags.writeable = False
+        if len(_STRAIGHT_QUADRATURE) >= STRAIGHT_QUADRATURE_CACHED:
+            del _STRAIGHT_QUADRATURE[next(iter(_STRAIGHT_QUADRATURE))]
+        _STRAIGHT_QUADRATURE[key] = out
+    return _STRAIGHT_QUADRATURE[key]
+
+
 def closed_parts(kind: ElementKind, geometry, coefficients: dict[str, np.ndarray]):
     """(parts, mass) of ``law_algebra`` for the straight reference of ``geometry`` from the
     exact tables: every entry is its rational times its monomial in the parameters."""

@@ -151,6 +151,20 @@ class Energy:
         return self.name != "continuum"
 
 
+def complete_pattern(n_shape: int, name: str) -> np.ndarray:
+    """Every key of storage pattern ``name`` for ``n_shape`` shape functions, in storage order
+    (as ``symgen.derive.patterns`` of the general variant; element.json ``"complete"``):
+    ``i4`` and ``gram`` the pairs (a, b), a <= b, of the n(n+1)/2 shape-function pairs;
+    ``cij`` the (k, p, m, q) with k <= p, row-major."""
+    if name in ("i4", "gram"):
+        a, b = np.triu_indices(n_shape * (n_shape + 1) // 2)
+        return np.column_stack([a, b]).astype(np.int64)
+    k, p = np.triu_indices(n_shape)
+    m, q = np.divmod(np.arange(n_shape * n_shape), n_shape)
+    return np.column_stack([np.repeat(k, m.size), np.repeat(p, m.size),
+                            np.tile(m, k.size), np.tile(q, k.size)]).astype(np.int64)
+
+
 @dataclass(frozen=True)
 class ElementKind:
     """Metadata of one generated element kind (see the module docstring).
@@ -181,6 +195,9 @@ class ElementKind:
     cij_sizes: dict[str, dict]
     gradient_pattern: tuple[tuple[int, int], ...]
     closed_tables: str | None
+    #: how the straight invariants are obtained when not by kernels or closed.json:
+    #: ``quadrature`` (an exact Gauss rule at load time; element.json ``straight_invariants``)
+    straight_invariants: str | None
     straight_reference_coefficients: tuple
     energy: Energy
     meta: dict = field(repr=False, compare=False)
@@ -205,6 +222,7 @@ class ElementKind:
                    dict(meta.get("laws_not_applicable", {})), meta["families"],
                    meta["optimization"], meta["patterns"], meta["cij_sizes"],
                    tuple(tuple(p) for p in meta["gradient_pattern"]), meta.get("closed_tables"),
+                   meta.get("straight_invariants"),
                    tuple(meta["straight_reference"]), Energy.from_document(meta.get("energy")),
                    meta)
 
@@ -321,7 +339,9 @@ class ElementKind:
         element of a mesh of distinct shapes reads them)."""
         converted = self.__dict__.setdefault("_patterns", {})   # not a field: not compared
         if (variant, name) not in converted:
-            array = np.array(self.patterns[variant][name], dtype=np.int64)
+            stored = self.patterns[variant][name]
+            array = (complete_pattern(self.n_shape, name) if stored == "complete"
+                     else np.array(stored, dtype=np.int64))
             array.flags.writeable = False
             converted[variant, name] = array
         return converted[variant, name]

@@ -137,10 +137,15 @@ class Body:
         return meshing.structured_mesh(element_kind(self.element), self.counts)
 
     @property
+    def solid(self) -> bool:
+        """Whether the body's kind meshes every axis (a brick: a box or a file of boxes)."""
+        return len(element_kind(self.element).mesh_axes) == 3
+
+    @property
     def section(self) -> tuple[float, ...]:
         """The section sizes (m) across the meshed axes: (height, width) of a beam, the
-        thickness of a plate, none for a box (its elements' sides are the geometry)."""
-        if self.box is not None:
+        thickness of a plate, none for a solid (its elements' sides are the geometry)."""
+        if self.box is not None or self.solid:
             return ()
         return (self.thickness,) if self.thickness is not None else (self.height, self.width)
 
@@ -174,7 +179,7 @@ class Body:
         section = {"height": self.height, "width": self.width, "thickness": self.thickness}
         given = {k: v for k, v in section.items() if v is not None}
         head = {"name": self.name, "element": self.element, "material": self.material,
-                **({"section": given} if given or self.box is None else {})}
+                **({"section": given} if given or not (self.box or self.solid) else {})}
         # a grid sets its elements (written only when they disagree: an error)
         grid = getattr(self.rectangle or self.box, "grid", None)
         if self.elements is not None and (grid is None or self.elements != math.prod(grid)) \

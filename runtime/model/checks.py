@@ -172,7 +172,7 @@ def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
                 bodies: tuple[Body, ...]) -> None:
     """A load must act on coordinates that its nodes' constraints leave free (on one node of
     an edge at least); a line force acts along a grid line of a rectangle body, not on the
-    face of a box body (no face load is built)."""
+    face of a box body, and a face force on such a face only."""
     boxes = {b.name for b in bodies if b.box is not None}
     for i, load in enumerate(loads):
         edge = getattr(load, "edge", None)
@@ -184,7 +184,12 @@ def check_loads(loads: tuple[Load, ...], constraints: tuple[Constraint, ...],
         if edge is not None and edge.body in boxes:
             raise SceneError(f"load[{i}].edge: {edge} is a face of the box body "
                              f"{show(edge.body)}; a {load.noun} acts along a grid line of a "
-                             f"rectangle body (loads on faces are not built yet)")
+                             f"rectangle body (on a face: a face_force)")
+        face = getattr(load, "face", None)
+        if face is not None and face.body not in boxes:
+            raise SceneError(f"load[{i}].face: {face} is not a face of a box body; a "
+                             f"{load.noun} acts on a lattice plane \"BODY:x=I\", \"BODY:y=J\" "
+                             f"or \"BODY:z=K\" of a box body")
     held = {node: i for i, c in enumerate(constraints)
             if isinstance(c, NodeConstraint) and c.holds_position for node in c.targets()}
     for i, load in enumerate(loads):

@@ -3,12 +3,12 @@ a ``[[body]]`` table (the path relative to the scene file).  docs/design.md, sec
 "Meshes from files", says what the file must hold.
 
 * **Cells**: those of the kind's meshed dimension (lines for beams and cables, surfaces for
-  plates and shells) make the body, all of one type, the type whose nodes are the kind's
-  node layout (``CELL_NODES``: ``line`` for 2-node beams, ``line3`` for 3-node beams,
-  ``quad`` for plate3d, ``quad8`` for the 8-node shells; ``hexahedron`` for a solid kind
-  with a corner layout).  Cells of other dimensions only name sets.  Each cell's nodes are
-  reordered from meshio's (VTK's) order to the kind's (line3's middle node comes last in
-  meshio, second in a 3-node beam).
+  plates and shells, volumes for bricks: boxes of one common frame) make the body, all of one
+  type, the type whose nodes are the kind's node layout (``CELL_NODES``: ``line`` for
+  2-node beams, ``line3`` for 3-node beams, ``quad`` for plate3d, ``quad8`` for the 8-node
+  shells; ``hexahedron`` for a solid kind with a corner layout).  Cells of other dimensions
+  only name sets.  Each cell's nodes are reordered from meshio's (VTK's) order to the kind's
+  (line3's middle node comes last in meshio, second in a 3-node beam).
 * **Nodes**: the file's points that the body's cells use, in the file's order (node k of the
   body is the k-th such point; every point used: the file's own numbering).
 * **Sets** (targets ``"BODY:NAME"``): meshio cell sets; gmsh physical groups (cell data
@@ -225,7 +225,7 @@ def _read(path: str, mtime: int, size: int, kind_name: str) -> MeshData:
         elif dimension == 2:
             e0s, sides = geometry.surface_references(kind, positions, connectivity, normals)
         else:
-            raise _Problem(f"solid meshes from files are not built yet ({kind.name})")
+            e0s, sides = geometry.solid_references(kind, positions, connectivity)
     except geometry.MeshGeometryError as error:
         raise _Problem(str(error)) from None
     for side in sides.ravel():

@@ -19,6 +19,11 @@ layout.
   flat mesh of rectangles with one common frame (else the slope discontinuity of Shabana and
   Mikkola).
 
+* **Solids** (brick kinds): every element a box whose edges from its first corner run along
+  the three axes of element 0's (a right-handed orthogonal triple), the nodes' r_x, r_y, r_z
+  those unit directions (shared by every element, as a ``box =`` body's); the sides a, b, c
+  are those edges' lengths.
+
 Errors are ``MeshGeometryError`` (a message without the key path; the reader adds it).
 """
 
@@ -322,6 +327,42 @@ def _aligned_frames(kind: ElementKind, positions: np.ndarray, connectivity: np.n
             f"common frame, and {what}; for curved or unstructured meshes use shell3d_3833 "
             f"(r, r_z, r_zz: only the normal is shared)")
     return np.broadcast_to(frame, (len(positions), 3, 3))
+
+
+def solid_references(kind: ElementKind, positions: np.ndarray, connectivity: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(element references (elements, ndof), sides (elements, 3) in m) of a solid mesh of
+    boxes with one common, right-handed frame (the module docstring); MeshGeometryError
+    naming the first element that is not such a box."""
+    points = kind.node_fractions
+    rows = positions[connectivity]                              # (elements, nodes, 3)
+    corner = [int(np.flatnonzero(np.all(np.isclose(points, p), axis=1))[0])
+              for p in ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1))]
+    edges = np.stack([rows[:, c] - rows[:, corner[0]] for c in corner[1:]], axis=-1)
+    sides = np.linalg.norm(edges, axis=1)                       # (elements, 3)
+    scale = np.ptp(positions, axis=0).max()
+    flat = np.flatnonzero(~(sides.min(axis=1) > 1e-12 * scale))
+    if flat.size:
+        raise MeshGeometryError(f"element {int(flat[0])} has an edge of zero length from its "
+                                "first corner; expected cells of positive volume")
+    frames = edges / sides[:, None, :]
+    frame = frames[0]
+    expected = rows[:, corner[0], None, :] + np.einsum("nk,eak->ena", points, edges)
+    box = np.all(np.abs(expected - rows) <= SAME * scale, axis=(1, 2))
+    aligned = np.abs(frames - frame).max(axis=(1, 2)) <= SAME
+    bad = np.flatnonzero(~(box & aligned))
+    if np.abs(frame.T @ frame - np.eye(3)).max() > SAME or np.linalg.det(frame) <= 0:
+        bad = np.array([0])
+    if bad.size:
+        raise MeshGeometryError(
+            f"element {int(bad[0])} is not a box with edges along element 0's axes (a "
+            f"right-handed orthogonal triple from its first corner); {kind.name} nodes carry "
+            f"r_x, r_y and r_z, which every element sharing a node uses as its own, so its "
+            f"mesh must be boxes of one common frame")
+    e0s = np.array([frame_reference(kind, positions[row],
+                                    np.broadcast_to(frame, (len(row), 3, 3)))
+                    for row in connectivity])
+    return e0s, sides
 
 
 def _far(kind: ElementKind) -> int:

@@ -226,19 +226,21 @@ def _check_initial_motion(body: Body, path: str, rho: float) -> None:
 
 
 def _file_shape(data: dict, path: str, kind: str, folder: str | None) -> tuple:
-    """Section, element count and mesh (a ``FileMesh``) of a body meshed from a file (beam
-    and plate kinds)."""
+    """Section, element count and mesh (a ``FileMesh``) of a body meshed from a file (beam,
+    plate and solid kinds)."""
     meta = element_kind(kind)
     for key in ("elements", *Line.keys, *Arc.keys, *Rectangle.keys, *Box.keys):
         if key in data:
             what = "elements" if key == "elements" else "placement"
             raise SceneError(f"{path}.{key}: the mesh file sets the body's {what}; "
                              f"expected either mesh = {{file = ...}} or {key}, got both")
-    if len(meta.mesh_axes) == 3:
-        raise SceneError(f"{path}.mesh: {kind} is a solid element; meshes from files are "
-                         "built for beam, cable, plate and shell kinds (lines and surfaces)")
     mesh = FileMesh.parse(data["mesh"], f"{path}.mesh", kind, folder)
     check_shapes(mesh, f"{path}.mesh")
+    if len(meta.mesh_axes) == 3:   # a solid: its elements' sides are its geometry
+        if "section" in data:
+            raise SceneError(f"{path}.section: {kind} is a solid element; its elements' "
+                             "sides come from the mesh file (no section)")
+        return None, None, None, len(mesh.data.e0s), mesh
     if len(meta.mesh_axes) == 1:
         section = keys(data["section"], f"{path}.section", ("height", "width"), (),
                        "a table {height = H, width = W}")

@@ -14,6 +14,9 @@ Cases (trapezoidal, h = 1e-3, gram method, C kernels, loaded from the first step
 * ``free links``: the joint chain's links without their joints, falling freely: what its
   step costs without constraints (the constraint share of a KKT step is measured against
   it).
+* ``brick block``: a 1 m steel cube of N x N x N brick3d_3843 elements (Chrono's ANCF-3843,
+  96 coordinates each) clamped on its face x = 0 under gravity (``scenes/brick_cantilever.toml``'s
+  body and material), loaded from the first step.
 
 Each case runs ``repeats`` times on one model (min and median per step).  For each case and
 linear solver (``runtime.catalog.LINEAR_SOLVERS``; ``auto`` is the model's
@@ -39,6 +42,7 @@ from runtime.model.items.constraints import Clamp, Pin, Spherical
 from runtime.model.items.loads import Gravity, LineForce
 from runtime.model.model import Model
 from runtime.model.scene import Scene, load_scene
+from runtime.model.settings import Dynamic
 from runtime.model.time_laws import Constant, CosineRamp
 from runtime.progress import Bar, enabled
 from runtime.solve import engines
@@ -93,6 +97,18 @@ def free_links_scene(joints: int, steps: int) -> Scene:
     return dataclasses.replace(joint_chain_scene(joints, steps), constraints=())
 
 
+def block_scene(grid: int, steps: int) -> Scene:
+    """The brick block case with ``grid`` x ``grid`` x ``grid`` elements, ``steps`` steps."""
+    scene = load_scene(scenes.path("brick_cantilever"))
+    body = scene.bodies[0]
+    body = dataclasses.replace(body, elements=None, box=dataclasses.replace(
+        body.box, size=(1.0, 1.0, 1.0), grid=(grid, grid, grid)))
+    return _dynamic(dataclasses.replace(
+        scene, bodies=(body,), constraints=(Clamp(edge=f"{body.name}:x=0"),),
+        loads=(Gravity((0.0, 0.0, -9.81)),), sensors=(),
+        dynamic=Dynamic(t_end=steps * 1e-3, step=1e-3)), steps)
+
+
 def _dynamic(scene: Scene, steps: int) -> Scene:
     dynamic = dataclasses.replace(scene.dynamic, t_end=steps * 1e-3, step=1e-3,
                                   integrator="trapezoidal", output_every=steps * 1e-3,
@@ -143,10 +159,17 @@ def _steps(elements: int) -> int:
     return 50 if elements <= 100 else 10 if elements <= 1000 else 3
 
 
+#: banded brick blocks up to this many elements a side (a block of N^3 bricks has a band of
+#: about 12 (N + 1)^2 coordinates: beyond, seconds per factorisation)
+BANDED_BLOCK_LIMIT = 4
+
+
 def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SOLVERS),
-         newtons=("full",), banded_limit: int = 32, joints=(50, 200)) -> list[tuple]:
+         newtons=("full",), banded_limit: int = 32, joints=(50, 200),
+         blocks=(2, 4, 6)) -> list[tuple]:
     """The cases: (scene maker, size, case label, solver, newton); banded plates up to
-    ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation)."""
+    ``banded_limit`` elements a side (beyond, its band costs seconds per factorisation),
+    banded brick blocks up to ``BANDED_BLOCK_LIMIT``."""
     cases = []
     for grid in plates:
         for solver in solvers:
@@ -162,6 +185,10 @@ def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SO
                   for solver in solvers for newton in newtons]
         cases += [(free_links_scene, count, f"free links {count}", AUTO, newton)
                   for newton in newtons]
+    for grid in blocks:
+        cases += [(block_scene, grid, f"brick block {grid} x {grid} x {grid}", solver, newton)
+                  for solver in solvers for newton in newtons
+                  if solver != "banded" or grid <= BANDED_BLOCK_LIMIT]
     return cases
 
 
@@ -172,8 +199,9 @@ def measure(cases: list[tuple], method: str = "gram", repeats: int = 3,
     rows = []
     with enabled(progress), Bar("bench steps", len(cases), "cases") as bar:
         for make, size, label, solver, newton in cases:
-            elements = size * size if make is plate_scene else size + (
-                make in (joint_chain_scene, free_links_scene))
+            elements = (size * size if make is plate_scene else size**3
+                        if make is block_scene else size + (
+                            make in (joint_chain_scene, free_links_scene)))
             rows.append(step_cost(make(size, _steps(elements)), label, solver, newton,
                                   method=method, repeats=repeats))
             bar.advance(f"{label}, {solver}, {newton}")
@@ -215,6 +243,8 @@ def _body_type(case: str) -> str:
     ``joint chain (beam3d)``): one colour of the plot per type."""
     if case.startswith("plate"):
         return "plate3d"
+    if case.startswith("brick block"):
+        return "brick3d_3843 block"
     name = case.rsplit(" ", 1)[0]
     return "beam3d chain" if name == "beam chain" else f"{name} (beam3d)"
 

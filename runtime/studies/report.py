@@ -166,7 +166,7 @@ def step_scaling(figures: Path, quick: bool = False) -> list[str]:
     cases = bench_steps.plan(
         plates=(2, 4) if quick else (4, 8, 16, 32, 64), chains=(10,) if quick else
         (1000, 10_000), solvers=(bench_steps.AUTO,), newtons=NEWTON_MODES,
-        joints=(3,) if quick else (50, 200))
+        joints=(3,) if quick else (50, 200), blocks=(1,) if quick else (2, 4))
     rows = bench_steps.measure(cases, repeats=1 if quick else 2, progress=False)
     bench_steps.plot(rows, figures / "step_scaling.png")
     date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")

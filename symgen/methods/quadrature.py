@@ -306,6 +306,8 @@ def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
     size = laws.voigt_size(spec.dim) * spec.ndof
     arrays = [Array("Z", size, "local", "d eps / d e per Voigt row"),
               Array("Y", size, "local", "D Z"),
+              Array("BM", spec.ndof, "local", "shape gradients b, node-major"),
+              Array("SB", spec.ndof, "local", "S b per shape function"),
               Array("GEO", spec.n_shape**2, "local", "b S b^T")]
     if damped:
         arrays.append(Array("ZD", size, "local", "d eps_dot / d e_dot per Voigt row"))
@@ -314,8 +316,9 @@ def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
 
 def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn, dshear,
                            scale, material: bool = True, fdot=None) -> None:
-    """The Jacobian at one point as loops (large elements): Z and Y = D Z stored (unrolled,
-    small), then jacobian += scale (sum_I Z_I Y_I^T + (b S b^T) kron I); with ``fdot``
+    """The Jacobian at one point as loops (large elements): Z and Y = D Z, b and S b stored
+    (unrolled, small), b S b^T by a loop, then jacobian += scale (sum_I Z_I Y_I^T +
+    (b S b^T) kron I); with ``fdot``
     (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric [+ material]) and
     jacobian_dot += scale alpha sum_I Z_I Y_I^T."""
     n, d, ndof = spec.n_shape, spec.dim, spec.ndof
@@ -327,10 +330,12 @@ def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn,
     for r, row in enumerate(_law_rows(dn, dshear, zref, d)):
         for i, value in enumerate(row):
             point.append(Assign(f"Y[{r * ndof + i}]", sp.sympify(value)))
-    for k in range(n):
-        for p in range(n):
-            point.append(Assign(f"GEO[{k * n + p}]",
-                                sp.sympify((bmat[k, :] * smat * bmat[p, :].T)[0])))
+    for k in range(n):            # b S b^T by a loop over b and S b (n^2 unrolled: slow
+        stress_b = smat * bmat[k, :].T    # to compile, the brick's 1024 of them)
+        for c in range(d):
+            point.append(Assign(f"BM[{k * d + c}]", sp.sympify(bmat[k, c])))
+            point.append(Assign(f"SB[{k * d + c}]", sp.sympify(stress_b[c])))
+    point.append(Loop("shape_products", "GEO", ("BM", "SB")))
     if fdot is None:
         point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
     else:

@@ -1,6 +1,7 @@
 """Points at which loads act, with the linear maps of the position and of the frame's
 gradients there (``runtime.model.items.follower.PointMaps``): a node, the element sides of a
-plate's grid line, the axis of a beam body, the mid-surface of a plate body.
+plate's grid line, the element faces of a box's lattice plane, the axis of a beam body, the
+mid-surface of a plate body.
 
 Shape functions come from each kind's generated ``invariants`` family; a map (dim, n) of a
 field ``sum_k s_k q_k`` is ``s^T (x) I_dim`` in the node-major element coordinates."""
@@ -16,8 +17,9 @@ from runtime.model.items.base import BodyView, ModelView
 from runtime.model.items.follower import PointMaps
 from runtime.model.schema import EdgeRef
 
-#: Gauss points along an element side for line loads (exact for the side's shape functions
-#: times its length element up to degree 15)
+#: Gauss points along an element side for line loads, and per direction over an element face
+#: for face loads (exact for the shape functions times the length or area element up to
+#: degree 15)
 EDGE_GAUSS_ORDER = 8
 #: Gauss points per direction over a plate element (pressure) and along a beam element
 SURFACE_GAUSS_ORDER = 5
@@ -78,6 +80,39 @@ def edge_sides(body: BodyView, edge: EdgeRef):
             q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
             ds = np.linalg.norm(grads[:, :, along] @ q0, axis=1) * w * size / 2
             yield e, points, ds, values, grads
+
+
+def face_sides(body: BodyView, face: EdgeRef):
+    """The element faces on a lattice plane ``"BODY:x=I"`` (``y=J``, ``z=K``) of a box body,
+    each once (an interior plane's faces belong to two elements): per face (element index,
+    shape values (p, n_shape) at its Gauss points, area elements dA (p,) in m^2: Gauss weight
+    times |dr0/du x dr0/dv|)."""
+    kind, element = body.kind, body.element
+    axis = "xyz".index(face.axis)
+    along = [a for a in range(3) if a != axis]
+    t, w = np.polynomial.legendre.leggauss(EDGE_GAUSS_ORDER)
+    on_face = np.isin(body.mesh.connectivity, face.nodes)
+    done: set[frozenset] = set()
+    for e in np.flatnonzero(on_face.sum(axis=1) > 0):
+        local = on_face[e]
+        fractions = np.unique(np.round(kind.node_fractions[local, axis], 12))
+        if fractions.size != 1:
+            continue
+        plane = np.isclose(kind.node_fractions[:, axis], fractions[0])
+        side = frozenset(body.mesh.connectivity[e][plane].tolist())
+        if not local[plane].all() or side in done:
+            continue
+        done.add(side)
+        sizes = [element.geometry[a] for a in along]
+        u, v = np.meshgrid((t + 1) / 2 * sizes[0], (t + 1) / 2 * sizes[1], indexing="ij")
+        points = np.zeros((u.size, kind.dim))
+        points[:, axis] = fractions[0] * element.geometry[axis]
+        points[:, along[0]], points[:, along[1]] = u.ravel(), v.ravel()
+        values, grads = shape_tables(body, points)
+        q0 = body.element_e0[e].reshape(kind.n_shape, kind.dim)
+        normal = np.cross(grads[:, :, along[0]] @ q0, grads[:, :, along[1]] @ q0)
+        weights = np.outer(w * sizes[0] / 2, w * sizes[1] / 2).ravel()
+        yield e, values, np.linalg.norm(normal, axis=1) * weights
 
 
 def _frame_maps(grads: np.ndarray, dim: int,

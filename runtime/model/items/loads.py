@@ -55,8 +55,8 @@ from runtime.model.schema import (
 )
 from runtime.model.time_laws import Constant, Law
 
-__all__ = ["LOADS", "BodyForce", "BodyTorque", "Bushing", "DistributedForce", "End", "Gravity",
-           "LineForce", "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment",
+__all__ = ["LOADS", "BodyForce", "BodyTorque", "Bushing", "DistributedForce", "End", "FaceForce",
+           "Gravity", "LineForce", "LineMoment", "Load", "NodeLoad", "PointForce", "PointMoment",
            "Pressure", "PythonLoad", "SpringDamper", "TorsionalSpring"]
 
 StateForce = Callable[[np.ndarray, bool], Patches]
@@ -584,6 +584,33 @@ class LineForce(EdgeLoad):
 
 
 @dataclass(frozen=True)
+class FaceForce(Load):
+    """A uniform force per unit (reference) area ``force_per_area`` (3,) in N/m^2 on a face
+    ``"BODY:x=I"`` (``y=J``, ``z=K``) of a box body, fixed in direction: the consistent
+    generalised force int S^T f dA over the element faces on that lattice plane (a pressure
+    p on the face x = -1 is ``[-p, 0, 0]``; a tip shear P over a section A,
+    ``[0, 0, -P / A]``).  Its resultant is f times the face's area."""
+
+    type: ClassVar[str] = "face_force"
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = "face_force acts on faces of box bodies (3D scenes)"
+    noun: ClassVar[str] = "face force"
+    target_key: ClassVar[str] = "face"
+    face: EdgeRef | str = key(edge_key)
+    force_per_area: tuple[float, ...] = key(_vector_key)
+
+    def targets(self) -> list[NodeRef]:
+        return self.face.refs()
+
+    def nominal(self, model: ModelView) -> np.ndarray:
+        out = np.zeros(model.size)
+        body = model.bodies[self.face.body]
+        for e, values, area in load_points.face_sides(body, self.face):
+            out[body.element_dofs[e]] += np.outer(values.T @ area, self.force_per_area).ravel()
+        return out
+
+
+@dataclass(frozen=True)
 class LineMoment(EdgeLoad):
     """A uniform moment per unit length ``moment_per_length`` (3,) in N m/m along an edge
     (``EdgeLoad``), e.g. ``[0, -m, 0]`` bends a strip along x about y: the virtual work of m
@@ -753,5 +780,6 @@ class PythonLoad(Load):
 
 
 LOADS: dict[str, type[Load]] = registry(PointForce, PointMoment, Gravity, LineForce, LineMoment,
-                                        Pressure, DistributedForce, PythonLoad, BodyForce,
-                                        SpringDamper, BodyTorque, TorsionalSpring, Bushing)
+                                        FaceForce, Pressure, DistributedForce, PythonLoad,
+                                        BodyForce, SpringDamper, BodyTorque, TorsionalSpring,
+                                        Bushing)

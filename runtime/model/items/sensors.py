@@ -659,7 +659,8 @@ class SectionForce(Sensor):
         body, element = _element_of(sensor, path, context)
         kind = element_kind(body.element)
         if kind.mesh_axes != [0]:
-            raise SceneError(f"{path}.body: body {show(body.name)} is a {kind.name} surface; "
+            what = "surface" if len(kind.mesh_axes) == 2 else "solid"
+            raise SceneError(f"{path}.body: body {show(body.name)} is a {kind.name} {what}; "
                              f"section forces are those of beams (a line of elements)")
         point = (sensor.x,) + (0.0,) * (context.dim - 1)
         _check_point(point, body, f"{path}.x")
