@@ -46,7 +46,6 @@ from runtime.solve.python_engine import (
     TALLY_WINDOW,
     Counters,
     Divergence,
-    ManifoldProjection,
     State,
     alpha_parameters,
     initial_state,
@@ -305,6 +304,8 @@ class CompiledEngine:
         if self.kkt:
             self._kkt(m, rows)
             schur_rows = 0
+        if dae.nonlinear and self.integrator == "trapezoidal":
+            self._projection(m, rows, ld)
         m.band = self._work(nf * ld)
         m.work = self._work(ld)
         m.lu = self._work(nf * (3 * bw + 1))
@@ -414,8 +415,7 @@ class CompiledEngine:
     def _holonomic(self, m) -> None:
         """Bind the quadratic constraint rows as data for the step's ``quadratic_rows``
         (per term its row, its factor, coordinates, linear parts, Hessian entries, constant;
-        the header says the layout) and the trapezoidal projection onto them, a Python
-        callback (``ManifoldProjection``, the Python engine's)."""
+        the header says the layout)."""
         dae, model = self.dae, self.dae.model
         h, offset = dae.holonomic, dae.joints_free.nnz
         free = np.zeros(dae.size, bool)
@@ -452,28 +452,6 @@ class CompiledEngine:
         m.holonomic_value = self._work(h.rows)
         m.a_full = self._work(dae.size)
         m.af_kept = self._work(self._af_data.size)
-        projection = None
-        if self.integrator == "trapezoidal":
-            projection = ManifoldProjection(dae, self.mass,
-                                            self.settings.tolerance * dae.scale,
-                                            self.settings.max_iterations)
-        q_full, v_full = self._q_full, self._v_full
-
-        def project() -> int:
-            try:
-                q, v = self._state_arrays[0], self._state_arrays[1]
-                projected = projection(q, v, q_full[dae.prescribed], v_full[dae.prescribed])
-                if projected is None:
-                    return -1
-                q[:], v[:] = projected
-                return 0
-            except Exception as error:   # reported after the call
-                self._callback_error = error
-                return -1
-
-        self._callback_error = None
-        self._project_callback = self._ffi.callback("int(void)", project, error=-1)
-        m.project = self._project_callback
 
     def _sliding(self, m, ld: int, bw: int) -> None:
         """Bind the sliding joints' rows (``runtime.model.sliding_rows``: not quadratic, their
@@ -579,13 +557,42 @@ class CompiledEngine:
         for name in ("s_slots", "below_slots", "above_slots", "diagonal_slots", "s_diagonal"):
             setattr(m, f"kkt_{name}", self._buffer(getattr(system, name), "int"))
         m.kkt_diagonal_count = system.s_diagonal.size
-        m.kkt_values = self._ffi.from_buffer("double[]", cholesky.values)
+        self._bind_kkt(m.kkt, cholesky)
         for name in ("rhs", "solution", "correction"):
             setattr(m, f"kkt_{name}", self._work(total))
         m.kkt_regularisation, m.kkt_refinements = (linear.KKT_REGULARISATION,
                                                    linear.KKT_REFINEMENTS)
+
+    def _projection(self, m, rows: scipy.sparse.csr_matrix, ld: int) -> None:
+        """Bind what the step's trapezoidal projection onto nonlinear rows (``project``)
+        factorises: the mass matrix's band (``ld`` rows a column) or its own CHOLMOD analysis
+        of the pattern (its values M_ff, factorised by the step's first projection) and
+        the buffers of its Schur complement of the rows; with the KKT system, a second
+        ``KKTSystem`` of the rows ``rows`` for [[M, C^T], [C, -delta I]]."""
+        nf, nj, pattern = self.dae.free.size, self.dae.constraint_rows, self.dae.model.pattern
+        if self.kkt:
+            self._kkt_mass_system = linear.KKTSystem(pattern, rows)
+            self._bind_kkt(m.kkt_mass, self._kkt_mass_system.cholesky)
+            return
+        mass = m.mass
+        mass.kind = 0
+        if self.linear_solver == "sparse":
+            cholesky = self._mass_cholesky = cholmod.Cholesky(pattern)
+            cholesky.values[:] = linear.pattern_values(self.dae.mass_ff, pattern)
+            for name in ("matrix", "factor", "common", "handles"):
+                setattr(mass, f"cholmod_{name}",
+                        self._ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
+        else:
+            mass.band = self._work(nf * ld)
+        mass.coupling = self._work(nf * nj)
+        mass.schur = self._work(nj * nj)
+        mass.schur_pivots = self._work(nj, "int")
+
+    def _bind_kkt(self, target, cholesky) -> None:
+        """Bind a KKT matrix (``ancf_kkt``): the values and analysis of ``cholesky``."""
+        target.values = self._ffi.from_buffer("double[]", cholesky.values)
         for name in ("matrix", "factor", "common", "handles"):
-            setattr(m, f"kkt_{name}",
+            setattr(target, name,
                     self._ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
 
     def _sparse(self, m) -> None:

@@ -685,8 +685,8 @@ class ManifoldProjection:
     C = [A; Phi_q] at the current q, iterated until the correction is within ``tolerance``
     (m), at most ``max_iterations`` times; then the velocities with C at the projected q.
     M is the engine's ``mass_solver`` (factorised once, apart from the iteration matrices'
-    solver, whose factorisations last only until its next one).  Both engines project
-    through it (the compiled one by a callback)."""
+    solver, whose factorisations last only until its next one).  The compiled step does
+    the same in C (``project`` in templates/stepper.c.j2)."""
 
     def __init__(self, dae: DAESystem, mass: SchurSolver, tolerance: float,
                  max_iterations: int) -> None:
