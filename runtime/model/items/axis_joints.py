@@ -27,7 +27,7 @@ import numpy as np
 from runtime.model.errors import SceneError
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint, normals_of
+from runtime.model.items.constraints import Built, Constraint, NodeSide, normals_of
 from runtime.model.items.rigid import check_rigid_bodies, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 
@@ -46,7 +46,7 @@ def _axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class AxisJoint(Constraint):
+class AxisJoint(NodeSide, Constraint):
     """Base of the joints of this module (module docstring): the rigid ``body``, its
     ``point`` and ``axis`` (body coordinates), the other side: the rigid body ``other`` or
     the ``node`` (neither: the ground)."""
@@ -66,9 +66,6 @@ class AxisJoint(Constraint):
         check_rigid_bodies(joint, path, context, f"a {cls.type} joint needs a rigid body")
         return joint
 
-    def targets(self) -> list[NodeRef]:
-        """The node it joins (its ``node``, if any)."""
-        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:

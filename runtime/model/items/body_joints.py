@@ -31,7 +31,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint, normals_of
+from runtime.model.items.constraints import Built, Constraint, NodeSide, normals_of
 from runtime.model.items.rigid import RigidBody, rigid_key
 from runtime.model.schema import (
     Context,
@@ -71,7 +71,7 @@ def _world_point(context: Context, name: str, point: tuple[float, ...]) -> np.nd
 
 
 @dataclass(frozen=True)
-class BodySpherical(Constraint):
+class BodySpherical(NodeSide, Constraint):
     """A point of a rigid ``body`` held at a point (module docstring): shared position."""
 
     type: ClassVar[str] = "body_spherical"
@@ -104,9 +104,6 @@ class BodySpherical(Constraint):
                              f"\"rigid\"), got the point mass {show(joint.body)}")
         return joint
 
-    def targets(self) -> list[NodeRef]:
-        """The nodes it joins (its ``node``, if any)."""
-        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:
@@ -245,7 +242,7 @@ def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ..
 
 
 @dataclass(frozen=True)
-class BodyPrismatic(Constraint):
+class BodyPrismatic(NodeSide, Constraint):
     """A slider on the ground: the point ``point`` (body coordinates) of the rigid body or
     point mass ``body`` moves along the global ``axis`` through where it is at t = 0 (two
     rows n_k . (r_P - r_P0) = 0 with n_k normal to the axis: linear rows with a constant),
@@ -286,9 +283,6 @@ class BodyPrismatic(Constraint):
     def drivers(self) -> tuple[Driver, ...]:
         return () if self.displacement is None else (Driver(self.displacement),)
 
-    def targets(self) -> list[NodeRef]:
-        """The node it slides on (its ``node``, if any)."""
-        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:

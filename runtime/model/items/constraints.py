@@ -77,6 +77,17 @@ class Constraint(Record):
         raise NotImplementedError
 
 
+class NodeSide:
+    """A joint whose other side may be a node of a meshed body (its ``node``; None: the
+    ground or a rigid body): the node is its scene target."""
+
+    node: NodeRef | None
+
+    def targets(self) -> list[NodeRef]:
+        """The node it joins (its ``node``, if any)."""
+        return [] if self.node is None else [self.node]
+
+
 @dataclass(frozen=True)
 class NodeConstraint(Constraint):
     """A constraint on one node (``"BODY:INDEX"``, or a NodeRef); ``holds_gradients``: it

@@ -17,7 +17,7 @@ import numpy as np
 
 from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Built, Constraint
+from runtime.model.items.constraints import Built, Constraint, NodeSide
 from runtime.model.items.load_points import shape_tables
 from runtime.model.items.rigid import rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
@@ -54,7 +54,7 @@ def _normal_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class Sliding(Constraint):
+class Sliding(NodeSide, Constraint):
     """A point held on the centre line of the line body ``beam`` (module docstring)."""
 
     type: ClassVar[str] = "sliding"
@@ -83,9 +83,6 @@ class Sliding(Constraint):
                              f"of the beam {show(joint.beam)} itself; expected a point off it")
         return joint
 
-    def targets(self) -> list[NodeRef]:
-        """The node that slides (its ``node``, if any)."""
-        return [] if self.node is None else [self.node]
 
     @property
     def target_key(self) -> str:
