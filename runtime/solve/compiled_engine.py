@@ -194,7 +194,8 @@ class CompiledEngine:
         self.settings = settings
         self.newton = newton_mode(settings)
         self.integrator = settings.integrator
-        self.dae = DAESystem(model, q_full)
+        with single_threaded_blas():     # the joints' projector: small banded solves
+            self.dae = DAESystem(model, q_full)
         self.counters = Counters()
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0,
                        "solve_s": 0.0, "constraint_s": 0.0}
@@ -219,7 +220,8 @@ class CompiledEngine:
         self._ffi, self._lib = compiled.module.ffi, compiled.module.lib
         self._keep: list = []
         #: the constant mass matrix with the joints, factorised once (``mass_solver``)
-        self.mass = mass_solver(self.dae)
+        with single_threaded_blas():
+            self.mass = mass_solver(self.dae)
         #: the step's model for the settings' time step, bound before the run (its arrays
         #: are constant; a second run or another step binds a new one: the step keeps its
         #: factorisation in it)
@@ -314,7 +316,6 @@ class CompiledEngine:
         m.solve_work = self._work(nf * schur_rows)
         m.schur = self._work(schur_rows * schur_rows)
         m.schur_pivots = self._work(schur_rows, "int")
-        m.schur_y = self._work(schur_rows)
         for name, address in lapack.functions().items():
             setattr(m, name, self._ffi.cast("void *", address))
         m.y = self._work(nj)

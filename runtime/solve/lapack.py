@@ -11,11 +11,9 @@ import functools
 
 import scipy.linalg.cython_lapack
 
-#: routines the compiled step calls: LU factorisation and inverse of a general matrix (the
-#: Schur complement, inverted once per factorisation: each solve is then one product, where
-#: dgetrs's calls cost more than their few hundred operations), Cholesky factorisation and
-#: solve of a symmetric band
-FUNCTIONS = ("dgetrf", "dgetri", "dpbtrf", "dpbtrs")
+#: routines the compiled step calls: LU factorisation and solve of a general matrix (the
+#: Schur complement), Cholesky factorisation and solve of a symmetric band
+FUNCTIONS = ("dgetrf", "dgetrs", "dpbtrf", "dpbtrs")
 #: bandwidths from which the compiled step's band Cholesky is LAPACK's (dpbtrf, blocked);
 #: narrower bands take the step's own loops with the bandwidth a compile-time constant
 #: (measured: LAPACK 1.4x slower on beam3d chains, bandwidth 23; 1.1-1.3x faster on 8 x 8

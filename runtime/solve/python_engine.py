@@ -276,7 +276,8 @@ class OutputDynamics:
 
     def __init__(self, dae: DAESystem, mass: SchurSolver | None = None) -> None:
         self.dae = dae
-        self.solver = mass or mass_solver(dae)
+        with single_threaded_blas():
+            self.solver = mass or mass_solver(dae)
         loads = dae.model.nominal_loads()
         self.load_vectors = (np.array([vector for _, vector in loads]) if loads
                              else np.zeros((0, dae.size)))
@@ -284,7 +285,13 @@ class OutputDynamics:
     def __call__(self, times: np.ndarray, q_full: np.ndarray,
                  v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
-        the states (k, size) of the output times (k,) (s)."""
+        the states (k, size) of the output times (k,) (s); BLAS on one thread (small
+        banded solves, which threads only slow down)."""
+        with single_threaded_blas():
+            return self._evaluate(times, q_full, v_full)
+
+    def _evaluate(self, times: np.ndarray, q_full: np.ndarray,
+                  v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         dae = self.dae
         _, _, ap = dae.prescribed_motion(times)
         factors = dae.load_factors(times)
@@ -319,7 +326,8 @@ class Integrator:
     modules: tuple[str, ...] = ()   # nothing built beyond the kernels
 
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
-        self.dae = DAESystem(model, q_full)
+        with single_threaded_blas():     # the joints' projector: small banded solves
+            self.dae = DAESystem(model, q_full)
         self.settings = settings
         self.newton = newton_mode(settings)
         self.counters = Counters()
@@ -333,7 +341,8 @@ class Integrator:
         self.linear_solver = self.linear.name
         self._mass = linear.pattern_values(self.dae.mass_ff, model.pattern)
         #: the constant mass matrix with the joints, factorised once (``mass_solver``)
-        self.mass = mass_solver(self.dae)
+        with single_threaded_blas():
+            self.mass = mass_solver(self.dae)
         self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
         self._refresh = True
         self._full_step = self.newton == "full"   # this step rebuilds at every iteration
