@@ -50,12 +50,14 @@ from runtime.model.items.sensors import (
     Reaction,
     SectionForce,
     Sensor,
+    Slide,
     Strain,
     StrainEnergy,
     Stress,
     TotalEnergy,
     Velocity,
 )
+from runtime.model.items.sliding import Sliding
 from runtime.model.items.symmetry import Fix, Symmetry
 from runtime.model.placements import Arc, Rectangle
 from runtime.model.scene import Scene, load_scene
@@ -81,7 +83,8 @@ __all__ = [
     "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMass",
     "PointMoment", "Position", "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad",
     "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
-    "SectionForce", "Sensor", "Sine", "Solver", "Spherical", "Spin", "SpinUp", "SpringDamper",
+    "SectionForce", "Sensor", "Sine", "Slide", "Sliding", "Solver", "Spherical", "Spin",
+    "SpinUp", "SpringDamper",
     "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table", "TorsionalSpring",
     "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene"
 ]

@@ -65,6 +65,8 @@ from runtime import (
     Scene,
     SceneError,
     Sine,
+    Slide,
+    Sliding,
     Solver,
     Spherical,
     Spin,
@@ -269,7 +271,7 @@ def test_registries_are_keyed_by_type():
                                  "spherical", "revolute", "weld", "body_spherical",
                                  "body_revolute",
                                  "body_prismatic", "body_weld", "body_cylindrical",
-                                 "body_universal"]
+                                 "body_universal", "sliding"]
     assert list(LOADS) == ["point_force", "point_moment", "gravity", "line_force",
                            "line_moment", "face_force", "pressure", "distributed_force",
                            "python",
@@ -279,7 +281,7 @@ def test_registries_are_keyed_by_type():
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
                              "strain", "stress", "section", "body_position", "body_velocity",
-                             "body_reaction"]
+                             "body_reaction", "slide"]
     assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
@@ -624,14 +626,21 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", rng.choice(["force", "moment"]),
                                 rng.choice(["x", "y", "z", "norm"]),
                                 rng.choice([None, joint])))
+    # a bead on the chain's first body, sliding along its centre line from its node 1
+    bead = PointMass("bead", _number(rng, 0.1, 5), position=chain[0].node_position(1))
+    slider = len(constraints)
+    constraints.append(Sliding(beam=chain[0].name, body="bead"))
+    sensors.append(Slide(f"sl{len(sensors)}", slider, rng.choice(["parameter", "rate",
+                                                                  "reaction"]),
+                         rng.choice(["x", "y", "z", "norm"])))
     if held.get((chain[0].name, 0)) is None:    # a hub welded to the chain's free start
         hub = RigidBody("hub", mass=_number(rng, 0.1, 10), inertia=tuple(moments),
                         position=chain[0].node_position(0))
         constraints.append(BodyWeld(body="hub", node=f"{chain[0].name}:0"))
         loads.append(BodyTorque(body="hub", torque=_number(rng, -10, 10),
                                 axis=_vector(rng, 3), time_law=_law(rng)))
-        return [crank, wheel, bob, on_node, hub]
-    return [crank, wheel, bob, on_node]
+        return [crank, wheel, bob, on_node, bead, hub]
+    return [crank, wheel, bob, on_node, bead]
 
 
 def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -> list:
