@@ -26,6 +26,7 @@ from runtime.catalog import generated_kinds
 from runtime.cli import main
 from runtime.kernels.kind import element_kind
 from runtime.model.model import Model
+from runtime.model.placements import Box
 from runtime.model.scene import parse_scene
 from runtime.model.toml_io import toml_text
 
@@ -115,15 +116,19 @@ def test_several_bodies_are_separate_polylines():
 KINDS = generated_kinds()
 PLATE_KINDS = [k for k in KINDS if element_kind(k).mesh_axes == [0, 1]]
 CORNER, SIZE = (0.1, -0.2, 0.3), (1.0, 0.4)     # a plate body's rectangle (m)
+BOX_SIZE, BOX_GRID = (1.0, 0.4, 0.2), (2, 1, 1)  # a solid body's box from CORNER (m)
 
 
 def kind_body(kind: str, name: str = "body") -> Body:
     """A small body of ``kind``: 2 elements along a slanted line from the origin (0.8, 0.6
-    [, 0]) (m) for a line kind, a 2 x 3 grid over the rectangle CORNER, SIZE for a plate."""
+    [, 0]) (m) for a line kind, a 2 x 3 grid over the rectangle CORNER, SIZE for a plate,
+    a 2 x 1 x 1 grid over the box CORNER, BOX_SIZE for a solid."""
     info = element_kind(kind)
     if info.mesh_axes == [0]:
         return Body(name, kind, "m", 0.02, 0.01, 2, (0.0,) * info.dim,
                     (0.8, 0.6) + (0.0,) * (info.dim - 2))
+    if len(info.mesh_axes) == 3:
+        return Body(name, kind, "m", box=Box(CORNER, BOX_SIZE, BOX_GRID))
     return Body(name, kind, "m", rectangle=Rectangle(CORNER, SIZE, (2, 3)), thickness=0.01)
 
 
@@ -164,6 +169,14 @@ def test_reference_samples_evenly_span_the_line_or_rectangle(kind):
     shape = Shape(model)
     reference = shape.sample(model.reference)
     name, cells = shape.cells[0]
+    if body.box is not None:        # an even grid filling the box, PER_ELEMENT^3 per element
+        axes = [corner + np.linspace(0.0, size, count * PER_ELEMENT + 1)
+                for corner, size, count in zip(CORNER, BOX_SIZE, BOX_GRID, strict=True)]
+        grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
+        assert np.unique(np.round(reference, 12), axis=0) == pytest.approx(
+            np.unique(np.round(grid, 12), axis=0), abs=1e-12)
+        assert len(reference) == len(grid) and len(cells) == 2 * PER_ELEMENT**3
+        return
     if body.rectangle is None:      # 2 elements, PER_ELEMENT intervals each, along the line
         t = np.linspace(0.0, 1.0, 2 * PER_ELEMENT + 1)
         assert reference == pytest.approx(np.outer(t, [0.8, 0.6, 0.0]), abs=1e-14)
