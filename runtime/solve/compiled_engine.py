@@ -48,6 +48,7 @@ from runtime.solve.python_engine import (
     Divergence,
     State,
     alpha_parameters,
+    dae_system,
     initial_state,
     linear_solver,
     mass_solver,
@@ -194,8 +195,7 @@ class CompiledEngine:
         self.settings = settings
         self.newton = newton_mode(settings)
         self.integrator = settings.integrator
-        with single_threaded_blas():     # the joints' projector: small banded solves
-            self.dae = DAESystem(model, q_full)
+        self.dae = dae_system(model, q_full)
         self.counters = Counters()
         self.timing = {"steps_s": 0.0, "kernel_s": 0.0, "factorisation_s": 0.0,
                        "solve_s": 0.0, "constraint_s": 0.0}
@@ -220,8 +220,7 @@ class CompiledEngine:
         self._ffi, self._lib = compiled.module.ffi, compiled.module.lib
         self._keep: list = []
         #: the constant mass matrix with the joints, factorised once (``mass_solver``)
-        with single_threaded_blas():
-            self.mass = mass_solver(self.dae)
+        self.mass = mass_solver(self.dae)
         #: the step's model for the settings' time step, bound before the run (its arrays
         #: are constant; a second run or another step binds a new one: the step keeps its
         #: factorisation in it)
@@ -580,9 +579,7 @@ class CompiledEngine:
         if self.linear_solver == "sparse":
             cholesky = self._mass_cholesky = cholmod.Cholesky(pattern)
             cholesky.values[:] = linear.pattern_values(self.dae.mass_ff, pattern)
-            for name in ("matrix", "factor", "common", "handles"):
-                setattr(mass, f"cholmod_{name}",
-                        self._ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
+            self._bind_cholmod(mass, cholesky, "cholmod_")
         else:
             mass.band = self._work(nf * ld)
         mass.coupling = self._work(nf * nj)
@@ -592,8 +589,13 @@ class CompiledEngine:
     def _bind_kkt(self, target, cholesky) -> None:
         """Bind a KKT matrix (``ancf_kkt``): the values and analysis of ``cholesky``."""
         target.values = self._ffi.from_buffer("double[]", cholesky.values)
+        self._bind_cholmod(target, cholesky)
+
+    def _bind_cholmod(self, target, cholesky, prefix: str = "") -> None:
+        """Bind the CHOLMOD objects of ``cholesky`` (matrix, factor, common, handles) to the
+        fields ``prefix`` + name of the step's struct ``target``."""
         for name in ("matrix", "factor", "common", "handles"):
-            setattr(target, name,
+            setattr(target, prefix + name,
                     self._ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
 
     def _sparse(self, m) -> None:
@@ -606,9 +608,7 @@ class CompiledEngine:
         m.pattern_indices = self._buffer(pattern.indices, "int")
         m.mass_values = self._buffer(linear.pattern_values(self.dae.mass_ff, pattern))
         m.values = ffi.from_buffer("double[]", cholesky.values)   # CHOLMOD reads these
-        for name in ("matrix", "factor", "common", "handles"):
-            setattr(m, f"cholmod_{name}",
-                    ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
+        self._bind_cholmod(m, cholesky, "cholmod_")
         for name, address in cholmod.functions().items():
             setattr(m, name, ffi.cast("void *", address))
         nf, lu = pattern.shape[0], {}

@@ -225,11 +225,21 @@ def constraint_system(dae: DAESystem, solver) -> linear.KKTSystem | None:
     return linear.KKTSystem(dae.model.pattern, rows)
 
 
+def dae_system(model: Model, q_full: np.ndarray) -> DAESystem:
+    """The engines' ``DAESystem`` of ``model`` at ``q_full``, built with BLAS on one thread
+    (the joints' projector: small banded solves, which OpenBLAS's threads only slow
+    down)."""
+    with single_threaded_blas():
+        return DAESystem(model, q_full)
+
+
 def mass_solver(dae: DAESystem) -> SchurSolver:
     """The mass matrix with the joints, factorised once (banded Cholesky of the constant
-    ``M_ff``, the joints by their Schur complement): the solves of consistent
-    accelerations (``initial_state``, ``OutputDynamics``)."""
-    return SchurSolver(dae.mass_band, dae.joints_free)
+    ``M_ff``, the joints by their Schur complement; BLAS on one thread, as
+    ``dae_system``): the solves of consistent accelerations (``initial_state``,
+    ``OutputDynamics``)."""
+    with single_threaded_blas():
+        return SchurSolver(dae.mass_band, dae.joints_free)
 
 
 def initial_state(dae: DAESystem, t: float = 0.0, mass: SchurSolver | None = None) -> State:
@@ -276,8 +286,7 @@ class OutputDynamics:
 
     def __init__(self, dae: DAESystem, mass: SchurSolver | None = None) -> None:
         self.dae = dae
-        with single_threaded_blas():
-            self.solver = mass or mass_solver(dae)
+        self.solver = mass or mass_solver(dae)
         loads = dae.model.nominal_loads()
         self.load_vectors = (np.array([vector for _, vector in loads]) if loads
                              else np.zeros((0, dae.size)))
@@ -326,8 +335,7 @@ class Integrator:
     modules: tuple[str, ...] = ()   # nothing built beyond the kernels
 
     def __init__(self, model: Model, settings, q_full: np.ndarray) -> None:
-        with single_threaded_blas():     # the joints' projector: small banded solves
-            self.dae = DAESystem(model, q_full)
+        self.dae = dae_system(model, q_full)
         self.settings = settings
         self.newton = newton_mode(settings)
         self.counters = Counters()
@@ -341,8 +349,7 @@ class Integrator:
         self.linear_solver = self.linear.name
         self._mass = linear.pattern_values(self.dae.mass_ff, model.pattern)
         #: the constant mass matrix with the joints, factorised once (``mass_solver``)
-        with single_threaded_blas():
-            self.mass = mass_solver(self.dae)
+        self.mass = mass_solver(self.dae)
         self._solver: SchurSolver | None = None   # kept across iterations (modified Newton)
         self._refresh = True
         self._full_step = self.newton == "full"   # this step rebuilds at every iteration
