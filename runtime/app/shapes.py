@@ -105,8 +105,8 @@ class Shape:
             outline += _polylines(first + points[:, _grid_loop(fractions)])
             node_points.append(first + nodes)
             first += count
-        for rigid in model.rigid.values():    # rigid bodies: their box (hexahedron)
-            if not hasattr(rigid.item, "extent"):
+        for rigid in model.rigid.values():    # rigid bodies: their box (hexahedron; 2D
+            if not hasattr(rigid.item, "extent") or model.dim == 2:   # bodies: not drawn)
                 continue
             corners = rigid.item.extent()                       # (8, 3) body coordinates
             values = np.column_stack([np.ones(8), corners])     # natural_map's weights

@@ -35,7 +35,7 @@ from runtime.model.items.force_elements import (
     TorsionalSpringForce,
 )
 from runtime.model.items.python_loads import PythonForce, PythonFunction
-from runtime.model.items.rigid import check_rigid_bodies, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, planar_defaults, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -269,21 +269,22 @@ class Gravity(Load):
 
 
 def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return vector(value, path, 3, "a point in body coordinates, m")
+    return vector(value, path, context.dim, f"a point in body coordinates, m, {context.dim}D")
 
 
 @dataclass(frozen=True)
 class BodyForce(Load):
-    """A force ``force`` (3,) in N, fixed in direction, at the point ``point`` (body
+    """A force ``force`` (dim,) in N, fixed in direction, at the point ``point`` (body
     coordinates, m) of the rigid body or point mass ``body``: the generalised force N^T f
     of the point's map (``runtime.model.items.rigid.natural_map``)."""
 
     type: ClassVar[str] = "body_force"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     force: tuple[float, ...] = key(_vector_key)
     point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def resolved(self, context: Context) -> Record:
+        return planar_defaults(self, context, ("point",))
 
     def nominal(self, model: ModelView) -> np.ndarray:
         dofs, point = model.rigid_point(self.body, self.point)
@@ -303,15 +304,15 @@ def _body_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]
 @dataclass(frozen=True)
 class BodyTorque(Load):
     """A torque ``torque`` (N m) times its ``time_law`` about the ``axis`` (body
-    coordinates, unit; default z) of the rigid body ``body``, turning with the body: a motor
-    on a body in a revolute joint about that axis (``runtime.model.items.force_elements``)."""
+    coordinates, unit; default z; 2D: about z, no axis) of the rigid body ``body``, turning
+    with the body: a motor on a body in a revolute joint about that axis
+    (``runtime.model.items.force_elements``)."""
 
     type: ClassVar[str] = "body_torque"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     torque: float = key(_finite_key)
-    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0))
+    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0),
+                                  only_3d="a 2D torque is about z")
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
