@@ -18,6 +18,7 @@ import scenes
 from runtime import (
     Arc,
     Body,
+    BodyAngularVelocity,
     BodyCylindrical,
     BodyForce,
     BodyPosition,
@@ -281,7 +282,7 @@ def test_registries_are_keyed_by_type():
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
                              "strain", "stress", "section", "body_position", "body_velocity",
-                             "body_reaction", "slide"]
+                             "body_angular_velocity", "body_reaction", "slide"]
     assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
@@ -623,6 +624,8 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     sensors.append(rng.choice([BodyPosition, BodyVelocity])(
         f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
         rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))
+    sensors.append(BodyAngularVelocity(f"rw{len(sensors)}", rng.choice(["crank", "wheel"]),
+                                       rng.choice(["x", "y", "z", "norm"])))
     sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", rng.choice(["force", "moment"]),
                                 rng.choice(["x", "y", "z", "norm"]),
                                 rng.choice([None, joint])))

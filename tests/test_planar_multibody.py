@@ -401,3 +401,23 @@ def test_a_torque_spins_a_pinned_2d_disc_up_at_t_over_i():
     assert np.abs(force(x, True).jacobian[0] - numeric).max() <= 1e-8
     with pytest.raises(SceneError, match=r"load\[0\]\.axis: only allowed in 3D"):
         scene_of(text + 'axis = [0, 0, 1]\n')
+
+
+def test_body_angular_velocity_sensor_reads_the_spin_in_2d_and_3d():
+    """The free 2D body spins at its initial 4 rad/s; a free 3D body of equal principal
+    moments keeps its initial angular velocity [1, -2, 3] rad/s (global axes)."""
+    from runtime import run_scene
+
+    sensor = '[[sensor]]\nname = "w"\ntype = "body_angular_velocity"\nbody = "plate"\n'
+    spin = run_scene(scene_of(FREE_BODY + sensor), progress=False).sensors["w"]
+    assert np.abs(spin - 4.0).max() <= 1e-9
+    ball = ('[[body]]\ntype = "rigid"\nname = "ball"\nmass = 2.0\ninertia = [0.5, 0.5, 0.5]\n'
+            'rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n'
+            'angular_velocity = [1.0, -2.0, 3.0]\n'
+            '[analysis.dynamic]\nt_end = 0.5\nstep = 1e-3\nintegrator = "trapezoidal"\n')
+    for component, value in (("x", 1.0), ("y", -2.0), ("z", 3.0), ("norm", np.sqrt(14.0))):
+        text = ball + sensor.replace('"plate"', '"ball"') + f'component = "{component}"\n'
+        read = run_scene(scene_of(text), progress=False).sensors["w"]
+        assert np.abs(read - value).max() <= 1e-9 * np.sqrt(14.0), component
+    with pytest.raises(SceneError, match=r"sensor\[0\]\.component: .*rotation is about z"):
+        scene_of(FREE_BODY + sensor + 'component = "x"\n')

@@ -236,6 +236,38 @@ class BodyVelocity(BodyPosition):
         return self._of(model, samples.v)
 
 
+def _rotation_component_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, ("x", "y", "z", "norm") if context.dim == 3 else ("z", "norm"),
+                  "component (a 2D rotation is about z)" if context.dim == 2 else "component")
+
+
+@dataclass(frozen=True)
+class BodyAngularVelocity(Sensor):
+    """Angular velocity (rad/s) of the rigid body ``body``, w = sum_a e_a x e_a' / 2 over
+    its axes e_a (u, v, w; in 2D u and v = perp(u)): exact for orthonormal axes (e_a' =
+    w x e_a).  One ``component`` (x | y | z | norm, global axes; in 2D z, the default, or
+    norm)."""
+
+    type: ClassVar[str] = "body_angular_velocity"
+    unit: ClassVar[str] = "rad/s"
+    energy: ClassVar[bool] = False
+    body: str = key(rigid_key)
+    component: str = key(_rotation_component_key, "z")
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        check_rigid_bodies(sensor, path, context, "a body_angular_velocity reads a rigid body")
+        return sensor
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        rigid = model.rigid[self.body]
+        axes = rigid.item.axes(samples.q[:, rigid.dofs])
+        rates = rigid.item.axes(samples.v[:, rigid.dofs])
+        omega = sum(_cross3(axes[:, a], rates[:, a]) for a in range(axes.shape[1])) / 2
+        return _component(omega, self.component)
+
+
 def _body_key(value: Any, path: str, context: Context) -> str:
     return choice(value, path, context.body_names, "body")
 
@@ -767,7 +799,7 @@ class ConstraintViolation(Sensor):
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce, BodyPosition, BodyVelocity, BodyReaction, Slide)
+    SectionForce, BodyPosition, BodyVelocity, BodyAngularVelocity, BodyReaction, Slide)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
