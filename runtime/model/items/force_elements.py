@@ -86,7 +86,7 @@ class CompiledForce:
 class SpringDamperForce:
     """The state force of a spring-damper of ``stiffness`` k (N/m), ``damping`` c (N s/m) and
     rest length ``length`` L0 (m) over the coordinates ``dofs`` (k,), with the map
-    ``difference`` D (3, k) and the constant ``offset`` d_0 (3,) of d = D x + d_0.  Reads
+    ``difference`` D (dim, k) and the constant ``offset`` d_0 (dim,) of d = D x + d_0.  Reads
     velocities (``reads_velocity``)."""
 
     reads_velocity = True
@@ -98,15 +98,17 @@ class SpringDamperForce:
         self.stiffness, self.damping, self.length = stiffness, damping, length
 
     def compiled(self) -> CompiledForce:
-        """Its data for the compiled step: the rows d = D x + d_0."""
-        k = self.dofs.shape[1]
+        """Its data for the compiled step: the rows d = D x + d_0, three of them (the step's
+        law is 3D: a 2D spring's third row is 0)."""
+        k, dim = self.dofs.shape[1], self.difference.shape[0]
         forms = QuadraticBlock("spring_damper", self.dofs[0], np.zeros((3, k, k)),
-                               self.difference, self.offset)
+                               np.vstack([self.difference, np.zeros((3 - dim, k))]),
+                               np.concatenate([self.offset, np.zeros(3 - dim)]))
         return CompiledForce("spring_damper", forms,
                              np.array([self.stiffness, self.damping, self.length]))
 
     def vector(self, q: np.ndarray) -> np.ndarray:
-        """d (3,) at the coordinates q (size,)."""
+        """d (dim,) at the coordinates q (size,)."""
         return self.difference @ q[self.dofs[0]] + self.offset
 
     def energy(self, q: np.ndarray) -> float:
@@ -122,13 +124,13 @@ class SpringDamperForce:
         if length == 0.0:
             raise ZeroDivisionError("a spring-damper of zero length has no direction")
         n = d / length
-        rate_vector = np.zeros(3) if v is None else D @ v[dofs]
+        rate_vector = np.zeros(D.shape[0]) if v is None else D @ v[dofs]
         rate = float(n @ rate_vector)
         f = self.stiffness * (length - self.length) + self.damping * rate
         force = -f * (D.T @ n)
         if not jacobian:
             return MotionPatches(self.dofs, force[None], None, None)
-        across = (np.eye(3) - np.outer(n, n)) / length
+        across = (np.eye(n.size) - np.outer(n, n)) / length
         inner = (self.stiffness * np.outer(n, n)
                  + self.damping * np.outer(n, rate_vector - n * rate) / length + f * across)
         d_q = -D.T @ inner @ D
