@@ -38,6 +38,7 @@ from runtime.model.items.loads import (
 from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
     Acceleration,
+    BodyAngle,
     BodyAngularVelocity,
     BodyPosition,
     BodyReaction,
@@ -76,7 +77,8 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyAngularVelocity", "BodyCylindrical", "BodyForce",
+    "Acceleration", "Arc", "Body", "BodyAngle", "BodyAngularVelocity", "BodyCylindrical",
+    "BodyForce",
     "BodyPosition", "BodyPrismatic",
     "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque", "BodyUniversal", "BodyVelocity",
     "BodyWeld", "Bushing", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",

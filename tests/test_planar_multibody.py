@@ -357,6 +357,11 @@ def test_bad_2d_rigid_input_names_the_key(text, culprit):
 
 
 def test_bad_2d_joint_and_load_input_names_the_key():
+    twice = PENDULUM_2D.replace('[[load]]', '[[constraint]]\ntype = "body_spherical"\n'
+                                'body = "bar"\n[[load]]', 1)
+    with pytest.raises(SceneError, match=r"constraint\[1\]: redundant: a row of this "
+                                         r"body_spherical joint repeats"):
+        Model(scene_of(twice))
     with pytest.raises(SceneError, match=r"constraint\[0\]\.axis: only allowed in 3D"):
         scene_of(PENDULUM_2D.replace('body = "bar"\n[[load]]',
                                      'body = "bar"\naxis = [0, 0, 1]\n[[load]]'))
@@ -403,14 +408,20 @@ def test_a_torque_spins_a_pinned_2d_disc_up_at_t_over_i():
         scene_of(text + 'axis = [0, 0, 1]\n')
 
 
-def test_body_angular_velocity_sensor_reads_the_spin_in_2d_and_3d():
-    """The free 2D body spins at its initial 4 rad/s; a free 3D body of equal principal
-    moments keeps its initial angular velocity [1, -2, 3] rad/s (global axes)."""
+def test_body_angle_and_angular_velocity_sensors_read_the_spin_in_2d_and_3d():
+    """The free 2D body spins at its initial 4 rad/s and its angle is the trapezoidal rule's
+    rotation (wrapped to (-pi, pi]); a free 3D body of equal principal moments keeps its
+    initial angular velocity [1, -2, 3] rad/s (global axes)."""
     from runtime import run_scene
 
     sensor = '[[sensor]]\nname = "w"\ntype = "body_angular_velocity"\nbody = "plate"\n'
-    spin = run_scene(scene_of(FREE_BODY + sensor), progress=False).sensors["w"]
-    assert np.abs(spin - 4.0).max() <= 1e-9
+    angle = '[[sensor]]\nname = "a"\ntype = "body_angle"\nbody = "plate"\n'
+    read = run_scene(scene_of(FREE_BODY + sensor + angle), progress=False).sensors
+    assert np.abs(read["w"] - 4.0).max() <= 1e-9
+    steps = np.rint(read["t"] / 2e-3)
+    turned = 0.7 + steps * 2 * np.arctan(4.0 * 2e-3 / 2)
+    assert np.abs(np.angle(np.exp(1j * (read["a"] - turned)))).max() <= 1e-9
+    assert read["a"].min() > -np.pi and read["a"].max() <= np.pi and np.ptp(read["a"]) > 6
     ball = ('[[body]]\ntype = "rigid"\nname = "ball"\nmass = 2.0\ninertia = [0.5, 0.5, 0.5]\n'
             'rotation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n'
             'angular_velocity = [1.0, -2.0, 3.0]\n'
@@ -421,6 +432,8 @@ def test_body_angular_velocity_sensor_reads_the_spin_in_2d_and_3d():
         assert np.abs(read - value).max() <= 1e-9 * np.sqrt(14.0), component
     with pytest.raises(SceneError, match=r"sensor\[0\]\.component: .*rotation is about z"):
         scene_of(FREE_BODY + sensor + 'component = "x"\n')
+    with pytest.raises(SceneError, match=r"sensor\[0\]\.type: a 3D body's orientation"):
+        scene_of(ball + angle.replace('"plate"', '"ball"'))
 
 
 #: a ball 0.1 m short of the rest length of a spring hung from the origin (no gravity)

@@ -364,6 +364,8 @@ class End:
             return self.node.spelled()
         if self.anchor is not None:
             return list(self.anchor)
+        if not any(self.point):     # the origin, in the scene's dimension
+            return {"body": self.body}
         return {"body": self.body, "point": list(self.point)}
 
     def position(self, model: ModelView) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

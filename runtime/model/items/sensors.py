@@ -236,6 +236,30 @@ class BodyVelocity(BodyPosition):
         return self._of(model, samples.v)
 
 
+@dataclass(frozen=True)
+class BodyAngle(Sensor):
+    """The angle (rad, in (-pi, pi]) of the 2D rigid body ``body``'s x axis u from the
+    global x axis, atan2(u_y, u_x)."""
+
+    type: ClassVar[str] = "body_angle"
+    unit: ClassVar[str] = "rad"
+    energy: ClassVar[bool] = False
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    dims_message: ClassVar[str] = ("a 3D body's orientation is no single angle; in 3D read "
+                                   "body_position of two of its points")
+    body: str = key(rigid_key)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        check_rigid_bodies(sensor, path, context, "a body_angle reads a rigid body")
+        return sensor
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        u = samples.q[:, model.rigid[self.body].dofs[2:4]]
+        return np.arctan2(u[:, 1], u[:, 0])
+
+
 def _rotation_component_key(value: Any, path: str, context: Context) -> str:
     return choice(value, path, ("x", "y", "z", "norm") if context.dim == 3 else ("z", "norm"),
                   "component (a 2D rotation is about z)" if context.dim == 2 else "component")
@@ -799,7 +823,8 @@ class ConstraintViolation(Sensor):
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce, BodyPosition, BodyVelocity, BodyAngularVelocity, BodyReaction, Slide)
+    SectionForce, BodyPosition, BodyVelocity, BodyAngle, BodyAngularVelocity, BodyReaction,
+    Slide)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
