@@ -181,6 +181,13 @@ type = "point_mass"
 name = "dot"
 mass = 0.5
 position = [2.0, 1.0]
+[[body]]
+type = "rigid"
+name = "c"
+mass = 1.5
+inertia = 0.2
+position = [1.5, -0.5]
+angle = 1.1
 [[constraint]]
 type = "body_revolute"
 body = "b"
@@ -193,6 +200,12 @@ type = "body_prismatic"
 body = "dot"
 other = "b"
 axis = [0.6, 0.8]
+[[constraint]]
+type = "body_prismatic"
+body = "c"
+other = "b"
+point = [0.2, 0.1]
+axis = [-0.8, 0.6]
 [[constraint]]
 type = "body_prismatic"
 body = "a"
@@ -209,8 +222,9 @@ def _planar_joints():
 
 def test_every_2d_constraint_jacobian_matches_finite_differences():
     """The 2D rigid body's row u.u = 1, the slider-crank's driven pin and slide, a driven
-    pin between two bodies, a slide of a point mass on a body and a driven slide of a body
-    on the ground (with its rotation lock): the rows vanish at t = 0, the Jacobians,
+    pin between two bodies, a slide of a point mass and of a rigid body (with its relative
+    rotation lock) on a body, and a driven slide of a body on the ground (with its rotation
+    lock): the rows vanish at t = 0, the Jacobians,
     geometric stiffnesses and curvatures match central differences."""
     from test_multibody import _finite_difference_check
 
@@ -222,22 +236,23 @@ def test_every_2d_constraint_jacobian_matches_finite_differences():
         assert np.abs(model.joints @ model.reference - model.joint_offsets).max() <= 1e-12
         blocks += model.holonomic.blocks
     owners = [block.owner for block in blocks]
-    assert "body_prismatic of dot on b" in owners and "body 'b'" in owners
+    assert {"body_prismatic of dot on b", "body_prismatic of c on b", "body 'b'"} <= set(owners)
     for block in blocks:
         _finite_difference_check(block, rng)
 
 
 def test_2d_joints_leave_the_right_motions():
-    """Rows of the joints (at the reference, A and Phi_q): a pin to the ground leaves the
-    rotation (4 coordinates, 1 + 2 rows), a slide of a rigid body leaves one translation,
-    a weld to a beam2d node holds the node's frame to the body."""
+    """Rows of the joints (at the reference, A and Phi_q): a driven pin and a driven slide
+    leave no motion, a slide of a point mass or of a rigid body one translation each, and a
+    weld to a beam2d node holds the node's frame to the body."""
     scene = _planar_joints()
     model = Model(scene)
     rows = np.vstack([model.joints.toarray(), model.holonomic.jacobian(model.reference)
                       .toarray()])
-    # 10 coordinates + 3 drivers: 2 unit rows, pin 2 + drive 1, slide 1 + lock 1, slide 1 +
-    # lock 1 + drive 1, the drivers prescribed: one free motion left (the point mass)
-    assert np.linalg.matrix_rank(rows[:, model.free]) == model.free.size - 1
+    # 14 free coordinates: 3 unit rows, a's slide 1 + lock 1 + drive 1, b's pin 2 + drive 1,
+    # dot's slide 1, c's slide 1 + lock 1: two free motions left (dot's and c's slides)
+    assert model.free.size == 14 and rows.shape[0] == 12
+    assert np.linalg.matrix_rank(rows[:, model.free]) == model.free.size - 2
     weld = scene_of("""
 [material.steel]
 E = 2.1e11

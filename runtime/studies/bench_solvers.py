@@ -6,7 +6,8 @@ Tables (Markdown):
 
 1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3), rotating beam
    (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3) and the shipped
-   slider-crank (rigid crank, 8-element beam3d or cable3d rod, slider, nonlinear joints):
+   slider-crank (rigid crank, 8-element beam3d or cable3d rod, slider, nonlinear joints;
+   and its 2D scene, cable2d rod):
    simulate time of each engine and Newton mode, the same run with the quadrature method
    (the paper's "without invariants"), and Exudyn (``runtime.studies.peers``, when
    installed) with modified and full Newton; min and median of the repeats, and ratios to
