@@ -559,3 +559,24 @@ def test_a_2d_point_mass_slides_down_a_stiff_rail_as_on_an_incline():
         sensors = run_scene(scene_of(BEAD_2D), engine=engine, progress=False).sensors
         exact = 0.1 + 0.5 * G * 0.6 * sensors["t"] ** 2
         assert np.abs(sensors["s"] - exact).max() <= 1e-6, engine
+
+
+def test_a_hanging_2d_pendulum_statics_and_its_modal_frequency():
+    """The bar hanging from its pin: the static solution keeps it there with the pivot
+    reaction m g, and its one mode swings at the compound pendulum's sqrt(m g d / I_p)."""
+    from runtime.solve.modal import modal_shapes
+    from runtime.solve.static import solve_static
+
+    down = 'centre_of_mass = [0.5, 0.0]\nangle = -1.5707963267948966'
+    hanging = scene_of(PENDULUM_2D.replace('centre_of_mass = [0.5, 0.0]', down)
+                       + '[analysis.static]\n[analysis.modal]\nmodes = 1\nabout = "static"\n')
+    model = Model(hanging)
+    found = solve_static(model, hanging.static)
+    assert np.abs(found.q - model.reference).max() <= 1e-12
+    mass = 7800.0 * 1.0 * 0.05 * 0.05
+    pivot = mass * (1.0 + 0.05**2) / 12 + mass * 0.5**2
+    modes = modal_shapes(model, found.q, 1, found.multipliers)
+    assert modes.frequencies == pytest.approx([np.sqrt(mass * G * 0.5 / pivot)], rel=1e-9)
+    shape = modes.shapes[0][model.rigid["bar"].dofs]
+    assert np.abs(shape[:2]).max() <= 1e-9 * np.abs(shape).max()      # the pin holds
+    assert abs(shape[3]) <= 1e-9 * abs(shape[2])       # u = (0, -1) turns along x

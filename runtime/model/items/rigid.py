@@ -339,7 +339,6 @@ class RigidBody(RigidItem):
     def constraint_block(self, first: int, owner: str) -> QuadraticBlock:
         """u.u = v.v = w.w = 1, u.v = v.w = w.u = 0 (Hessians on the 9 axis coordinates);
         in 2D u.u = 1 alone."""
-        n = self.coordinates
         if self.dim == 2:
             hessian = np.zeros((1, 4, 4))
             hessian[0, 2:, 2:] = 2 * np.eye(2)
@@ -353,7 +352,7 @@ class RigidBody(RigidItem):
             block[b, a] += 1.0
             hessians[row] = np.kron(block, np.eye(3))
         constant = np.array([-1.0, -1.0, -1.0, 0.0, 0.0, 0.0])
-        return QuadraticBlock(owner, np.arange(first, first + n), hessians,
+        return QuadraticBlock(owner, np.arange(first, first + 12), hessians,
                               np.zeros((6, 12)), constant)
 
     def point_map(self, point: tuple[float, ...]) -> np.ndarray:
