@@ -580,3 +580,26 @@ def test_a_hanging_2d_pendulum_statics_and_its_modal_frequency():
     shape = modes.shapes[0][model.rigid["bar"].dofs]
     assert np.abs(shape[:2]).max() <= 1e-9 * np.abs(shape).max()      # the pin holds
     assert abs(shape[3]) <= 1e-9 * abs(shape[2])       # u = (0, -1) turns along x
+
+
+def test_vtu_draws_a_2d_rigid_body_as_its_rectangle(tmp_path):
+    """The 2D pendulum's VTU files hold the bar as a quad of its box's 1 m x 0.05 m whose
+    corners move with the body (r0 + x_1 u + x_2 perp(u), perp(u) = [-u_y, u_x])."""
+    import meshio
+
+    from runtime import run_scene
+    from runtime.app.shapes import VtkSeries
+
+    scene = scene_of(PENDULUM_2D.replace("t_end = 0.6", "t_end = 0.05"))
+    result = run_scene(scene, engine="python", progress=False, store_states=True,
+                       observers=[VtkSeries(tmp_path)])
+    mesh = meshio.read(tmp_path / "dynamic_000050.vtu")
+    quads = [c.data for c in mesh.cells if c.type == "quad"]
+    assert len(quads) == 1 and quads[0].shape == (1, 4)
+    corners = (mesh.points[quads[0][0]] + mesh.point_data["displacement"][quads[0][0]])
+    q = result.states.q[-1]
+    origin, u = q[:2], q[2:4]
+    local = np.array([[0.0, -0.025], [1.0, -0.025], [1.0, 0.025], [0.0, 0.025]])
+    expected = origin + np.outer(local[:, 0], u) + np.outer(local[:, 1], [-u[1], u[0]])
+    assert np.abs(corners[:, :2] - expected).max() <= 1e-12
+    assert np.abs(corners[:, 2]).max() == 0.0

@@ -368,7 +368,19 @@ class RigidBody(RigidItem):
     def extent(self) -> np.ndarray:
         """The corners (8, 3) in body coordinates (m) of the box it is drawn as (VTK
         hexahedron order): its box, the box around its cylinder, or the box of its mass
-        and inertia (sides a^2 = 6 (I2 + I3 - I1) / m, ...), centred on the centre of mass."""
+        and inertia (sides a^2 = 6 (I2 + I3 - I1) / m, ...), centred on the centre of mass;
+        in 2D the corners (4, 2) of the rectangle of its box's a, b, the square around its
+        cylinder or the square of its moment (a^2 = 6 I / m), anticlockwise."""
+        if self.dim == 2:
+            if self.box is not None:
+                sides = np.array(self.box["size"][:2], float)
+            elif self.cylinder is not None:
+                sides = np.full(2, 2 * self.cylinder["radius"])
+            else:
+                mass, inertia = self.mass_properties()
+                sides = np.full(2, math.sqrt(6 * inertia / mass))
+            unit = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float) - 0.5
+            return unit * sides + np.asarray(self.centre_of_mass)
         if self.box is not None:
             sides = np.array(self.box["size"], float)
         elif self.cylinder is not None:
