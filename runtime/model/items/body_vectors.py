@@ -79,8 +79,9 @@ def check_frame_node(node: NodeRef | None, path: str, context: Context, needs: s
     kind = element_kind(context.node.bodies[node.body].element)
     if len(kind.first_gradients) < context.dim:
         raise SceneError(f"{path}.node: {needs} the node's frame, which needs its "
-                         f"{context.dim} gradients {', '.join(('r_x', 'r_y', 'r_z')[:context.dim])}"
-                         f" (a beam{context.dim}d node); node "
+                         f"{('two', 'three')[context.dim - 2]} gradients "
+                         f"{', '.join(('r_x', 'r_y', 'r_z')[:context.dim])} (a "
+                         f"{'beam2d' if context.dim == 2 else 'beam3d or plate3d'} node); node "
                          f"{show(node.spelled())} of body {show(node.body)} ({kind.name}) "
                          f"carries only {', '.join(kind.vectors)}: enough for an axis along "
                          "a gradient (body_revolute, body_universal), not for a frame")

@@ -84,7 +84,7 @@ class Sliding(NodeSide, Constraint):
         return joint
 
     def resolved(self, context: Context) -> Record:
-        return planar_defaults(self, context, ("point",))
+        return self if self.body is None else planar_defaults(self, context, ("point",))
 
     @property
     def target_key(self) -> str:
