@@ -38,6 +38,8 @@ from runtime.model.items.loads import (
 from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
     Acceleration,
+    BodyAngle,
+    BodyAngularVelocity,
     BodyPosition,
     BodyReaction,
     BodyVelocity,
@@ -75,7 +77,9 @@ from runtime.model.time_laws import (
 )
 
 __all__ = [
-    "Acceleration", "Arc", "Body", "BodyCylindrical", "BodyForce", "BodyPosition", "BodyPrismatic",
+    "Acceleration", "Arc", "Body", "BodyAngle", "BodyAngularVelocity", "BodyCylindrical",
+    "BodyForce",
+    "BodyPosition", "BodyPrismatic",
     "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque", "BodyUniversal", "BodyVelocity",
     "BodyWeld", "Bushing", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
     "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",

@@ -18,6 +18,8 @@ import scenes
 from runtime import (
     Arc,
     Body,
+    BodyAngle,
+    BodyAngularVelocity,
     BodyCylindrical,
     BodyForce,
     BodyPosition,
@@ -281,7 +283,7 @@ def test_registries_are_keyed_by_type():
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
                              "strain", "stress", "section", "body_position", "body_velocity",
-                             "body_reaction", "slide"]
+                             "body_angle", "body_angular_velocity", "body_reaction", "slide"]
     assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
@@ -540,8 +542,9 @@ def random_scene(rng: random.Random) -> Scene:
                                                else ("z", "norm"))))
         sensors.append(rng.choice(options))
 
-    rigid = _rigid_items(rng, chain, constraints, loads, sensors, held) \
-        if dim == 3 and rng.random() < 0.5 else []
+    rigid = [] if rng.random() < 0.5 else (
+        _rigid_items(rng, chain, constraints, loads, sensors, held) if dim == 3
+        else _planar_rigid_items(rng, chain, constraints, loads, sensors))
     static = Static(rng.randint(1, 100), _number(rng, 1e-12, 1e-4), rng.randint(1, 5)) \
         if rng.random() < 0.5 else None
     modal = Modal(rng.randint(1, 2), rng.choice(["reference", "static"])) \
@@ -623,6 +626,8 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     sensors.append(rng.choice([BodyPosition, BodyVelocity])(
         f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
         rng.choice(["x", "y", "z", "norm"]), _vector(rng, 3)))
+    sensors.append(BodyAngularVelocity(f"rw{len(sensors)}", rng.choice(["crank", "wheel"]),
+                                       rng.choice(["x", "y", "z", "norm"])))
     sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", rng.choice(["force", "moment"]),
                                 rng.choice(["x", "y", "z", "norm"]),
                                 rng.choice([None, joint])))
@@ -641,6 +646,55 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
                                 axis=_vector(rng, 3), time_law=_law(rng)))
         return [crank, wheel, bob, on_node, bead, hub]
     return [crank, wheel, bob, on_node, bead]
+
+
+def _planar_rigid_items(rng: random.Random, chain: list, constraints: list, loads: list,
+                        sensors: list) -> list:
+    """The rigid items of a 2D scene: a crank (a shape or mass and inertia about z; an
+    angle or a rotation) pinned to the chain's last node, a wheel on a pin to the ground
+    (its angle driven, or not), a particle sliding on the ground or the wheel, a point mass
+    on a node; a body force, a motor torque and a spring-damper; the body sensors."""
+    end = chain[-1]
+    tip = end.node_position(end.n_nodes - 1)
+    angle = _number(rng, -3, 3)
+    pose = rng.choice([{"angle": angle}, {"rotation": (
+        (math.cos(angle), -math.sin(angle)), (math.sin(angle), math.cos(angle)))}])
+    shape = rng.choice([{"box": {"size": [_number(rng, 0.1, 1.0) for _ in range(3)]},
+                         "density": _number(rng, 100, 9000)},
+                        {"mass": _number(rng, 0.1, 10), "inertia": _number(rng, 0.01, 1)}])
+    crank = RigidBody("crank", position=tip, centre_of_mass=_vector(rng, 2, 0.2),
+                      velocity=_vector(rng, 2) if rng.random() < 0.5 else None,
+                      angular_velocity=_number(rng, -5, 5) if rng.random() < 0.5 else None,
+                      **pose, **shape)
+    wheel = RigidBody("wheel", mass=_number(rng, 0.1, 10), inertia=_number(rng, 0.01, 1),
+                      position=_vector(rng, 2, 5.0))
+    bob = PointMass("bob", _number(rng, 0.1, 5), position=_vector(rng, 2, 5.0),
+                    velocity=_vector(rng, 2))
+    on_node = PointMass("lump", _number(rng, 0.1, 5), node=NodeRef(chain[0].name, 0))
+    joint = len(constraints)
+    constraints.append(rng.choice([BodySpherical, BodyRevolute])(
+        body="crank", node=f"{end.name}:-1"))
+    constraints.append(BodyRevolute(body="wheel", point=_vector(rng, 2), angle=rng.choice(
+        [None, SpinUp(_number(rng, -9, 9), _number(rng, 0.1, 2))])))
+    constraints.append(BodyPrismatic(body="bob", axis=_vector(rng, 2), displacement=rng.choice(
+        [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]),
+        **rng.choice([{}, {"other": "wheel"}])))
+    loads.append(BodyForce(body="crank", force=_vector(rng, 2, 10), point=_vector(rng, 2)))
+    loads.append(BodyTorque(body="wheel", torque=_number(rng, -10, 10), time_law=_law(rng)))
+    loads.append(SpringDamper(End(body="bob"), rng.choice([
+        End(anchor=_vector(rng, 2, 9.0)), End(node=NodeRef(chain[0].name, 0)),
+        End(body="wheel", point=_vector(rng, 2))]), _number(rng, 0, 1e4),
+        _number(rng, 0, 10), rng.choice([None, _number(rng, 0.1, 2)])))
+    sensors.append(rng.choice([BodyPosition, BodyVelocity])(
+        f"rb{len(sensors)}", rng.choice(["crank", "wheel", "bob", "lump"]),
+        rng.choice(["x", "y", "norm"]), _vector(rng, 2)))
+    sensors.append(BodyAngle(f"ra{len(sensors)}", rng.choice(["crank", "wheel"])))
+    sensors.append(BodyAngularVelocity(f"rw{len(sensors)}", rng.choice(["crank", "wheel"]),
+                                       rng.choice(["z", "norm"])))
+    quantity = rng.choice(["force", "moment"])
+    sensors.append(BodyReaction(f"rr{len(sensors)}", "crank", quantity, rng.choice(
+        ["x", "y", "norm"] if quantity == "force" else ["z", "norm"]), rng.choice([None, joint])))
+    return [crank, wheel, bob, on_node]
 
 
 def _point_sensors(rng: random.Random, name: str, body: Body, dim: int, plate) -> list:

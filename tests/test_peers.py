@@ -74,8 +74,9 @@ def test_slider_crank_peer_starts_as_the_shipped_scene_and_moves_as_our_mechanis
     and velocities, and its slider follows ours (rigid flywheel in natural coordinates
     driven by a rheonomic row, beam3d rod, nonlinear joints) to 2e-6 of the crank radius
     over the scene's 0.7 s, and to 1e-9 m with our rod of cable3d elements (Exudyn's
-    element in 3D): two codes sharing nothing, a nearly rigid aluminium rod."""
-    from runtime.studies.bench_solvers import _cable_rod
+    element in 3D) and with the 2D scene (planar crank, cable2d rod, 2D slider): two codes
+    sharing nothing, a nearly rigid aluminium rod."""
+    from runtime.studies.bench_solvers import cable_rod
 
     scene = load_scene(SCENES / "slider_crank.toml")
     rod = next(body for body in scene.bodies if body.name == "rod")
@@ -92,8 +93,11 @@ def test_slider_crank_peer_starts_as_the_shipped_scene_and_moves_as_our_mechanis
     t, x = peer.history
     assert t[-1] == pytest.approx(scene.dynamic.t_end)
     assert np.ptp(x) > 1.9 * peers.SLIDER_CRANK["radius"]     # the slider's whole stroke
+    planar = load_scene(SCENES / "slider_crank_2d.toml")
+    planar = dataclasses.replace(planar, dynamic=dataclasses.replace(
+        planar.dynamic, output_every=every))
     for ours, tolerance in ((scene, 2e-6 * peers.SLIDER_CRANK["radius"]),
-                            (_cable_rod(scene), 1e-9)):
+                            (cable_rod(scene), 1e-9), (planar, 1e-9)):
         result = run_scene(ours, progress=False)
         assert result.status == "ok"
         difference = np.interp(t, result.sensors["t"], result.sensors["slider_x"]) - x
@@ -107,7 +111,7 @@ def test_four_bar_peer_swings_its_rocker_as_our_linkage():
     rad with the shipped beam3d coupler and to 1e-9 rad with a cable3d one (7.6e-10 and
     3.2e-11 measured)."""
     from runtime.model.model import Model
-    from runtime.studies.bench_solvers import _cable_rod
+    from runtime.studies.bench_solvers import cable_rod
 
     scene = load_scene(SCENES / "four_bar.toml")
     coupler = next(body for body in scene.bodies if body.name == "coupler")
@@ -119,7 +123,7 @@ def test_four_bar_peer_swings_its_rocker_as_our_linkage():
     t, angle = peer.history
     assert t[-1] == pytest.approx(scene.dynamic.t_end)
     assert np.ptp(angle) > 1.0
-    cable = _cable_rod(dataclasses.replace(scene, sensors=()), "coupler")
+    cable = cable_rod(dataclasses.replace(scene, sensors=()), "coupler")
     for ours, tolerance in ((scene, 1e-8), (cable, 1e-9)):
         result = run_scene(ours, progress=False, store_states=True)
         assert result.status == "ok"

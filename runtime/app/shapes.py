@@ -41,6 +41,7 @@ from runtime.app.result import Modes, Observer
 from runtime.kernels.kind import ElementKind
 from runtime.kernels.loader import kernel_family
 from runtime.model.items import material_points as material
+from runtime.model.items.rigid import natural_map
 from runtime.model.model import BodyMesh, Model
 from runtime.progress import Bar
 
@@ -105,16 +106,24 @@ class Shape:
             outline += _polylines(first + points[:, _grid_loop(fractions)])
             node_points.append(first + nodes)
             first += count
-        for rigid in model.rigid.values():    # rigid bodies: their box (hexahedron)
-            if not hasattr(rigid.item, "extent"):
+        # per 2D rigid body: its coordinates (k,), the maps (corners, 2, k) of its corners
+        # (``natural_map``: v = perp(u) is no coordinate, so no weights), their points
+        self._planar: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        for rigid in model.rigid.values():    # rigid bodies: their box (hexahedron; a
+            if not hasattr(rigid.item, "extent"):                   # rectangle in 2D)
                 continue
-            corners = rigid.item.extent()                       # (8, 3) body coordinates
-            values = np.column_stack([np.ones(8), corners])     # natural_map's weights
-            points = first + np.arange(8)[None, :]
-            self._bodies.append((rigid.dofs[None, :], values, points))
-            cells.setdefault(CELL_TYPES[3], []).append(points)
-            outline += _polylines(points[:, _BOX_EDGES])
-            first += 8
+            corners = rigid.item.extent()                # (8, 3) | (4, 2) body coordinates
+            points = first + np.arange(len(corners))[None, :]
+            if model.dim == 3:
+                values = np.column_stack([np.ones(8), corners])     # natural_map's weights
+                self._bodies.append((rigid.dofs[None, :], values, points))
+                outline += _polylines(points[:, _BOX_EDGES])
+            else:
+                self._planar.append((rigid.dofs, np.array([natural_map(c) for c in corners]),
+                                     points[0]))
+                outline += _polylines(points[:, [0, 1, 2, 3, 0]])
+            cells.setdefault(CELL_TYPES[model.dim], []).append(points)
+            first += len(corners)
         self.points = first
         self.cells = [(name, np.concatenate(blocks)) for name, blocks in cells.items()]
         self.node_points = np.concatenate(node_points) if node_points else np.zeros(0, int)
@@ -128,6 +137,8 @@ class Shape:
             e = q[dofs].reshape(dofs.shape[0], values.shape[1], self.dim)
             samples = np.einsum("pk,mkd->mpd", values, e)       # (elements, samples, dim)
             result[points.ravel(), :self.dim] = samples.reshape(-1, self.dim)
+        for dofs, maps, points in self._planar:
+            result[points, :2] = maps @ q[dofs]
         return result
 
     def fields(self, q: np.ndarray) -> dict[str, np.ndarray]:

@@ -269,7 +269,7 @@ class Model:
                 self.node_index(rigid.item.node), "r")
             rows.append(np.repeat(dofs, dofs.size))
             cols.append(np.tile(dofs, dofs.size))
-            vals.append((mass if rigid.dofs.size else rigid.item.mass * np.eye(3)).ravel())
+            vals.append((mass if rigid.dofs.size else rigid.item.mass * np.eye(dofs.size)).ravel())
         self.mass = scipy.sparse.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(self.size, self.size))
@@ -669,13 +669,13 @@ class Model:
         for name, rigid in self.rigid.items():
             if (body is not None and name != body) or not rigid.dofs.size:
                 continue
-            vectors = self.reference[rigid.dofs].reshape(-1, 3)    # a point (, its axes)
+            vectors = self.reference[rigid.dofs].reshape(-1, self.dim)   # a point (, its axes)
             part = np.zeros_like(vectors)
             if translation is not None:
                 part[0] += np.asarray(translation, float)
             if rotation is not None:
                 arms = vectors.copy()
-                arms[0] -= np.zeros(3) if about is None else np.asarray(about, float)
+                arms[0] -= np.zeros(self.dim) if about is None else np.asarray(about, float)
                 part += _cross(rotation, arms)
             field[rigid.dofs] = part.ravel()
         return field
@@ -697,12 +697,12 @@ class Model:
         return velocities
 
     def rigid_point(self, name: str, point: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
-        """(coordinates (k,), map (3, k)) of the position of the body point ``point`` (body
+        """(coordinates (k,), map (dim, k)) of the position of the body point ``point`` (body
         coordinates, m) of the rigid item ``name``: a rigid body's natural coordinates, a
         particle's position, or the node of a point mass on a node."""
         rigid = self.rigid[name]
         if not rigid.dofs.size:
-            return self.node_dofs(self.node_index(rigid.item.node), "r"), np.eye(3)
+            return self.node_dofs(self.node_index(rigid.item.node), "r"), np.eye(self.dim)
         return rigid.dofs, rigid.item.point_map(point)
 
     def free_motions(self, tolerance: float = 1e-12) -> list[str]:

@@ -444,6 +444,14 @@ def _output(data: Any) -> Output:
         (f.name for f in dataclasses.fields(Output)), boolean)))
 
 
+def rigid_dimension(tables: list[tuple[int, dict]]) -> int:
+    """The dimension of a scene of rigid items only (``tables``: (index in [[body]],
+    table)): 2 when one of them has a ``position`` of two numbers, else 3."""
+    planar = any(isinstance(raw.get("position"), list) and len(raw["position"]) == 2
+                 for _, raw in tables)
+    return 2 if planar else 3
+
+
 def _rigid_bodies(tables: list[tuple[int, dict]], bodies: list[Body],
                   context: Context) -> tuple[RigidItem, ...]:
     """The rigid items (rigid bodies, point masses) of the ``[[body]]`` tables with a
@@ -524,7 +532,8 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     for i, body in enumerate(bodies):   # element sizes once the counts are known to fit
         body.placement.check_counts(body.counts, f"body[{i}]")
         _check_initial_motion(body, f"body[{i}]", materials[body.material].rho)
-    context = Context(bodies[0].dim if bodies else 3, Nodes(tuple(bodies)),
+    context = Context(bodies[0].dim if bodies else rigid_dimension(rigid_tables),
+                      Nodes(tuple(bodies)),
                       None if source == "<scene>" else str(Path(source).resolve().parent))
     rigid_bodies = _rigid_bodies(rigid_tables, bodies, context)
     context = dataclasses.replace(context, rigid={r.name: r for r in rigid_bodies})

@@ -74,8 +74,11 @@ class Scene:
 
     @property
     def dim(self) -> int:
-        """Spatial dimension shared by every body (2 or 3; rigid bodies are 3D)."""
-        return self.bodies[0].dim if self.bodies else 3
+        """Spatial dimension shared by every body (2 or 3; a scene of rigid items only has
+        theirs: ``runtime.model.parse.rigid_dimension``)."""
+        if self.bodies:
+            return self.bodies[0].dim
+        return len(self.rigid_bodies[0].position) if self.rigid_bodies else 3
 
     def body(self, name: str) -> Body:
         """The body called ``name`` (KeyError otherwise)."""

@@ -479,10 +479,10 @@ def registry(*classes: type[Record]) -> dict[str, type[Record]]:
     return {cls.type: cls for cls in classes}
 
 
-def unit_axis(value: Any, path: str) -> tuple[float, ...]:
-    """A non-zero 3D axis, normalised (an axis already of unit length to 1e-12 is kept as it
-    is, so that reading a written scene gives the same numbers)."""
-    axis = vector(value, path, 3, "an axis is 3D")
+def unit_axis(value: Any, path: str, dim: int = 3) -> tuple[float, ...]:
+    """A non-zero axis of ``dim`` components, normalised (an axis already of unit length to
+    1e-12 is kept as it is, so that reading a written scene gives the same numbers)."""
+    axis = vector(value, path, dim, f"an axis in {dim}D")
     norm = math.hypot(*axis)
     if norm == 0.0:
         raise SceneError(f"{path}: expected a non-zero axis, got {show(value)}")

@@ -57,7 +57,7 @@ def modal_shapes(model: Model, q: np.ndarray, modes: int,
     shapes[:, model.free] = vectors.T
     # positions: the nodes', and the origins of rigid bodies and free point masses
     positions = np.concatenate([model.position_dofs().ravel()] + [
-        rigid.dofs[:3] for rigid in model.rigid.values() if rigid.dofs.size])
+        rigid.dofs[:model.dim] for rigid in model.rigid.values() if rigid.dofs.size])
     for shape in shapes:
         largest = shape[positions][np.argmax(np.abs(shape[positions]))]
         if largest != 0:

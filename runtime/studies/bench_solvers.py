@@ -6,7 +6,8 @@ Tables (Markdown):
 
 1. the paper's cantilever (2/5/10 beam3d, 4 s, trapezoidal, h = 1e-3), rotating beam
    (10 beam2d, 20 s, generalized-alpha rho_inf = 0.8, h = 1e-3) and the shipped
-   slider-crank (rigid crank, 8-element beam3d or cable3d rod, slider, nonlinear joints):
+   slider-crank (rigid crank, 8-element beam3d or cable3d rod, slider, nonlinear joints;
+   and its 2D scene, cable2d rod):
    simulate time of each engine and Newton mode, the same run with the quadrature method
    (the paper's "without invariants"), and Exudyn (``runtime.studies.peers``, when
    installed) with modified and full Newton; min and median of the repeats, and ratios to
@@ -152,7 +153,7 @@ def whole_run_cases(quick: bool = False) -> list[Case]:
     return cases + _slider_crank_cases(quick, with_peer) + _four_bar_cases(quick, with_peer)
 
 
-def _cable_rod(scene: Scene, name: str = "rod") -> Scene:
+def cable_rod(scene: Scene, name: str = "rod") -> Scene:
     """The mechanism with its flexible body ``name`` (the slider-crank's rod, the four-bar's
     coupler) of cable3d elements (the peer's element kind, in 3D), hinged to the rigid
     bodies by spherical joints (a cable node has no frame for the revolute's axis; the
@@ -169,12 +170,13 @@ def _cable_rod(scene: Scene, name: str = "rod") -> Scene:
 
 def _slider_crank_cases(quick: bool, with_peer: bool) -> list[Case]:
     """The shipped slider-crank (rigid flywheel crank, 8 beam3d rod, point-mass slider, the
-    nonlinear joints), the same with a cable3d rod, and Exudyn's (RigidBody2D, ANCFCable2D
-    rod, MassPoint2D)."""
+    nonlinear joints), the same with a cable3d rod, its 2D scene (planar rigid crank, 8
+    cable2d rod, 2D slider: ``scenes/slider_crank_2d.toml``), and Exudyn's (RigidBody2D,
+    ANCFCable2D rod, MassPoint2D)."""
     t_end = 0.05 if quick else 0.7
-    scene = _scene("slider_crank", t_end=t_end)
-    scene = dataclasses.replace(scene, sensors=tuple(s for s in scene.sensors
-                                                     if s.name == "slider_x"))
+    scene, planar = (dataclasses.replace(s, sensors=tuple(
+        x for x in s.sensors if x.name == "slider_x"))
+        for s in (_scene(name, t_end=t_end) for name in ("slider_crank", "slider_crank_2d")))
     settings = scene.dynamic
     table = (f"slider-crank, rigid crank, 8-element rod, slider, {t_end:g} s, "
              f"generalized-alpha rho_inf = {settings.rho_inf:g}, h = {settings.step:g}")
@@ -182,9 +184,12 @@ def _slider_crank_cases(quick: bool, with_peer: bool) -> list[Case]:
                                                           tip="slider_x"))
              for engine, newton in (("compiled", "full"), ("compiled", "modified"),
                                     ("compiled", "auto"), ("python", "full"))]
-    cables = _cable_rod(scene)
+    cables = cable_rod(scene)
     cases += [Case(table, f"compiled {newton} gram, cable3d rod",
                    _ours(cables, "compiled", newton, tip="slider_x"))
+              for newton in NEWTON_MODES]
+    cases += [Case(table, f"compiled {newton} gram, 2D cable2d rod",
+                   _ours(planar, "compiled", newton, tip="slider_x"))
               for newton in NEWTON_MODES]
     if with_peer:
         cases += [Case(table, f"Exudyn RigidBody2D + ANCFCable2D {newton}", _exudyn(
@@ -208,7 +213,7 @@ def _four_bar_cases(quick: bool, with_peer: bool) -> list[Case]:
     cases = [Case(table, f"compiled {newton} gram", _ours(scene, "compiled", newton,
                                                           tip="rocker_tip_y"))
              for newton in NEWTON_MODES]
-    cables = _cable_rod(scene, "coupler")
+    cables = cable_rod(scene, "coupler")
     cases += [Case(table, f"compiled {newton} gram, cable3d coupler",
                    _ours(cables, "compiled", newton, tip="rocker_tip_y"))
               for newton in NEWTON_MODES]

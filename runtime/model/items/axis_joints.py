@@ -52,7 +52,8 @@ class AxisJoint(NodeSide, Constraint):
     the ``node`` (neither: the ground)."""
 
     dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
+    dims_message: ClassVar[str] = ("cylindrical and universal joints are 3D (3D scenes only); "
+                                   "in 2D a body_revolute or a body_prismatic")
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0))

@@ -57,7 +57,7 @@ class ModelView(Protocol):
     rigid: dict[str, Any]
 
     def rigid_point(self, name: str, point: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
-        """(coordinates (k,), map (3, k)) of the position of a rigid item's body point."""
+        """(coordinates (k,), map (dim, k)) of the position of a rigid item's body point."""
 
     def node_index(self, ref: NodeRef) -> int:
         """Global node index of a scene node reference."""

@@ -18,6 +18,13 @@ prismatic joint's ``displacement`` law d(t) the row a . (r_P - r_Q) - d(t) = 0; 
 coefficients are driver coordinates of the model (``runtime.model.holonomic.DrivenBlock``).
 The prismatic joint slides on the ground or, with ``other``, on another rigid body, or,
 with ``node``, on a node's frame (``runtime.model.items.body_vectors``).
+
+In 2D scenes (planar natural coordinates, ``runtime.model.items.rigid``) the same rows are
+written for two components: a spherical joint and a revolute joint are the same pin (2
+rows; the axis is z), the revolute's ``angle`` drives the rotation about z by the rows
+[u . u', u . v'] = [cos phi, sin phi], a prismatic joint has one row across its axis and,
+for a rigid body, one rotation lock, a weld ties each of the node's gradients to a fixed
+combination of the body's u and v = perp(u) (2 rows per gradient).
 """
 
 from __future__ import annotations
@@ -32,7 +39,7 @@ from runtime.model.holonomic import DrivenBlock, Driver, QuadraticBlock
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, NodeSide, normals_of
-from runtime.model.items.rigid import RigidBody, rigid_key
+from runtime.model.items.rigid import PERP, RigidBody, planar_defaults, rigid_key
 from runtime.model.schema import (
     Context,
     NodeRef,
@@ -54,7 +61,7 @@ MOTION_START = 1e-12
 
 
 def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return vector(value, path, 3, "a point in body coordinates, m")
+    return vector(value, path, context.dim, f"a point in body coordinates, m, {context.dim}D")
 
 
 def _axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -75,8 +82,6 @@ class BodySpherical(NodeSide, Constraint):
     """A point of a rigid ``body`` held at a point (module docstring): shared position."""
 
     type: ClassVar[str] = "body_spherical"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     node: NodeRef | str | None = key(node_key, None)
@@ -104,6 +109,9 @@ class BodySpherical(NodeSide, Constraint):
                              f"\"rigid\"), got the point mass {show(joint.body)}")
         return joint
 
+    def resolved(self, context: Context) -> Record:
+        return planar_defaults(self, context, ("point",) if self.other is None
+                               else ("point", "other_point"))
 
     @property
     def target_key(self) -> str:
@@ -122,9 +130,9 @@ class BodySpherical(NodeSide, Constraint):
         return model.rigid_point(self.body, self.point)
 
     def _other_side(self, model: ModelView) -> tuple[np.ndarray, np.ndarray] | None:
-        """(coordinates, map (3, k)) of the other point, None for the ground."""
+        """(coordinates, map (dim, k)) of the other point, None for the ground."""
         if self.node is not None:
-            return model.node_dofs(model.node_index(self.node), "r"), np.eye(3)
+            return model.node_dofs(model.node_index(self.node), "r"), np.eye(model.dim)
         if self.other is not None:
             return model.rigid_point(self.other, self.other_point)
         return None
@@ -135,11 +143,11 @@ class BodySpherical(NodeSide, Constraint):
         if other is None:      # r_P = its place at t = 0: linear rows with a constant
             place = point @ model.reference[dofs]
             built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
-                                               np.zeros((3, dofs.size, dofs.size)), point,
-                                               -place))
+                                               np.zeros((point.shape[0], dofs.size,
+                                                         dofs.size)), point, -place))
             return
         other_dofs, other_point = other
-        for c in range(3):
+        for c in range(point.shape[0]):
             row: dict[int, float] = {}
             for index, value in zip(dofs, point[c], strict=True):
                 if value != 0.0:
@@ -170,8 +178,11 @@ def angle_forms(model: ModelView, body: str, axis: tuple[float, ...], side: vect
     [cos phi, sin phi] (times the lengths of the vectors): e a body vector normal to the
     axis, e' and f' = a x e' the side's vectors that are e and a x e at t = 0: fixed on the
     ground (linear rows), fixed combinations of another body's axes or of a node's
-    gradients (bilinear rows; ``body_vectors.direction``)."""
-    reference = normals_of(model.rigid[body].item.frame @ np.asarray(axis))  # e', f' at t = 0
+    gradients (bilinear rows; ``body_vectors.direction``).  In 2D (axis z) e = u, and e',
+    f' are the body's u and v at t = 0."""
+    frame = model.rigid[body].item.frame
+    reference = (normals_of(frame @ np.asarray(axis)) if model.dim == 3
+                 else frame.T)                                       # e', f' at t = 0
     mine = vectors.direction(model, body, reference[0])
     return vectors.dot_rows(owner, [(mine, vectors.direction(
         model, side, vector, f"{owner}: the reference direction")) for vector in reference])
@@ -192,7 +203,8 @@ class BodyRevolute(BodySpherical):
     docstring)."""
 
     type: ClassVar[str] = "body_revolute"
-    axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0))
+    axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0),
+                                  only_3d="a 2D revolute joint turns about z")
     angle: Law | None = key(_motion_key("an angle in rad"), None)
 
     def drivers(self) -> tuple[Driver, ...]:
@@ -217,6 +229,8 @@ class BodyRevolute(BodySpherical):
 
     def _align(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
+        if model.dim == 2:      # a pin: the axis is z on both sides
+            return
         body = model.rigid[self.body]
         dofs = body.dofs
         frame = body.item.frame
@@ -238,7 +252,7 @@ class BodyRevolute(BodySpherical):
 
 
 def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return unit_axis(value, path)
+    return unit_axis(value, path, context.dim)
 
 
 @dataclass(frozen=True)
@@ -256,8 +270,6 @@ class BodyPrismatic(NodeSide, Constraint):
     rheonomic row)."""
 
     type: ClassVar[str] = "body_prismatic"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
@@ -283,6 +295,8 @@ class BodyPrismatic(NodeSide, Constraint):
     def drivers(self) -> tuple[Driver, ...]:
         return () if self.displacement is None else (Driver(self.displacement),)
 
+    def resolved(self, context: Context) -> Record:
+        return planar_defaults(self, context, ("point", "axis"))
 
     @property
     def target_key(self) -> str:
@@ -294,9 +308,9 @@ class BodyPrismatic(NodeSide, Constraint):
             return
         dofs, position = model.rigid_point(self.body, self.point)
         normals = normals_of(np.asarray(self.axis))
-        rows = normals @ position                                   # (2, k)
+        rows = normals @ position                                   # (dim - 1, k)
         built.blocks.append(QuadraticBlock(f"{self.type} of {self.body}", dofs,
-                                           np.zeros((2, dofs.size, dofs.size)), rows,
+                                           np.zeros((len(rows), dofs.size, dofs.size)), rows,
                                            -rows @ model.reference[dofs]))
         if self.displacement is not None:   # a . (r_P - r_P0) - d(t) = 0
             along = np.asarray(self.axis) @ position
@@ -308,7 +322,12 @@ class BodyPrismatic(NodeSide, Constraint):
                 QuadraticBlock(owner, dofs, zero, np.zeros((1, dofs.size)), -np.ones(1))),
                 (-1, int(built.drivers[0]))))
         rigid = model.rigid[self.body]
-        if rigid.dofs.size != 12:
+        if not isinstance(rigid.item, RigidBody):
+            return
+        if model.dim == 2:                                       # u . v0 = 0
+            v0 = PERP @ model.reference[rigid.dofs[2:]]
+            built.rows.append({int(rigid.dofs[2 + c]): float(v0[c]) for c in range(2)
+                               if v0[c] != 0.0})
             return
         axes = model.reference[rigid.dofs[3:]].reshape(3, 3)     # u0, v0, w0
         for a, b in ((0, 1), (1, 2), (2, 0)):                   # e_a . e_b0 = 0
@@ -320,7 +339,7 @@ class BodyPrismatic(NodeSide, Constraint):
         side = vectors.side_of(self)
         owner = f"{self.type} of {self.body} on {side}"
         axis = np.asarray(self.axis)
-        turns = model.rigid[self.body].dofs.size == 12       # a rigid body, not a point mass
+        turns = isinstance(model.rigid[self.body].item, RigidBody)    # not a point mass
         built.blocks.append(vectors.frame_rows(model, self.body, self.point, side,
                                                normals_of(axis), turns, owner))
         if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
@@ -338,8 +357,9 @@ class BodyWeld(BodySpherical):
     """A rigid connection of a rigid body and a ``node`` of a meshed body (the node's
     section turns with the body, as a clamp on a hub that moves): shared position, and each
     of the node's gradient vectors a fixed combination of the body's axes,
-    ``r_k = sum_a c_ka e_a`` with c_ka = e_a0 . r_k0 at t = 0 (linear rows: 3 per vector).
-    The node keeps its reference section's shape and size (its gradients do not stretch)."""
+    ``r_k = sum_a c_ka e_a`` with c_ka = e_a0 . r_k0 at t = 0 (linear rows: dim per vector;
+    the body direction of ``body_vectors.direction``).  The node keeps its reference
+    section's shape and size (its gradients do not stretch)."""
 
     type: ClassVar[str] = "body_weld"
 
@@ -356,16 +376,14 @@ class BodyWeld(BodySpherical):
 
     def apply(self, model: ModelView, built: Built) -> None:
         super().apply(model, built)
-        body = model.rigid[self.body]
-        axes = model.reference[body.dofs[3:]].reshape(3, 3)          # e_a0 (rows)
         node = model.node_index(self.node)
         for name in model.node_vectors(node):
             if name == "r":
                 continue
             gradient = model.node_dofs(node, name)
-            coefficients = axes @ model.reference[gradient]           # c_a = e_a0 . r_k0
-            for c in range(3):
-                row = {int(body.dofs[3 + 3 * a + c]): float(coefficients[a])
-                       for a in range(3) if coefficients[a] != 0.0}
+            mine = vectors.direction(model, self.body, model.reference[gradient])
+            for c, coefficients in enumerate(mine.map):             # sum_a c_a e_a - r_k
+                row = {int(i): float(v) for i, v in zip(mine.dofs, coefficients, strict=True)
+                       if v != 0.0}
                 row[int(gradient[c])] = -1.0
                 built.rows.append(row)

@@ -4,9 +4,9 @@ coordinates, and constraint rows that are their dot products (quadratic blocks,
 
 A side is the ground (None), a rigid body (its name) or a node of a meshed body (a
 ``NodeRef``).  In natural coordinates a body point and a body direction are linear in the
-body's 12 coordinates (``runtime.model.items.rigid.natural_map``); a node's point and
+body's 12 coordinates (``runtime.model.items.rigid.natural_map``; in 2D its 4); a node's point and
 direction are fixed combinations r + G c and G c of its position r and its gradients G
-(r_x, r_y, r_z: its section's frame, ``gradient_map``), c fixed at t = 0; a point or
+(r_x, r_y (, r_z): its section's frame, ``gradient_map``), c fixed at t = 0; a point or
 direction of the ground is a constant.  So ``a . b`` of two of them is a quadratic form
 with a constant Hessian: the rows of the joints whose axes are fixed in both sides
 (cylindrical, universal, prismatic off the ground) and the deflection of a bushing.
@@ -33,16 +33,14 @@ __all__ = ["Affine", "Side", "body_point", "check_frame_node", "combined", "dire
 #: the other side of a joint: the ground (None), a rigid body (its name) or a node
 Side = str | NodeRef | None
 
-#: a frame fixed in a node needs its gradients to span 3D: r_x, r_y and r_z
-FRAME_GRADIENTS = 3
 #: an axis given in the frame of a node with one gradient lies along it to this (cosine)
 ALONG = 1e-12
 
 
 @dataclass(frozen=True)
 class Affine:
-    """A vector ``map @ q[dofs] + constant`` (3,) of the coordinates ``dofs`` (k,), map
-    (3, k)."""
+    """A vector ``map @ q[dofs] + constant`` (dim,) of the coordinates ``dofs`` (k,), map
+    (dim, k)."""
 
     dofs: np.ndarray
     map: np.ndarray
@@ -53,7 +51,7 @@ class Affine:
                       np.hstack([self.map, -other.map]), self.constant - other.constant)
 
     def at(self, q: np.ndarray) -> np.ndarray:
-        """Its value (3,) at the coordinates q (size,)."""
+        """Its value (dim,) at the coordinates q (size,)."""
         return self.map @ q[self.dofs] + self.constant
 
 
@@ -74,14 +72,16 @@ def exclusive_sides(data: dict, path: str) -> None:
 
 def check_frame_node(node: NodeRef | None, path: str, context: Context, needs: str) -> None:
     """SceneError when the ``node`` (None: no node side) lacks the gradients of a frame
-    fixed in it (r_x, r_y and r_z spanning 3D; a 3D cable node's r_x fixes one direction
-    only); ``needs`` says what needs the frame, as "a body_prismatic holds"."""
+    fixed in it (r_x, r_y (, r_z) spanning the scene's space; a cable node's r_x fixes one
+    direction only); ``needs`` says what needs the frame, as "a body_prismatic holds"."""
     if node is None:
         return
     kind = element_kind(context.node.bodies[node.body].element)
-    if len(kind.first_gradients) < FRAME_GRADIENTS:
-        raise SceneError(f"{path}.node: {needs} the node's frame, which needs its three "
-                         f"gradients r_x, r_y, r_z (a beam3d or plate3d node); node "
+    if len(kind.first_gradients) < context.dim:
+        raise SceneError(f"{path}.node: {needs} the node's frame, which needs its "
+                         f"{('two', 'three')[context.dim - 2]} gradients "
+                         f"{', '.join(('r_x', 'r_y', 'r_z')[:context.dim])} (a "
+                         f"{'beam2d' if context.dim == 2 else 'beam3d or plate3d'} node); node "
                          f"{show(node.spelled())} of body {show(node.body)} ({kind.name}) "
                          f"carries only {', '.join(kind.vectors)}: enough for an axis along "
                          "a gradient (body_revolute, body_universal), not for a frame")
@@ -114,44 +114,46 @@ def side_axis(model: ModelView, side: Side, local: tuple[float, ...], what: str)
 
 def point(model: ModelView, side: Side, world: np.ndarray,
           what: str = "the joint's point") -> Affine:
-    """The point of the ``side`` (module docstring) that is at ``world`` (3,) at t = 0; on a
+    """The point of the ``side`` (module docstring) that is at ``world`` (dim,) at t = 0; on a
     node r + G c with G c the offset from the node at t = 0 (SceneError naming ``what``
     when the offset is not in the span of the node's gradients)."""
     world = np.asarray(world, float)
+    dim = world.size
     if side is None:
-        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), world)
+        return Affine(np.zeros(0, np.int64), np.zeros((dim, 0)), world)
     if isinstance(side, NodeRef):
         node = model.node_index(side)
         offset = world - model.reference[model.node_dofs(node, "r")]
         dofs, mapping = gradient_map(model, node, offset, f"{what}: its offset from the node")
-        start = 3 * model.node_vectors(node).index("r")
-        mapping[:, start:start + 3] += np.eye(3)
-        return Affine(dofs, mapping, np.zeros(3))
+        start = dim * model.node_vectors(node).index("r")
+        mapping[:, start:start + dim] += np.eye(dim)
+        return Affine(dofs, mapping, np.zeros(dim))
     rigid = model.rigid[side]
     local = rigid.item.frame.T @ (world - np.asarray(rigid.item.position))
-    return Affine(rigid.dofs, natural_map(local), np.zeros(3))
+    return Affine(rigid.dofs, natural_map(local), np.zeros(dim))
 
 
 def body_point(model: ModelView, body: str, local: tuple[float, ...]) -> Affine:
     """The point at body coordinates ``local`` of the rigid body or point mass ``body``."""
     dofs, mapping = model.rigid_point(body, local)
-    return Affine(dofs, mapping, np.zeros(3))
+    return Affine(dofs, mapping, np.zeros(mapping.shape[0]))
 
 
 def direction(model: ModelView, side: Side, world: np.ndarray,
               what: str = "the joint's direction") -> Affine:
-    """The direction fixed in the ``side`` (module docstring) that is ``world`` (3,) at
+    """The direction fixed in the ``side`` (module docstring) that is ``world`` (dim,) at
     t = 0; on a node a fixed combination G c of its gradients (SceneError naming ``what``
     when ``world`` is not in their span)."""
     world = np.asarray(world, float)
+    dim = world.size
     if side is None:
-        return Affine(np.zeros(0, np.int64), np.zeros((3, 0)), world)
+        return Affine(np.zeros(0, np.int64), np.zeros((dim, 0)), world)
     if isinstance(side, NodeRef):
         dofs, mapping = gradient_map(model, model.node_index(side), world, what)
-        return Affine(dofs, mapping, np.zeros(3))
+        return Affine(dofs, mapping, np.zeros(dim))
     rigid = model.rigid[side]
     local = rigid.item.frame.T @ world
-    return Affine(rigid.dofs, natural_map(local) - natural_map(np.zeros(3)), np.zeros(3))
+    return Affine(rigid.dofs, natural_map(local) - natural_map(np.zeros(dim)), np.zeros(dim))
 
 
 def dot_rows(owner: str, pairs: list[tuple[Affine, Affine]],
@@ -162,7 +164,7 @@ def dot_rows(owner: str, pairs: list[tuple[Affine, Affine]],
     k = dofs.size
 
     def spread(x: Affine) -> np.ndarray:
-        full = np.zeros((3, k))
+        full = np.zeros((x.map.shape[0], k))
         np.add.at(full.T, np.searchsorted(dofs, x.dofs), x.map.T)
         return full
 
@@ -192,7 +194,8 @@ def frame_rows(model: ModelView, body: str, local: tuple[float, ...], side: Side
     ``rotation`` (a rigid body) three more, the small rotation of the body's axes a_k
     relative to the side's directions b_k that are a_k at t = 0 (rad, the axial vector of
     the skew part of [a_i . b_j]: theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...; it changes
-    sign when the sides swap).  All 0 at t = 0, bilinear (linear to the ground)."""
+    sign when the sides swap; in 2D the one rotation about z, theta_3).  All 0 at t = 0,
+    bilinear (linear to the ground)."""
     here = body_point(model, body, local)
     slide = here - point(model, side, here.at(model.reference), f"{owner}: the point")
     pairs = [(slide, direction(model, side, d, f"{owner}: the direction")) for d in along]
@@ -202,11 +205,12 @@ def frame_rows(model: ModelView, body: str, local: tuple[float, ...], side: Side
     axes = model.rigid[body].item.frame.T                 # a_k at t = 0 (rows)
     mine = [direction(model, body, a) for a in axes]
     theirs = [direction(model, side, a, f"{owner}: the axis") for a in axes]
-    for i, j in ((1, 2), (2, 0), (0, 1)):                 # a_i . b_j and a_j . b_i
+    planes = ((1, 2), (2, 0), (0, 1)) if len(axes) == 3 else ((0, 1),)
+    for i, j in planes:                                   # a_i . b_j and a_j . b_i
         pairs += [(mine[i], theirs[j]), (mine[j], theirs[i])]
-    matrix = np.zeros((n + 3, n + 6))
+    matrix = np.zeros((n + len(planes), n + 2 * len(planes)))
     matrix[:n, :n] = np.eye(n)
-    for k in range(3):
+    for k in range(len(planes)):
         matrix[n + k, n + 2 * k], matrix[n + k, n + 1 + 2 * k] = 0.5, -0.5
     return combined(dot_rows(owner, pairs), matrix)
 

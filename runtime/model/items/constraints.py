@@ -213,7 +213,10 @@ class Joint(Constraint):
 
 
 def normals_of(axis: np.ndarray) -> np.ndarray:
-    """Two unit vectors (2, 3) normal to the unit ``axis`` and to each other."""
+    """Two unit vectors (2, 3) normal to the unit ``axis`` (3,) and to each other; in 2D
+    (axis (2,)) the one (1, 2) that is the axis turned by +90 degrees."""
+    if axis.size == 2:
+        return np.array([[-axis[1], axis[0]]])
     helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
     first = np.cross(axis, helper)
     first /= np.linalg.norm(first)
@@ -222,8 +225,8 @@ def normals_of(axis: np.ndarray) -> np.ndarray:
 
 def gradient_map(model: ModelView, node: int, vector: np.ndarray,
                  what: str) -> tuple[np.ndarray, np.ndarray]:
-    """(the node's coordinates (k,), map (3, k)) of the fixed combination ``G c`` of a 3D
-    node's gradient vectors G that is ``vector`` (3,) at the reference: it turns and
+    """(the node's coordinates (k,), map (dim, k)) of the fixed combination ``G c`` of a
+    node's gradient vectors G that is ``vector`` (dim,) at the reference: it turns and
     stretches with the node's section.  SceneError (``what`` names the vector) when
     ``vector`` is not in the span of the node's gradients."""
     names = [name for name in model.node_vectors(node) if is_first_gradient(name)]
@@ -234,10 +237,11 @@ def gradient_map(model: ModelView, node: int, vector: np.ndarray,
                          f"of the gradients {', '.join(names)} of the node (its section's "
                          "frame); choose an axis in it")
     dofs = model.node_dofs(node)
-    mapping = np.zeros((3, dofs.size))
+    dim = vector.size
+    mapping = np.zeros((dim, dofs.size))
     for k, name in enumerate(names):
-        start = model.node_vectors(node).index(name) * 3
-        mapping[:, start:start + 3] += combination[k] * np.eye(3)
+        start = model.node_vectors(node).index(name) * dim
+        mapping[:, start:start + dim] += combination[k] * np.eye(dim)
     return dofs, mapping
 
 

@@ -55,6 +55,7 @@ import numpy as np
 from runtime.model.holonomic import QuadraticBlock
 from runtime.model.items.follower import Patches
 from runtime.model.items.python_loads import MotionPatches
+from runtime.model.items.rigid import PERP
 
 __all__ = ["FORCE_LAWS", "BodyTorqueForce", "BushingForce", "CompiledForce",
            "SpringDamperForce", "TorsionalSpringForce"]
@@ -85,7 +86,7 @@ class CompiledForce:
 class SpringDamperForce:
     """The state force of a spring-damper of ``stiffness`` k (N/m), ``damping`` c (N s/m) and
     rest length ``length`` L0 (m) over the coordinates ``dofs`` (k,), with the map
-    ``difference`` D (3, k) and the constant ``offset`` d_0 (3,) of d = D x + d_0.  Reads
+    ``difference`` D (dim, k) and the constant ``offset`` d_0 (dim,) of d = D x + d_0.  Reads
     velocities (``reads_velocity``)."""
 
     reads_velocity = True
@@ -97,15 +98,17 @@ class SpringDamperForce:
         self.stiffness, self.damping, self.length = stiffness, damping, length
 
     def compiled(self) -> CompiledForce:
-        """Its data for the compiled step: the rows d = D x + d_0."""
-        k = self.dofs.shape[1]
+        """Its data for the compiled step: the rows d = D x + d_0, three of them (the step's
+        law is 3D: a 2D spring's third row is 0)."""
+        k, dim = self.dofs.shape[1], self.difference.shape[0]
         forms = QuadraticBlock("spring_damper", self.dofs[0], np.zeros((3, k, k)),
-                               self.difference, self.offset)
+                               np.vstack([self.difference, np.zeros((3 - dim, k))]),
+                               np.concatenate([self.offset, np.zeros(3 - dim)]))
         return CompiledForce("spring_damper", forms,
                              np.array([self.stiffness, self.damping, self.length]))
 
     def vector(self, q: np.ndarray) -> np.ndarray:
-        """d (3,) at the coordinates q (size,)."""
+        """d (dim,) at the coordinates q (size,)."""
         return self.difference @ q[self.dofs[0]] + self.offset
 
     def energy(self, q: np.ndarray) -> float:
@@ -121,13 +124,13 @@ class SpringDamperForce:
         if length == 0.0:
             raise ZeroDivisionError("a spring-damper of zero length has no direction")
         n = d / length
-        rate_vector = np.zeros(3) if v is None else D @ v[dofs]
+        rate_vector = np.zeros(D.shape[0]) if v is None else D @ v[dofs]
         rate = float(n @ rate_vector)
         f = self.stiffness * (length - self.length) + self.damping * rate
         force = -f * (D.T @ n)
         if not jacobian:
             return MotionPatches(self.dofs, force[None], None, None)
-        across = (np.eye(3) - np.outer(n, n)) / length
+        across = (np.eye(n.size) - np.outer(n, n)) / length
         inner = (self.stiffness * np.outer(n, n)
                  + self.damping * np.outer(n, rate_vector - n * rate) / length + f * across)
         d_q = -D.T @ inner @ D
@@ -242,16 +245,25 @@ class BodyTorqueForce:
     moment M = T sum_b n_b u_b turns with the body.  Its generalised force does the virtual
     work M . d theta of the rotations d u_a = d theta x u_a: ``Q_a = M x u_a / 2`` (then
     sum_a u_a x Q_a = M for an orthonormal frame), with the exact Jacobian
-    ``dQ_a/du_c = (T n_c [u_a]_x^T + delta_ac [M]_x) / 2``."""
+    ``dQ_a/du_c = (T n_c [u_a]_x^T + delta_ac [M]_x) / 2``.  In 2D ([r0, u] at ``dofs``
+    (4,), the torque about z, ``axis`` unused) d u = d theta perp(u): ``Q_u = T perp(u)``
+    (u . u = 1), linear, with the constant Jacobian T PERP."""
 
     def __init__(self, dofs: np.ndarray, axis: np.ndarray, torque: float) -> None:
         self.dofs = np.asarray(dofs, np.int64)[None, :]
         self.axis, self.torque = np.asarray(axis, float), float(torque)
+        self.planar = self.dofs.shape[1] == 4
 
     def compiled(self) -> CompiledForce:
         """Its data for the compiled step: Q itself, quadratic in the coordinates with the
-        Hessians H_i whose columns are the (linear) Jacobian at the unit coordinates."""
+        Hessians H_i whose columns are the (linear) Jacobian at the unit coordinates; in 2D
+        linear (no Hessians, the constant Jacobian)."""
         dofs = self.dofs[0]
+        if self.planar:
+            jacobian = self(np.zeros(int(dofs.max()) + 1), True).jacobian[0]
+            forms = QuadraticBlock("body_torque", dofs, np.zeros((4, 4, 4)), jacobian,
+                                   np.zeros(4))
+            return CompiledForce("direct", forms, np.zeros(0))
         hessians = np.empty((12, 12, 12))
         for column in range(12):
             unit = np.zeros(int(dofs.max()) + 1)
@@ -262,6 +274,11 @@ class BodyTorqueForce:
         return CompiledForce("direct", forms, np.zeros(0))
 
     def __call__(self, q: np.ndarray, jacobian: bool) -> Patches:
+        if self.planar:
+            d_q = np.zeros((4, 4))
+            d_q[2:, 2:] = self.torque * PERP
+            force = d_q @ q[self.dofs[0]]
+            return Patches(self.dofs, force[None], d_q[None] if jacobian else None)
         axes = q[self.dofs[0][3:]].reshape(3, 3)           # rows u_1, u_2, u_3
         moment = self.torque * (self.axis @ axes)         # M (3,)
         force = np.zeros(12)

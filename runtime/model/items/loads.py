@@ -35,7 +35,7 @@ from runtime.model.items.force_elements import (
     TorsionalSpringForce,
 )
 from runtime.model.items.python_loads import PythonForce, PythonFunction
-from runtime.model.items.rigid import check_rigid_bodies, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, planar_defaults, rigid_key
 from runtime.model.schema import (
     Context,
     EdgeRef,
@@ -269,21 +269,22 @@ class Gravity(Load):
 
 
 def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return vector(value, path, 3, "a point in body coordinates, m")
+    return vector(value, path, context.dim, f"a point in body coordinates, m, {context.dim}D")
 
 
 @dataclass(frozen=True)
 class BodyForce(Load):
-    """A force ``force`` (3,) in N, fixed in direction, at the point ``point`` (body
+    """A force ``force`` (dim,) in N, fixed in direction, at the point ``point`` (body
     coordinates, m) of the rigid body or point mass ``body``: the generalised force N^T f
     of the point's map (``runtime.model.items.rigid.natural_map``)."""
 
     type: ClassVar[str] = "body_force"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     force: tuple[float, ...] = key(_vector_key)
     point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def resolved(self, context: Context) -> Record:
+        return planar_defaults(self, context, ("point",))
 
     def nominal(self, model: ModelView) -> np.ndarray:
         dofs, point = model.rigid_point(self.body, self.point)
@@ -303,15 +304,15 @@ def _body_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]
 @dataclass(frozen=True)
 class BodyTorque(Load):
     """A torque ``torque`` (N m) times its ``time_law`` about the ``axis`` (body
-    coordinates, unit; default z) of the rigid body ``body``, turning with the body: a motor
-    on a body in a revolute joint about that axis (``runtime.model.items.force_elements``)."""
+    coordinates, unit; default z; 2D: about z, no axis) of the rigid body ``body``, turning
+    with the body: a motor on a body in a revolute joint about that axis
+    (``runtime.model.items.force_elements``)."""
 
     type: ClassVar[str] = "body_torque"
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     torque: float = key(_finite_key)
-    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0))
+    axis: tuple[float, ...] = key(_body_axis_key, (0.0, 0.0, 1.0),
+                                  only_3d="a 2D torque is about z")
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
@@ -334,8 +335,9 @@ class BodyTorque(Load):
 @dataclass(frozen=True)
 class End:
     """An end of a force element: a ``node`` of a meshed body, the point ``point`` (body
-    coordinates, m) of a rigid ``body``, or a fixed ``anchor`` (3,) in m.  TOML: "BODY:INDEX",
-    {body = "NAME", point = [x, y, z]} (point default the origin) or [x, y, z]."""
+    coordinates, m) of a rigid ``body``, or a fixed ``anchor`` (dim,) in m.  TOML:
+    "BODY:INDEX", {body = "NAME", point = [x, y(, z)]} (point default the origin) or
+    [x, y(, z)]."""
 
     node: NodeRef | None = None
     body: str | None = None
@@ -347,9 +349,10 @@ class End:
         if isinstance(value, str):
             return cls(node=node_key(value, path, context))
         if isinstance(value, list):
-            return cls(anchor=vector(value, path, 3, "an anchor point in m"))
+            return cls(anchor=vector(value, path, context.dim,
+                                     f"an anchor point in m, {context.dim}D"))
         if isinstance(value, dict) and set(value) <= {"body", "point"} and "body" in value:
-            point = _body_point_key(value.get("point", [0.0, 0.0, 0.0]), f"{path}.point",
+            point = _body_point_key(value.get("point", [0.0] * context.dim), f"{path}.point",
                                     context)
             return cls(body=rigid_key(value["body"], f"{path}.body", context), point=point)
         raise SceneError(f'{path}: expected a node "BODY:INDEX", a rigid body\'s point '
@@ -361,16 +364,20 @@ class End:
             return self.node.spelled()
         if self.anchor is not None:
             return list(self.anchor)
+        if not any(self.point):     # the origin, in the scene's dimension
+            return {"body": self.body}
         return {"body": self.body, "point": list(self.point)}
 
     def position(self, model: ModelView) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(coordinates (k,), map (3, k), constant (3,)) of its position."""
+        """(coordinates (k,), map (dim, k), constant (dim,)) of its position."""
+        dim = model.dim
         if self.node is not None:
-            return model.node_dofs(model.node_index(self.node), "r"), np.eye(3), np.zeros(3)
+            return (model.node_dofs(model.node_index(self.node), "r"), np.eye(dim),
+                    np.zeros(dim))
         if self.anchor is not None:
-            return np.zeros(0, int), np.zeros((3, 0)), np.asarray(self.anchor, float)
+            return np.zeros(0, int), np.zeros((dim, 0)), np.asarray(self.anchor, float)
         dofs, point = model.rigid_point(self.body, self.point)
-        return dofs, point, np.zeros(3)
+        return dofs, point, np.zeros(dim)
 
 
 def _end_key(value: Any, path: str, context: Context) -> End:
@@ -386,12 +393,10 @@ def _non_negative_key(value: Any, path: str, context: Context) -> float:
 
 @dataclass(frozen=True)
 class ForceElement(Load):
-    """A force element: a state load of 3D scenes with no nominal part, whose exact
-    Jacobians (``state_force``, ``runtime.model.items.force_elements``) couple its
-    coordinates in the model's pattern."""
+    """A force element: a state load with no nominal part, whose exact Jacobians
+    (``state_force``, ``runtime.model.items.force_elements``) couple its coordinates in the
+    model's pattern."""
 
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "force elements are 3D (3D scenes only)"
     load_factor: ClassVar[bool] = False
 
     @property
@@ -411,6 +416,9 @@ class RigidForceElement(ForceElement):
     """A force element on the rigid ``body`` and the rigid body ``other`` (or the ground):
     both must be rigid bodies (``joins``: what the message says it joins) and distinct."""
 
+    dims: ClassVar[tuple[int, ...]] = (3,)
+    dims_message: ClassVar[str] = ("torsional springs and bushings are 3D (3D scenes only); "
+                                   "in 2D a spring_damper")
     joins: ClassVar[str] = "joins rigid bodies"
 
     @classmethod
@@ -441,7 +449,7 @@ class SpringDamper(ForceElement):
         difference = np.hstack([map_b, -map_a])
         offset = const_b - const_a
         unique, inverse = np.unique(dofs, return_inverse=True)
-        merged = np.zeros((3, unique.size))
+        merged = np.zeros((model.dim, unique.size))
         np.add.at(merged.T, inverse, difference.T)
         rest = float(np.linalg.norm(merged @ model.reference[unique] + offset))
         return SpringDamperForce(unique, merged, offset, self.stiffness, self.damping,

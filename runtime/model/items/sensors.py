@@ -22,7 +22,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Joint
-from runtime.model.items.rigid import check_rigid_bodies, rigid_key
+from runtime.model.items.rigid import check_rigid_bodies, planar_defaults, rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
     Context,
@@ -199,7 +199,7 @@ class Velocity(Sensor):
 
 
 def _body_point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return vector(value, path, 3, "a point in body coordinates, m")
+    return vector(value, path, context.dim, f"a point in body coordinates, m, {context.dim}D")
 
 
 @dataclass(frozen=True)
@@ -210,11 +210,12 @@ class BodyPosition(Sensor):
     type: ClassVar[str] = "body_position"
     unit: ClassVar[str] = "m"
     energy: ClassVar[bool] = False
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     component: str = key(_component_key)
     point: tuple[float, ...] = key(_body_point_key, (0.0, 0.0, 0.0))
+
+    def resolved(self, context: Context) -> Record:
+        return planar_defaults(self, context, ("point",))
 
     def _of(self, model: ModelView, states: np.ndarray) -> np.ndarray:
         dofs, point = model.rigid_point(self.body, self.point)
@@ -233,6 +234,62 @@ class BodyVelocity(BodyPosition):
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return self._of(model, samples.v)
+
+
+@dataclass(frozen=True)
+class BodyAngle(Sensor):
+    """The angle (rad, in (-pi, pi]) of the 2D rigid body ``body``'s x axis u from the
+    global x axis, atan2(u_y, u_x)."""
+
+    type: ClassVar[str] = "body_angle"
+    unit: ClassVar[str] = "rad"
+    energy: ClassVar[bool] = False
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    dims_message: ClassVar[str] = ("a 3D body's orientation is no single angle; in 3D read "
+                                   "body_position of two of its points")
+    body: str = key(rigid_key)
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        check_rigid_bodies(sensor, path, context, "a body_angle reads a rigid body")
+        return sensor
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        u = samples.q[:, model.rigid[self.body].dofs[2:4]]
+        return np.arctan2(u[:, 1], u[:, 0])
+
+
+def _rotation_component_key(value: Any, path: str, context: Context) -> str:
+    return choice(value, path, ("x", "y", "z", "norm") if context.dim == 3 else ("z", "norm"),
+                  "component (a 2D rotation is about z)" if context.dim == 2 else "component")
+
+
+@dataclass(frozen=True)
+class BodyAngularVelocity(Sensor):
+    """Angular velocity (rad/s) of the rigid body ``body``, w = sum_a e_a x e_a' / 2 over
+    its axes e_a (u, v, w; in 2D u and v = perp(u)): exact for orthonormal axes (e_a' =
+    w x e_a).  One ``component`` (x | y | z | norm, global axes; in 2D z, the default, or
+    norm)."""
+
+    type: ClassVar[str] = "body_angular_velocity"
+    unit: ClassVar[str] = "rad/s"
+    energy: ClassVar[bool] = False
+    body: str = key(rigid_key)
+    component: str = key(_rotation_component_key, "z")
+
+    @classmethod
+    def parse(cls, data: dict, path: str, context: Context) -> Record:
+        sensor = super().parse(data, path, context)
+        check_rigid_bodies(sensor, path, context, "a body_angular_velocity reads a rigid body")
+        return sensor
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        rigid = model.rigid[self.body]
+        axes = rigid.item.axes(samples.q[:, rigid.dofs])
+        rates = rigid.item.axes(samples.v[:, rigid.dofs])
+        omega = sum(_cross3(axes[:, a], rates[:, a]) for a in range(axes.shape[1])) / 2
+        return _component(omega, self.component)
 
 
 def _body_key(value: Any, path: str, context: Context) -> str:
@@ -298,16 +355,7 @@ class Reaction(Sensor):
             raise SceneError(f'{path}: expected either node = "BODY:INDEX" or edge = '
                              f'"BODY:x=I" (a grid line of a rectangle body), got '
                              f"{' and '.join(given) if given else 'neither'}")
-        sensor = super().parse(data, path, context)
-        allowed = ("x", "y", "z", "norm") if context.dim == 3 else \
-            ("x", "y", "norm") if sensor.quantity == "force" else ("z", "norm")
-        if sensor.component not in allowed:
-            why = "a 2D moment is about z" if sensor.quantity == "moment" else \
-                "a 2D force has x and y"
-            raise SceneError(f"{path}.component: unknown component {show(sensor.component)} "
-                             f"of a {context.dim}D {sensor.quantity} ({why}); expected one of "
-                             f"{', '.join(allowed)}")
-        return sensor
+        return _checked_component(super().parse(data, path, context), path, context)
 
     def targets(self) -> list[NodeRef]:
         """The nodes whose reactions it sums."""
@@ -373,6 +421,20 @@ def _cross3(arm: np.ndarray, force: np.ndarray) -> np.ndarray:
     return out
 
 
+def _checked_component(sensor: Reaction | BodyReaction, path: str, context: Context) -> Record:
+    """The reaction ``sensor``, SceneError unless its component exists for its quantity in
+    the scene's dimension (a 2D force has x and y, a 2D moment z)."""
+    allowed = ("x", "y", "z", "norm") if context.dim == 3 else \
+        ("x", "y", "norm") if sensor.quantity == "force" else ("z", "norm")
+    if sensor.component not in allowed:
+        why = "a 2D moment is about z" if sensor.quantity == "moment" else \
+            "a 2D force has x and y"
+        raise SceneError(f"{path}.component: unknown component {show(sensor.component)} "
+                         f"of a {context.dim}D {sensor.quantity} ({why}); expected one of "
+                         f"{', '.join(allowed)}")
+    return sensor
+
+
 def _constraint_index_key(value: Any, path: str, context: Context) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
         raise SceneError(f"{path}: expected the index (0, 1, ...) of a [[constraint]] of "
@@ -386,14 +448,13 @@ class BodyReaction(Sensor):
     constraints exert on the rigid body ``body``: all of them, or the one ``constraint``
     (its index among the [[constraint]] tables), from the multipliers: the generalised force
     Q = -C^T lambda on the natural coordinates [r0, u, v, w] gives the force Q_r0 and the
-    moment sum_a e_a x Q_a (e_a = u, v, w; the body's own rigidity rows add none).  One
-    ``component`` (x | y | z | norm, the default) in global axes."""
+    moment sum_a e_a x Q_a (e_a = u, v, w; the body's own rigidity rows add none; in 2D,
+    on [r0, u], the moment about z u x Q_u).  One ``component`` (x | y | z | norm, the
+    default; a 2D moment is about z: z | norm) in global axes."""
 
     type: ClassVar[str] = "body_reaction"
     energy: ClassVar[bool] = False
     dynamics: ClassVar[bool] = True
-    dims: ClassVar[tuple[int, ...]] = (3,)
-    dims_message: ClassVar[str] = "rigid bodies are 3D (3D scenes only)"
     body: str = key(rigid_key)
     quantity: str = key(_quantity_key, "force")
     component: str = key(_any_component_key, "norm")
@@ -407,7 +468,7 @@ class BodyReaction(Sensor):
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         sensor = super().parse(data, path, context)
         check_rigid_bodies(sensor, path, context, "a body_reaction reads a rigid body")
-        return sensor
+        return _checked_component(sensor, path, context)
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         rigid = model.rigid[self.body]
@@ -416,10 +477,12 @@ class BodyReaction(Sensor):
         rows = None if self.constraint is None else model.constraint_multipliers[
             self.constraint]
         force = -_multiplier_force(model, samples, rigid.dofs, rows)
+        dim = model.dim
         if self.quantity == "force":
-            return _component(force[:, :3], self.component)
-        axes = samples.q[:, rigid.dofs[3:]].reshape(-1, 3, 3)
-        moment = sum(_cross3(axes[:, a], force[:, 3 + 3 * a:6 + 3 * a]) for a in range(3))
+            return _component(force[:, :dim], self.component)
+        vectors = samples.q[:, rigid.dofs].reshape(len(samples.q), -1, dim)[:, 1:]
+        moment = sum(_cross3(vectors[:, a], force[:, dim * (a + 1):dim * (a + 2)])
+                     for a in range(vectors.shape[1]))
         return _component(moment, self.component)
 
 
@@ -760,7 +823,8 @@ class ConstraintViolation(Sensor):
 SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
-    SectionForce, BodyPosition, BodyVelocity, BodyReaction, Slide)
+    SectionForce, BodyPosition, BodyVelocity, BodyAngle, BodyAngularVelocity, BodyReaction,
+    Slide)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 

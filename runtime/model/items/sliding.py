@@ -19,7 +19,7 @@ from runtime.model.errors import SceneError, show
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Constraint, NodeSide
 from runtime.model.items.load_points import shape_tables
-from runtime.model.items.rigid import rigid_key
+from runtime.model.items.rigid import planar_defaults, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 from runtime.model.sliding_rows import CentreLine, Normal, SlideError, SlidingBlock
 
@@ -46,7 +46,7 @@ def _line_body_key(value: Any, path: str, context: Context) -> str:
 
 
 def _point_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
-    return vector(value, path, 3, "a point in body coordinates, m")
+    return vector(value, path, context.dim, f"a point in body coordinates, m, {context.dim}D")
 
 
 def _normal_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
@@ -83,6 +83,8 @@ class Sliding(NodeSide, Constraint):
                              f"of the beam {show(joint.beam)} itself; expected a point off it")
         return joint
 
+    def resolved(self, context: Context) -> Record:
+        return self if self.body is None else planar_defaults(self, context, ("point",))
 
     @property
     def target_key(self) -> str:
