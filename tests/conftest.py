@@ -281,3 +281,32 @@ def _curved_only_where_the_energy_takes_it(request):
 def pytest_configure(config) -> None:
     config.addinivalue_line("markers", "curved: the test builds curved references of its "
                             "kind (skipped for kinds whose energy refuses them)")
+    config.addinivalue_line("markers", "slow: a test of a minute or more: its file runs "
+                            "first, so that the workers of `-n auto` end together")
+
+
+# ---------------------------------------------------------------- scheduling on the workers
+# `-n auto --dist loadfile --no-loadscope-reorder` (pyproject.toml): whole files per worker
+# in collection order.  Files with a test marked ``slow`` are collected first, and the tests
+# whose node id starts with one of ``APART`` are work units of their own (the regeneration of
+# each kind: minutes each, no shared fixture), so that no worker is left alone with a long
+# file at the end.
+
+APART = ("tests/test_generate.py::test_regeneration_is_byte_identical[",)
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    slow_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow_files)   # stable: file order kept
+
+
+def pytest_xdist_make_scheduler(config, log):
+    from xdist.scheduler import LoadFileScheduling
+
+    class FilesAndApart(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            if nodeid.startswith(APART):
+                return nodeid
+            return super()._split_scope(nodeid)
+
+    return FilesAndApart(config, log)

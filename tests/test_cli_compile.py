@@ -3,11 +3,14 @@ load compiles nothing), unknown kinds are a named option error."""
 
 from __future__ import annotations
 
+import pytest
+
 from runtime.cli import main
 from runtime.kernels.kind import element_kind
 from runtime.kernels.loader import KernelFamily
 
 
+@pytest.mark.slow
 def test_compile_fills_the_cache_for_the_chosen_kinds(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("ANCF_CACHE_DIR", str(tmp_path / "cache"))
     assert main(["compile", "--element", "cable2d", "--quiet"]) == 0

@@ -2,9 +2,12 @@
 
 import re
 
+import pytest
+
 from runtime import cli
 
 
+@pytest.mark.slow
 def test_quick_report(tmp_path, capsys):
     assert cli.main(["report", "--quick", "--out", str(tmp_path)]) == 0
     text = (tmp_path / "report.md").read_text()

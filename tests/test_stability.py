@@ -130,6 +130,7 @@ def test_cli_entry_prints_and_writes(tmp_path, capsys):
     assert defaults.out == "results/stability" and defaults.scheduler is None
 
 
+@pytest.mark.slow
 def test_tiny_sweep_on_a_two_worker_local_cluster(quick_rows):
     rows = stability.stability_study(quick=True, workers=2)
     assert [(r.group, r.case, r.method, r.passed) for r in rows] == \
