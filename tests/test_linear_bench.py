@@ -31,13 +31,17 @@ def test_bench_steps_rows_name_the_solver_and_split_the_step(tmp_path):
 
 
 def test_constraint_share_of_a_kkt_step_is_measured_against_the_free_links():
-    def row(case, step_ms, share=float("nan"), newton="full"):
-        return {"case": case, "step_ms": step_ms, "constraint_share": share, "newton": newton}
-    kkt = row("joint chain 200", 20.0)
+    def row(case, step_ms, share=float("nan"), newton="full", iterations=1.0):
+        return {"case": case, "step_ms": step_ms, "constraint_share": share, "newton": newton,
+                "newton_per_step": iterations}
+    kkt = row("joint chain 200", 20.0, iterations=1.25)
     rows = [kkt, row("free links 200", 15.0), row("free links 200", 5.0, newton="auto")]
     assert bench_steps.constraint_share(kkt, rows) == 0.25
+    # per Newton iteration: 16 ms an iteration with the joints, 15 without
+    assert bench_steps.constraint_share(kkt, rows, per_iteration=True) == 0.0625
     schur = row("joint chain 50", 10.0, share=0.6)
     assert bench_steps.constraint_share(schur, rows) == 0.6
+    assert bench_steps.constraint_share(schur, rows, per_iteration=True) == 0.6
     # no free links measured: nothing to compare with
     assert bench_steps.constraint_share(kkt, [kkt]) != bench_steps.constraint_share(kkt, [kkt])
 

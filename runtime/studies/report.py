@@ -173,7 +173,9 @@ def step_scaling(figures: Path, quick: bool = False) -> list[str]:
     return ["## 9. The cost of a step against model size (`ancf bench steps`)", "",
             f"Measured on {date}: each model with the linear solver it chooses, every Newton "
             "mode, min of the repeats; the constraint share of a KKT step (many joints) is "
-            "measured against the same links without joints (`free links`).", "",
+            "measured against the same links without joints (`free links`), per step and per "
+            "Newton iteration (the free links fall in one iteration a step, the swinging "
+            "chain takes more whatever handles its joints).", "",
             bench_steps.table(rows), "![cost per element-step](figures/step_scaling.png)", ""]
 
 
