@@ -237,23 +237,29 @@ class BodyVelocity(BodyPosition):
 
 
 @dataclass(frozen=True)
-class BodyAngle(Sensor):
-    """The angle (rad, in (-pi, pi]) of the 2D rigid body ``body``'s x axis u from the
-    global x axis, atan2(u_y, u_x)."""
+class RigidBodySensor(Sensor):
+    """Base of the sensors of a rigid body ``body`` (not a point mass: it has no axes)."""
 
-    type: ClassVar[str] = "body_angle"
-    unit: ClassVar[str] = "rad"
     energy: ClassVar[bool] = False
-    dims: ClassVar[tuple[int, ...]] = (2,)
-    dims_message: ClassVar[str] = ("a 3D body's orientation is no single angle; in 3D read "
-                                   "body_position of two of its points")
     body: str = key(rigid_key)
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         sensor = super().parse(data, path, context)
-        check_rigid_bodies(sensor, path, context, "a body_angle reads a rigid body")
+        check_rigid_bodies(sensor, path, context, f"a {cls.type} reads a rigid body")
         return sensor
+
+
+@dataclass(frozen=True)
+class BodyAngle(RigidBodySensor):
+    """The angle (rad, in (-pi, pi]) of the 2D rigid body ``body``'s x axis u from the
+    global x axis, atan2(u_y, u_x)."""
+
+    type: ClassVar[str] = "body_angle"
+    unit: ClassVar[str] = "rad"
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    dims_message: ClassVar[str] = ("a 3D body's orientation is no single angle; in 3D read "
+                                   "body_position of two of its points")
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         u = samples.q[:, model.rigid[self.body].dofs[2:4]]
@@ -266,7 +272,7 @@ def _rotation_component_key(value: Any, path: str, context: Context) -> str:
 
 
 @dataclass(frozen=True)
-class BodyAngularVelocity(Sensor):
+class BodyAngularVelocity(RigidBodySensor):
     """Angular velocity (rad/s) of the rigid body ``body``, w = sum_a e_a x e_a' / 2 over
     its axes e_a (u, v, w; in 2D u and v = perp(u)): exact for orthonormal axes (e_a' =
     w x e_a).  One ``component`` (x | y | z | norm, global axes; in 2D z, the default, or
@@ -274,15 +280,7 @@ class BodyAngularVelocity(Sensor):
 
     type: ClassVar[str] = "body_angular_velocity"
     unit: ClassVar[str] = "rad/s"
-    energy: ClassVar[bool] = False
-    body: str = key(rigid_key)
     component: str = key(_rotation_component_key, "z")
-
-    @classmethod
-    def parse(cls, data: dict, path: str, context: Context) -> Record:
-        sensor = super().parse(data, path, context)
-        check_rigid_bodies(sensor, path, context, "a body_angular_velocity reads a rigid body")
-        return sensor
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         rigid = model.rigid[self.body]
@@ -443,7 +441,7 @@ def _constraint_index_key(value: Any, path: str, context: Context) -> int:
 
 
 @dataclass(frozen=True)
-class BodyReaction(Sensor):
+class BodyReaction(RigidBodySensor):
     """The ``quantity`` (force in N | moment in N m about the body's origin) that the
     constraints exert on the rigid body ``body``: all of them, or the one ``constraint``
     (its index among the [[constraint]] tables), from the multipliers: the generalised force
@@ -453,9 +451,7 @@ class BodyReaction(Sensor):
     default; a 2D moment is about z: z | norm) in global axes."""
 
     type: ClassVar[str] = "body_reaction"
-    energy: ClassVar[bool] = False
     dynamics: ClassVar[bool] = True
-    body: str = key(rigid_key)
     quantity: str = key(_quantity_key, "force")
     component: str = key(_any_component_key, "norm")
     constraint: int | None = key(_constraint_index_key, None)
@@ -466,9 +462,7 @@ class BodyReaction(Sensor):
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
-        sensor = super().parse(data, path, context)
-        check_rigid_bodies(sensor, path, context, "a body_reaction reads a rigid body")
-        return _checked_component(sensor, path, context)
+        return _checked_component(super().parse(data, path, context), path, context)
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         rigid = model.rigid[self.body]
