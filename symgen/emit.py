@@ -16,7 +16,16 @@ import sympy as sp
 
 from symgen import derive, energies, laws, methods, structural
 from symgen.element import ElementSpec
-from symgen.ir import Assign, Kernel, Loop, PointLoop, SparseProduct, kernel_operations
+from symgen.ir import (
+    SHAPE_INDEX,
+    Assign,
+    Kernel,
+    Loop,
+    PointLoop,
+    ShapeLoop,
+    SparseProduct,
+    kernel_operations,
+)
 from symgen.methods.cij import cij_sizes
 from symgen.methods.common import closed_as_data
 from symgen.printing import code
@@ -83,6 +92,9 @@ def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> 
                         "args": list(st.args), "scale": code(sp.sympify(st.scale))})
         elif isinstance(st, PointLoop):
             out.append({"kind": "loop", "table": st.table, "width": None,
+                        "body": _statements(list(st.body), vector_arrays, vector_temps)})
+        elif isinstance(st, ShapeLoop):
+            out.append({"kind": "shapes", "count": st.count, "index": SHAPE_INDEX,
                         "body": _statements(list(st.body), vector_arrays, vector_temps)})
     return out
 

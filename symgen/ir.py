@@ -59,6 +59,26 @@ class PointLoop:
     default_points: int
 
 
+@dataclass(frozen=True)
+class ShapeLoop:
+    """Repeat ``body`` for every shape function k = 0 .. ``count`` - 1: its array elements
+    index by ``k`` (``shape_ref``), so one copy of the per-shape-function statements serves
+    all of them (large elements: ``symgen.methods.common.shape_looped``)."""
+
+    count: int
+    body: tuple
+
+
+#: The loop index of a ``ShapeLoop`` as its statements print it.
+SHAPE_INDEX = "k"
+
+
+def shape_ref(name: str, stride: int, offset: int = 0) -> sp.Symbol:
+    """The symbol printed as ``name[stride*k + offset]`` (k the ``ShapeLoop`` index)."""
+    tail = f" + {offset}" if offset else ""
+    return sp.Symbol(f"{name}[{stride}*{SHAPE_INDEX}{tail}]", real=True)
+
+
 @dataclass
 class Kernel:
     """One batched kernel: signature arrays in call order plus the per-element body."""
@@ -149,6 +169,8 @@ def kernel_operations(kernel: Kernel, points: int | None = None) -> int:
                 total += repeat * 2 * st.nnz
             elif isinstance(st, PointLoop):
                 total += count(st.body, repeat * (points or st.default_points))
+            elif isinstance(st, ShapeLoop):
+                total += count(st.body, repeat * st.count)
             elif isinstance(st, Loop):
                 t = kernel.loop_tables
                 total += repeat * LOOP_OPS[st.op](t["n"], t["d"], t["np"], t["nnz"], st.args)

@@ -66,6 +66,22 @@ def test_a_corner_function_has_no_structural_zero_so_nothing_is_stored_per_entry
     assert kind.pattern("general", "cij").shape == (npairs * 32 * 32, 4)
 
 
+def test_quadrature_families_loop_over_the_shape_functions_at_each_point():
+    """One copy of the per-shape-function statements of a point (``ShapeLoop``), not 32:
+    unrolled, quadrature_law's C was 511 kB of code besides the tables and took 49 s to
+    compile (docs/new-element.md section 6); the smaller elements keep their unrolled points."""
+    from symgen.methods.common import shape_looped
+
+    assert shape_looped(get(KIND))
+    assert not any(shape_looped(get(kind)) for kind in ("plate3d", "shell3d_3833", "beam3d"))
+    for family in ("quadrature", "quadrature_law"):
+        text = (generated_dir() / KIND / f"{family}.c").read_text()
+        code = "".join(line for line in text.splitlines(keepends=True)
+                       if not line.startswith("static const int "))
+        assert "for (int k = 0; k < 32; k++)" in code
+        assert len(code) < 200_000, (family, len(code))
+
+
 def test_straight_invariants_are_exact_and_cached_per_dimensions():
     """The load-time rule is exact: one more Gauss point per axis changes no stored invariant
     beyond round-off; elements of the same dimensions share the cached arrays."""

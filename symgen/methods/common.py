@@ -57,6 +57,20 @@ def closed_as_data(spec: ElementSpec) -> bool:
 LOOPED_QUADRATURE_FROM = 27
 
 
+#: ... and the quadrature families of elements with at least this many coordinates also loop
+#: over the shape functions at each point (``ShapeLoop``: one copy of the per-shape-function
+#: statements instead of one per function), where every shape function has every gradient
+#: (a complete gradient pattern: the table holds ds/dx of shape function k at k dim + c).
+#: Unrolled, the brick's (96) quadrature_law took 62 s to compile (docs/new-element.md 6).
+SHAPE_LOOPED_FROM = 96
+
+
+def shape_looped(spec: ElementSpec) -> bool:
+    """Whether the quadrature families of ``spec`` loop over the shape functions at each
+    point (``SHAPE_LOOPED_FROM``)."""
+    return spec.ndof >= SHAPE_LOOPED_FROM and len(derive.gradient_pattern(spec)) == spec.ndof
+
+
 def looped(spec: ElementSpec, method: str | None = None, variant: str = "straight") -> bool:
     """Whether ``spec`` (or its ``method``'s families, gram and damping ones of storage
     ``variant``) gets the looped forms."""
@@ -203,14 +217,15 @@ def loop_tables(spec: ElementSpec, variant: str) -> dict:
                        "pattern_b": [b for _, b in pattern]}}
 
 
-def looped_start(spec: ElementSpec, body: list, velocities: bool) -> list[Array]:
-    """Node-relative coordinates into the local arrays Q, Q0, DQ (and QD): unrolled, with
-    the exact position differences of ``translate``."""
-    temps = Temporaries()
-    q, q0, dq = translate(spec, body, temps, with_reference=True)
-    named = [("Q", q, "coordinates relative to the first node"),
-             ("Q0", q0, "reference coordinates relative to the first node"),
-             ("DQ", dq, "displacements relative to the first node")]
+def looped_start(spec: ElementSpec, body: list, velocities: bool,
+                 temps: Temporaries | None = None, current: bool = True) -> list[Array]:
+    """Node-relative coordinates into the local arrays Q (unless not ``current``), Q0, DQ
+    (and QD): unrolled, with the exact position differences of ``translate`` (temporaries
+    from ``temps``, by default a fresh numbering)."""
+    q, q0, dq = translate(spec, body, temps or Temporaries(), with_reference=True)
+    named = [("Q", q, "coordinates relative to the first node")] if current else []
+    named += [("Q0", q0, "reference coordinates relative to the first node"),
+              ("DQ", dq, "displacements relative to the first node")]
     if velocities:
         named.append(("QD", relative_velocities(spec), "velocities relative to the first node"))
     for name, values, _ in named:

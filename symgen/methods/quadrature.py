@@ -8,7 +8,18 @@ import sympy as sp
 
 from symgen import derive, energies, laws
 from symgen.element import ElementSpec
-from symgen.ir import Array, Assign, Kernel, Loop, PointLoop, Temporaries, ref, refs
+from symgen.ir import (
+    Array,
+    Assign,
+    Kernel,
+    Loop,
+    PointLoop,
+    ShapeLoop,
+    Temporaries,
+    ref,
+    refs,
+    shape_ref,
+)
 from symgen.methods.common import (
     DAMPING_KERNELS,
     KERNELS,
@@ -16,9 +27,11 @@ from symgen.methods.common import (
     kernel_name,
     loop_tables,
     looped,
+    looped_start,
     materialize,
     quantity_output,
     relative_velocities,
+    shape_looped,
     store,
     store_symmetric,
     translate,
@@ -56,21 +69,32 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
               *[quantity_output(spec, quantity) for quantity in quantities]]
     temps = Temporaries()
     body: list = []
-    _, q0, dq = translate(spec, body, temps, with_reference=True)
+    shapes = shape_looped(spec)
+    if shapes:
+        arrays += [*looped_start(spec, body, False, temps, current=False),
+                   *_shape_locals(spec, ("J0", "H"))]
+    else:
+        _, q0, dq = translate(spec, body, temps, with_reference=True)
     lam_, g_ = refs("material", 2)
     tab = refs("tab", width_)
-    ds = sp.zeros(n, d)
-    for j, (k, c) in enumerate(pattern):
-        ds[k, c] = tab[j]
-    Q0 = sp.Matrix(n, d, q0)
-    dQ = sp.Matrix(n, d, dq)
     point: list = []
-    j0 = sp.Matrix(d, d, materialize(point, temps, list(Q0.T * ds)))
+    if shapes:
+        ds_row = sp.Matrix(1, d, [shape_ref("tab", d, c) for c in range(d)])
+        j0 = _shape_sums(spec, point, {"J0": "Q0"}, ds_row)["J0"]
+    else:
+        ds = sp.zeros(n, d)
+        for j, (k, c) in enumerate(pattern):
+            ds[k, c] = tab[j]
+        j0 = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, q0).T * ds)))
     det = materialize(point, temps, [j0.det(method="berkowitz")])[0]
     inv_det = materialize(point, temps, [1 / det])[0]
     j0_inv = sp.Matrix(d, d, materialize(point, temps, list(j0.adjugate() * inv_det)))
-    b = sp.Matrix(n, d, materialize(point, temps, list(ds * j0_inv)))
-    h = sp.Matrix(d, d, materialize(point, temps, list(dQ.T * b)))
+    if shapes:
+        b = _shape_gradients(spec, point, ds_row, j0_inv)
+        h = _shape_sums(spec, point, {"H": "DQ"}, b)["H"]
+    else:
+        b = sp.Matrix(n, d, materialize(point, temps, list(ds * j0_inv)))
+        h = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, dq).T * b)))
     strain = sp.Matrix(d, d, materialize(point, temps, list((h + h.T + h.T * h) / 2)))
     trace = materialize(point, temps, [strain.trace()])[0]
     wdet = materialize(point, temps, [tab[-1] * det])[0]
@@ -81,14 +105,16 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
         stress = sp.Matrix(d, d, materialize(
             point, temps, list(lam_ * trace * sp.eye(d) + 2 * g_ * strain)))
         f = sp.eye(d) + h
-        if "force" in quantities:
+        if "force" in quantities and shapes:
+            _shape_force(spec, point, temps, b, stress, f, -wdet)
+        elif "force" in quantities:
             bs = sp.Matrix(n, d, materialize(point, temps, list(b * stress)))
             force = -wdet * (bs * f.T)
             store(point, "force", list(force), accumulate=True)
         if "jacobian" in quantities and looped(spec, "quadrature"):
             dn = sp.Matrix(d, d, lambda x_, y_: lam_ + (2 * g_ if x_ == y_ else 0))
             _looped_point_jacobian(spec, point, b, f, stress, dn,
-                                   [g_] * len(laws.shear_pairs(d)), -wdet)
+                                   [g_] * len(laws.shear_pairs(d)), -wdet, shapes=shapes)
         elif "jacobian" in quantities:
             a = sp.Matrix(n, d, materialize(point, temps, list(b * f.T)))
             bsb = materialize(point, temps, [(b[k, :] * stress * b[p, :].T)[0]
@@ -111,7 +137,7 @@ def quadrature_kernel(spec: ElementSpec, quantities, variant: str = "") -> Kerne
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_points(spec)))
     if looped(spec, "quadrature") and "jacobian" in quantities:
-        arrays += _point_locals(spec, damped=False)
+        arrays += _point_locals(spec, damped=False, gradients=not shapes)
     return Kernel(kernel_name(quantities), f"Elastic {' and '.join(quantities)} by Gauss "
                   "quadrature at every call (no invariants).", arrays, body,
                   loop_tables(spec, "straight") if looped(spec, "quadrature") else None)
@@ -168,13 +194,16 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
         arrays += [quantity_output(spec, quantity) for quantity in quantities]
     temps = Temporaries()
     body: list = []
-    _, q0, dq = translate(spec, body, temps, with_reference=True)
-    qd = relative_velocities(spec) if damped else None
+    shapes = shape_looped(spec)
+    sums = {"F0": "Q0", "DF": "DQ", **({"FD": "QD"} if damped else {})}
+    if shapes:
+        arrays += [*looped_start(spec, body, damped, temps, current=False),
+                   *_shape_locals(spec, tuple(sums))]
+    else:
+        _, q0, dq = translate(spec, body, temps, with_reference=True)
+        qd = relative_velocities(spec) if damped else None
     alpha = ref("alpha", 0)
     tab = refs("tab", width_)
-    ds = sp.zeros(n, d)
-    for j, (k, c) in enumerate(pattern):
-        ds[k, c] = tab[j]
     offset = len(pattern)
     u_inv = sp.zeros(d, d)
     for j, (a, b) in enumerate(upper_d):
@@ -184,9 +213,18 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
     dn = sp.Matrix(d, d, lambda a, b: coefficient[(min(a, b), max(a, b))])
     dshear = [coefficient[(d + s, d + s)] for s in range(len(shears))]
     point: list = []
-    bmat = sp.Matrix(n, d, materialize(point, temps, list(ds * u_inv)))
-    f0 = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, q0).T * bmat)))
-    df = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, dq).T * bmat)))
+    if shapes:
+        ds_row = sp.Matrix(1, d, [shape_ref("tab", d, c) for c in range(d)])
+        bmat = _shape_gradients(spec, point, ds_row, u_inv)
+        gradients = _shape_sums(spec, point, sums, bmat)
+        f0, df = gradients["F0"], gradients["DF"]
+    else:
+        ds = sp.zeros(n, d)
+        for j, (k, c) in enumerate(pattern):
+            ds[k, c] = tab[j]
+        bmat = sp.Matrix(n, d, materialize(point, temps, list(ds * u_inv)))
+        f0 = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, q0).T * bmat)))
+        df = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, dq).T * bmat)))
     strain = (f0.T * df + df.T * f0 + df.T * df) / 2
     f = sp.Matrix(d, d, materialize(point, temps, list(f0 + df)))
     eps = materialize(point, temps, [strain[a, a] for a in range(d)]
@@ -216,7 +254,8 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
         store(point, "energy", [sum(x * y for x, y in zip(eps, sigma, strict=True)) / 2],
                accumulate=True)
     if damped:
-        fdot = sp.Matrix(d, d, materialize(point, temps, list(sp.Matrix(n, d, qd).T * bmat)))
+        fdot = gradients["FD"] if shapes else sp.Matrix(d, d, materialize(
+            point, temps, list(sp.Matrix(n, d, qd).T * bmat)))
         eps_dot = materialize(point, temps, [
             sum(f[c, a] * fdot[c, a] for c in range(d)) for a in range(d)] + [
             sum(f[c, a] * fdot[c, b] + fdot[c, a] * f[c, b] for c in range(d))
@@ -227,15 +266,19 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
         total = sigma
     if "force" in quantities or "jacobian" in quantities:
         s_total = sp.Matrix(d, d, materialize(point, temps, list(tensor(total))))
-    if "force" in quantities:
+    if "force" in quantities and shapes:
+        _shape_force(spec, point, temps, bmat, s_total, f, -1)
+    elif "force" in quantities:
         bs = sp.Matrix(n, d, materialize(point, temps, list(bmat * s_total)))
         store(point, "force", list(-(bs * f.T)), accumulate=True)
     if "jacobian" in quantities and looped(spec, "quadrature_law"):
         if not damped:
-            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1)
+            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
+                                   shapes=shapes)
         else:
             _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
-                                   material=name == "damped_force_jacobians", fdot=fdot)
+                                   material=name == "damped_force_jacobians", fdot=fdot,
+                                   shapes=shapes)
     elif "jacobian" in quantities:
         z = [materialize(point, temps, row) for row in z_of(f)]
         y = [materialize(point, temps, row) for row in _law_rows(dn, dshear, z, d)]
@@ -272,7 +315,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
                              accumulate=True)
     body.append(PointLoop("table", tuple(point), _default_law_points(spec)))
     if looped(spec, "quadrature_law") and "jacobian" in quantities:
-        arrays += _point_locals(spec, damped)
+        arrays += _point_locals(spec, damped, gradients=not shapes)
     doc = KERNEL_DOCS[name]
     return Kernel(name, f"{doc[0].upper()}{doc[1:]} of any law by Gauss quadrature at every "
                   "call (volume and axis rules).", arrays, body,
@@ -302,11 +345,13 @@ def _z_rows(bmat, fmat, n: int, d: int) -> list:
     return rows
 
 
-def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
+def _point_locals(spec: ElementSpec, damped: bool, gradients: bool = True) -> list[Array]:
+    """The local arrays of the looped point Jacobian (with the gradients BM unless
+    ``_shape_locals`` declares them)."""
     size = laws.voigt_size(spec.dim) * spec.ndof
     arrays = [Array("Z", size, "local", "d eps / d e per Voigt row"),
               Array("Y", size, "local", "D Z"),
-              Array("BM", spec.ndof, "local", "shape gradients b, node-major"),
+              *([_gradients_array(spec)] if gradients else []),
               Array("SB", spec.ndof, "local", "S b per shape function"),
               Array("GEO", spec.n_shape**2, "local", "b S b^T")]
     if damped:
@@ -315,39 +360,106 @@ def _point_locals(spec: ElementSpec, damped: bool) -> list[Array]:
 
 
 def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn, dshear,
-                           scale, material: bool = True, fdot=None) -> None:
+                           scale, material: bool = True, fdot=None, shapes: bool = False) -> None:
     """The Jacobian at one point as loops (large elements): Z and Y = D Z, b and S b stored
     (unrolled, small), b S b^T by a loop, then jacobian += scale (sum_I Z_I Y_I^T +
     (b S b^T) kron I); with ``fdot``
     (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric [+ material]) and
-    jacobian_dot += scale alpha sum_I Z_I Y_I^T."""
+    jacobian_dot += scale alpha sum_I Z_I Y_I^T.  With ``shapes`` (``shape_looped``),
+    ``bmat`` is the row of shape function k already in BM (``_shape_gradients``) and Z, Y,
+    S b (and Zdot) are written for that k in one ``ShapeLoop``."""
     n, d, ndof = spec.n_shape, spec.dim, spec.ndof
     rows = laws.voigt_size(d)
-    for r, row in enumerate(_z_rows(bmat, fmat, n, d)):
-        for i, value in enumerate(row):
-            point.append(Assign(f"Z[{r * ndof + i}]", sp.sympify(value)))
-    zref = [[ref("Z", r * ndof + i) for i in range(ndof)] for r in range(rows)]
-    for r, row in enumerate(_law_rows(dn, dshear, zref, d)):
-        for i, value in enumerate(row):
-            point.append(Assign(f"Y[{r * ndof + i}]", sp.sympify(value)))
-    for k in range(n):            # b S b^T by a loop over b and S b (n^2 unrolled: slow
+    written = 1 if shapes else n        # shape functions written out
+    body: list = [] if shapes else point
+
+    def at(name: str, r: int, i: int):
+        """The symbol of name[r ndof + i], i = k d + c (k the loop index with ``shapes``)."""
+        return shape_ref(name, d, r * ndof + i) if shapes else ref(name, r * ndof + i)
+
+    def rows_of(name: str, values: list) -> None:
+        for r, row in enumerate(values):
+            for i, value in enumerate(row):
+                body.append(Assign(at(name, r, i).name, sp.sympify(value)))
+
+    rows_of("Z", _z_rows(bmat, fmat, written, d))
+    zref = [[at("Z", r, i) for i in range(written * d)] for r in range(rows)]
+    rows_of("Y", _law_rows(dn, dshear, zref, d))
+    for k in range(written):      # b S b^T by a loop over b and S b (n^2 unrolled: slow
         stress_b = smat * bmat[k, :].T    # to compile, the brick's 1024 of them)
         for c in range(d):
-            point.append(Assign(f"BM[{k * d + c}]", sp.sympify(bmat[k, c])))
-            point.append(Assign(f"SB[{k * d + c}]", sp.sympify(stress_b[c])))
+            if not shapes:
+                body.append(Assign(f"BM[{k * d + c}]", sp.sympify(bmat[k, c])))
+            body.append(Assign(at("SB", 0, k * d + c).name, sp.sympify(stress_b[c])))
+    if shapes:
+        if fdot is not None:
+            rows_of("ZD", _z_rows(bmat, fdot, written, d))
+        point.append(ShapeLoop(n, tuple(body)))
     point.append(Loop("shape_products", "GEO", ("BM", "SB")))
     if fdot is None:
         point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
     else:
         alpha = ref("alpha", 0)
-        for r, row in enumerate(_z_rows(bmat, fdot, n, d)):
-            for i, value in enumerate(row):
-                point.append(Assign(f"ZD[{r * ndof + i}]", sp.sympify(value)))
+        if not shapes:
+            rows_of("ZD", _z_rows(bmat, fdot, n, d))
         point.append(Loop("rows_product", "jacobian", ("Y", "ZD", rows), scale * alpha))
         if material:
             point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
         point.append(Loop("rows_product", "jacobian_dot", ("Z", "Y", rows), scale * alpha))
     point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
+
+
+def _gradients_array(spec: ElementSpec) -> Array:
+    return Array("BM", spec.ndof, "local", "shape gradients b, node-major")
+
+
+def _shape_locals(spec: ElementSpec, sums: tuple[str, ...]) -> list[Array]:
+    """The local arrays of the shape-looped points: the gradients BM and the d x d sums
+    (``_shape_sums``) named ``sums``."""
+    return [_gradients_array(spec), *[Array(name, spec.dim**2, "local", SHAPE_SUMS[name])
+                                      for name in sums]]
+
+
+#: The d x d sums over the shape functions of the shape-looped points (row-major).
+SHAPE_SUMS = {"J0": "Q0^T ds, the reference Jacobian", "H": "DQ^T b, the displacement gradient",
+              "F0": "Q0^T b, the reference deformation gradient",
+              "DF": "DQ^T b, the displacement gradient", "FD": "QD^T b, its rate"}
+
+
+def _shape_gradients(spec: ElementSpec, point: list, ds_row, right) -> sp.Matrix:
+    """BM[k d + a] = (ds_k right)_a for every shape function k in one ``ShapeLoop``, from
+    the row ``ds_row`` (1 x d) of shape function k; returns that row of BM (1 x d)."""
+    d = spec.dim
+    values = list(ds_row * right)
+    point.append(ShapeLoop(spec.n_shape, tuple(
+        Assign(shape_ref("BM", d, a).name, sp.sympify(value)) for a, value in enumerate(values))))
+    return sp.Matrix(1, d, [shape_ref("BM", d, a) for a in range(d)])
+
+
+def _shape_sums(spec: ElementSpec, point: list, sums: dict[str, str], row) -> dict:
+    """target = source^T b for each {target: source} of ``sums`` (d x d, row-major: entry
+    (c, a) sums source[k d + c] row_a over the shape functions k) in one ``ShapeLoop``,
+    ``row`` (1 x d) the row of shape function k; returns each target's matrix of entries."""
+    d = spec.dim
+    body = []
+    for target, source in sums.items():
+        point.append(Loop("zero", target, (d * d,)))
+        body += [Assign(f"{target}[{c * d + a}]", shape_ref(source, d, c) * row[a], True)
+                 for c in range(d) for a in range(d)]
+    point.append(ShapeLoop(spec.n_shape, tuple(body)))
+    return {target: sp.Matrix(d, d, refs(target, d * d)) for target in sums}
+
+
+def _shape_force(spec: ElementSpec, point: list, temps: Temporaries, row, stress, fmat,
+                 scale) -> None:
+    """force[k d + c] += scale ((row S) F^T)_c for every shape function k in one
+    ``ShapeLoop``, ``row`` (1 x d) the gradients of shape function k."""
+    d = spec.dim
+    body: list = []
+    stress_b = sp.Matrix(1, d, materialize(body, temps, list(row * stress)))
+    body += [Assign(shape_ref("force", d, c).name, sp.sympify(value), True)
+             for c, value in enumerate(scale * (stress_b * fmat.T))]
+    point.append(ShapeLoop(spec.n_shape, tuple(body)))
 
 
 def cable_table_width(spec: ElementSpec, bending: str = "simple") -> int:
