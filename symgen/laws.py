@@ -121,13 +121,16 @@ class Law:
     """A material law: ``parts(dim)`` gives its parts for an element dimension.
 
     ``default_corrections(dim)``: expressions in nu of the shear corrections when the user
-    gives none; ``None`` for laws without shear corrections.
+    gives none; ``None`` for laws without shear corrections.  ``refuses(domain, nodes)``:
+    why the law does not apply to an element with these nodes (points of the domain), or
+    None; ``None`` for laws that apply wherever their parts' subdomains exist.
     """
 
     name: str
     description: str
     parts: Callable[[int], tuple[LawPart, ...]]
     default_corrections: Callable[[int], tuple[sp.Expr, ...]] | None = None
+    refuses: Callable[[object, tuple], str | None] | None = None
 
     def domain_coefficients(self, dim: int) -> dict[str, list[sp.Expr]]:
         """Summed law coefficients per domain (zeros where the law has no part)."""
@@ -197,6 +200,22 @@ def _svk_sri(dim: int) -> tuple[LawPart, ...]:
             LawPart("thickness_normal", "volume", thickness.applyfunc(sp.factor)))
 
 
+def _without_mid_side_nodes(domain, nodes: tuple) -> str | None:
+    """Why 2 x 2 Gauss points of the surface do not suit elements with only corner nodes:
+    on those (plate3d: r, r_x, r_y, r_z at the corners) they leave deformation modes of no
+    energy that spread through a mesh (spurious frequencies between the bending ones); the
+    quadratic serendipity shells, three nodes along each side, keep none."""
+    for axis in domain.reduced_axes("volume_gauss2x2"):
+        a = domain.axes[axis]
+        along = sorted({sp.nsimplify(node[axis] / a.scale) for node in nodes})
+        if len(along) < 3:
+            return (f"its plane-stress and shear part samples the surface at 2 x 2 Gauss "
+                    f"points, which leaves zero-energy modes that spread through a mesh unless "
+                    f"a mid-side node sits on each side (the nodes sit at {a.coordinate} = "
+                    f"{', '.join(str(u * a.scale) for u in along)} only)")
+    return None
+
+
 LAWS: dict[str, Law] = {
     "svk": Law("svk", "St. Venant-Kirchhoff, isotropic D over the volume", _svk),
     "ecm": Law("ecm", "enhanced continuum mechanics: D0 over the volume, the Poisson part "
@@ -208,7 +227,7 @@ LAWS: dict[str, Law] = {
     "svk_sri": Law("svk_sri", "svk with selective reduced integration of the surface: the "
                    "plane-stress part and the shears at 2 x 2 Gauss points, the thickness-"
                    "normal part over the volume (no membrane or shear locking of thin shells)",
-                   _svk_sri),
+                   _svk_sri, refuses=_without_mid_side_nodes),
 }
 
 
@@ -216,7 +235,7 @@ def not_applicable(law: Law, domain, nodes: tuple = ()) -> str | None:
     """Why ``law`` does not apply to elements on ``domain`` (a ``symgen.domains.Domain``) with
     ``nodes`` (points of the domain), or None when it does: one of its parts integrates over
     a subdomain the domain lacks, or at the ends of an axis (Lobatto) that are not all the
-    nodes along it (``_not_at_nodes``)."""
+    nodes along it (``_not_at_nodes``), or the law's own ``refuses`` says why."""
     for part in law.parts(domain.dim):
         if part.domain not in domain.subdomain_names:
             return (f"law {law.name!r} does not apply to the {domain.name} domain: its part "
@@ -225,7 +244,8 @@ def not_applicable(law: Law, domain, nodes: tuple = ()) -> str | None:
         reason = _not_at_nodes(part, domain, nodes)
         if reason is not None:
             return f"law {law.name!r} does not apply: {reason}"
-    return None
+    reason = law.refuses(domain, nodes) if law.refuses is not None else None
+    return None if reason is None else f"law {law.name!r} does not apply: {reason}"
 
 
 def _not_at_nodes(part: LawPart, domain, nodes: tuple) -> str | None:
