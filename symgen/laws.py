@@ -36,7 +36,8 @@ Laws (docs/laws.md has the formulas):
 * ``svk_sri``: ``svk`` split exactly into a plane-stress part (E11, E22 with the plane-stress
   moduli ``E / (1 - nu^2)``, and every shear with G) on the surface's 2 x 2 Gauss points and
   the thickness-normal part ``(lam + 2G) (E33 + nu / (1 - nu) (E11 + E22))^2 / 2`` over the
-  volume, against the membrane and transverse-shear locking of thin shells (the plates).
+  volume, against the membrane and transverse-shear locking of thin shells (the quadratic
+  serendipity shells; plate3d, corner nodes only, refuses it: ``_without_mid_side_nodes``).
 """
 
 from __future__ import annotations

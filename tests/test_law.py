@@ -674,6 +674,9 @@ def plate_strip_tip(kind: str, law: str, nu: float, elements: int) -> float:
                   sensors=[Displacement("tip_z", "plate:-1,0", "z")], static=Static())
     result = run_scene(scene, progress=False)
     assert result.status == "ok", result.summary["message"]
+    # a run warns of Poisson thickness locking where the kind has it (no r_zz)
+    warned = any("Poisson thickness locking" in text for text in result.summary["warnings"])
+    assert warned == (element_kind(kind).svk_locking(nu) is not None)
     return -result.summary["static"]["sensors"]["tip_z"]
 
 
