@@ -14,7 +14,8 @@ Named *subdomains* are what material-law parts integrate over (symgen/laws.py):
 * an axis of a subdomain whose value is the name of a rule of ``AXIS_RULES`` is integrated
   by that rule instead of exactly (*reduced integration*, the beam's ``volume_gauss2``,
   ``volume_lobatto2``, ``axis_lobatto2``: x by the 2-point Gauss-Legendre rule, or by the
-  2-point Gauss-Lobatto rule at the ends x = 0, l).  The rules are symmetric, so every moment
+  2-point Gauss-Lobatto rule at the ends x = 0, l; the plate's ``volume_gauss2x2``: x and y
+  by the 2-point Gauss rule).  The rules are symmetric, so every moment
   of a monomial is rational and the closed forms stay exact.
 
 Everything an element derives (invariants, kernels, reference geometry, quadrature tables)
@@ -294,12 +295,15 @@ def beam_reduced(axis_fixed: tuple) -> tuple:
 
 
 def plate() -> Domain:
-    """x in [0, a], y in [0, b], z in [-t/2, t/2]; the ``midsurface`` subdomain is z = 0."""
+    """x in [0, a], y in [0, b], z in [-t/2, t/2]; the ``midsurface`` subdomain is z = 0, the
+    ``volume_gauss2x2`` one the volume with x and y (the surface) by the 2-point Gauss rule
+    and z by the volume's order (the reduced surface integration of shells)."""
     axes = (Axis(x, side_a, sp.Integer(0), sp.Integer(1)),
             Axis(y, side_b, sp.Integer(0), sp.Integer(1)),
             Axis(z, thickness, -HALF, HALF))
     return Domain("plate", axes, (side_a, side_b, thickness), ("length", "height", "width"),
-                  None, (("midsurface", ((2, sp.Integer(0)),)),))
+                  None, (("midsurface", ((2, sp.Integer(0)),)),
+                         ("volume_gauss2x2", ((0, "gauss2"), (1, "gauss2")))))
 
 
 def box() -> Domain:

@@ -9,7 +9,8 @@ that density integrated over the part's domain:
 * ``axis``:   the beam axis y = z = 0, a line integral over x scaled by the cross-section
   area ``h w`` (height times width, or times thickness in 2D);
 * ``volume_gauss2``, ``volume_lobatto2``, ``axis_lobatto2``: the same with x integrated by a
-  2-point rule instead of exactly (Gauss-Legendre; Gauss-Lobatto: the ends x = 0, l).
+  2-point rule instead of exactly (Gauss-Legendre; Gauss-Lobatto: the ends x = 0, l);
+* ``volume_gauss2x2``: the plates' volume with x and y by the 2-point Gauss rule (z exactly).
 
 Every part has the *orthotropic form*: a full symmetric block on the normal strains and a
 diagonal block on the shear strains, nothing coupling the two.  Its numbers, the *law
@@ -31,7 +32,12 @@ Laws (docs/laws.md has the formulas):
   slender beams in large rotations: E11 and the transverse shears (2E12, 2E13) by the 2-point
   Gauss rule (membrane and shear locking), the cross-section strains (E22, E33, 2E23) and the
   Poisson part at the element ends by the 2-point Lobatto rule (the linearly interpolated
-  r_y, r_z of a rotated element shrink between the ends, which E22, E33 would resist).
+  r_y, r_z of a rotated element shrink between the ends, which E22, E33 would resist);
+* ``svk_sri``: ``svk`` split exactly into a plane-stress part (E11, E22 with the plane-stress
+  moduli ``E / (1 - nu^2)``, and every shear with G) on the surface's 2 x 2 Gauss points and
+  the thickness-normal part ``(lam + 2G) (E33 + nu / (1 - nu) (E11 + E22))^2 / 2`` over the
+  volume, against the membrane and transverse-shear locking of thin shells (the quadratic
+  serendipity shells; plate3d, corner nodes only, refuses it: ``_without_mid_side_nodes``).
 """
 
 from __future__ import annotations
@@ -45,7 +51,8 @@ import sympy as sp
 #: domain (symgen/domains.py).  ``volume`` is every element's; ``axis`` (y = z = 0) is the
 #: beams'; ``midsurface`` (z = 0) is the plates'.  A law with a part on a subdomain that an
 #: element's domain lacks does not apply to that element (``not_applicable``).
-DOMAINS = ("volume", "axis", "midsurface", "volume_gauss2", "volume_lobatto2", "axis_lobatto2")
+DOMAINS = ("volume", "axis", "midsurface", "volume_gauss2", "volume_lobatto2", "axis_lobatto2",
+           "volume_gauss2x2")
 
 young, poisson = sp.symbols("E nu", positive=True)
 #: Lame parameters in terms of E and nu.
@@ -115,13 +122,16 @@ class Law:
     """A material law: ``parts(dim)`` gives its parts for an element dimension.
 
     ``default_corrections(dim)``: expressions in nu of the shear corrections when the user
-    gives none; ``None`` for laws without shear corrections.
+    gives none; ``None`` for laws without shear corrections.  ``refuses(domain, nodes)``:
+    why the law does not apply to an element with these nodes (points of the domain), or
+    None; ``None`` for laws that apply wherever their parts' subdomains exist.
     """
 
     name: str
     description: str
     parts: Callable[[int], tuple[LawPart, ...]]
     default_corrections: Callable[[int], tuple[sp.Expr, ...]] | None = None
+    refuses: Callable[[object, tuple], str | None] | None = None
 
     def domain_coefficients(self, dim: int) -> dict[str, list[sp.Expr]]:
         """Summed law coefficients per domain (zeros where the law has no part)."""
@@ -178,6 +188,35 @@ def _ecm_sri(dim: int) -> tuple[LawPart, ...]:
             LawPart("Dv", "axis_lobatto2", dv.voigt))
 
 
+def _svk_sri(dim: int) -> tuple[LawPart, ...]:
+    # the isotropic normal block C with the thickness axis last, C = [[Cpp, c], [c^T, C33]]:
+    # eps^T C eps = e_p^T (Cpp - c c^T / C33) e_p + C33 (E33 + c^T e_p / C33)^2 exactly, the
+    # plane-stress matrix (E / (1 - nu^2) [[1, nu], [nu, 1]] in 3D) and a square, each >= 0
+    normal = _isotropic_normal(dim)
+    thickness_row = normal[dim - 1, :] / normal[dim - 1, dim - 1]
+    thickness = _block(dim, normal[dim - 1, dim - 1] * thickness_row.T * thickness_row,
+                       [0] * len(shear_pairs(dim)))
+    plane = _block(dim, normal, [SHEAR] * len(shear_pairs(dim))) - thickness
+    return (LawPart("plane_stress_shear", "volume_gauss2x2", plane.applyfunc(sp.factor)),
+            LawPart("thickness_normal", "volume", thickness.applyfunc(sp.factor)))
+
+
+def _without_mid_side_nodes(domain, nodes: tuple) -> str | None:
+    """Why 2 x 2 Gauss points of the surface do not suit elements with only corner nodes:
+    on those (plate3d: r, r_x, r_y, r_z at the corners) they leave deformation modes of no
+    energy that spread through a mesh (spurious frequencies between the bending ones); the
+    quadratic serendipity shells, three nodes along each side, keep none."""
+    for axis in domain.reduced_axes("volume_gauss2x2"):
+        a = domain.axes[axis]
+        along = sorted({sp.nsimplify(node[axis] / a.scale) for node in nodes})
+        if len(along) < 3:
+            return (f"its plane-stress and shear part samples the surface at 2 x 2 Gauss "
+                    f"points, which leaves zero-energy modes that spread through a mesh unless "
+                    f"a mid-side node sits on each side (the nodes sit at {a.coordinate} = "
+                    f"{', '.join(str(u * a.scale) for u in along)} only)")
+    return None
+
+
 LAWS: dict[str, Law] = {
     "svk": Law("svk", "St. Venant-Kirchhoff, isotropic D over the volume", _svk),
     "ecm": Law("ecm", "enhanced continuum mechanics: D0 over the volume, the Poisson part "
@@ -186,6 +225,10 @@ LAWS: dict[str, Law] = {
                    "transverse shears by 2-point Gauss, the cross-section strains and the "
                    "Poisson part at the ends (no locking of slender beams)", _ecm_sri,
                    timoshenko_correction),
+    "svk_sri": Law("svk_sri", "svk with selective reduced integration of the surface: the "
+                   "plane-stress part and the shears at 2 x 2 Gauss points, the thickness-"
+                   "normal part over the volume (no membrane or shear locking of thin shells)",
+                   _svk_sri, refuses=_without_mid_side_nodes),
 }
 
 
@@ -193,7 +236,7 @@ def not_applicable(law: Law, domain, nodes: tuple = ()) -> str | None:
     """Why ``law`` does not apply to elements on ``domain`` (a ``symgen.domains.Domain``) with
     ``nodes`` (points of the domain), or None when it does: one of its parts integrates over
     a subdomain the domain lacks, or at the ends of an axis (Lobatto) that are not all the
-    nodes along it (``_not_at_nodes``)."""
+    nodes along it (``_not_at_nodes``), or the law's own ``refuses`` says why."""
     for part in law.parts(domain.dim):
         if part.domain not in domain.subdomain_names:
             return (f"law {law.name!r} does not apply to the {domain.name} domain: its part "
@@ -202,7 +245,8 @@ def not_applicable(law: Law, domain, nodes: tuple = ()) -> str | None:
         reason = _not_at_nodes(part, domain, nodes)
         if reason is not None:
             return f"law {law.name!r} does not apply: {reason}"
-    return None
+    reason = law.refuses(domain, nodes) if law.refuses is not None else None
+    return None if reason is None else f"law {law.name!r} does not apply: {reason}"
 
 
 def _not_at_nodes(part: LawPart, domain, nodes: tuple) -> str | None:

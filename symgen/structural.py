@@ -159,7 +159,7 @@ STRUCTURAL_LAWS: dict[str, StructuralLaw] = {
         "elastic_line", "structural beam of the centre line (Gerstmayr and Shabana's elastic "
         "line): axial strain and bending r_xx . r_y (and r_xx . r_z, torsion) along the axis, "
         "transverse shear and cross-section strains at the nodes", _parts(_strains),
-        laws.timoshenko_correction, _strains),
+        laws.timoshenko_correction, strains=_strains),
 }
 
 

@@ -230,6 +230,20 @@ def energy_scale() -> float:
     return E_MODULUS * LENGTH * HEIGHT * WIDTH * 1e-6
 
 
+def rigid_cancellation(el: Element, e: np.ndarray) -> tuple[float, float]:
+    """(force, |q|) bounds of what the invariant methods (gram, cij) leave at a rigid motion
+    ``e`` (ndof,) or (m, ndof): their sums of terms of size |K| |e| cancel there up to a few
+    eps |K| |e| per coordinate (|K| ~ the Jacobian, |e| the positions relative to the first
+    node), more for the many invariants of large elements (``invariant_rounding``); the
+    energy's terms are |q| times larger."""
+    d = el.kind.dim
+    q = np.asarray(e, float).reshape(-1, el.kind.n_shape, d)
+    q = q - q[:, position_rows(el.kind.name)[:1]]
+    terms = np.abs(el.elastic_jacobian(e)).max() * np.abs(q).max()
+    eps = np.finfo(float).eps
+    return 16 * eps * el.ndof * terms * invariant_rounding(el.kind.name), float(np.abs(q).max())
+
+
 def rel_diff(a, b) -> float:
     """max |a - b| / max |b|: the relative difference used throughout."""
     a, b = np.asarray(a, float), np.asarray(b, float)

@@ -303,11 +303,12 @@ def test_rigidly_moved_curved_shell_has_no_elastic_force(tmp_path):
 
 
 def test_roof_centre_deflection_converges_with_the_mesh(tmp_path):
-    """The shipped roof (8 x 8 elements) against refined meshes of the same geometry (there is
-    no structured curved-shell placement, and the benchmark's published curves are
-    nonlinear): 8 and 16 elements a side extrapolated as h^2 predict the 12 x 12 result to
-    1e-3 (the observed order is 2), the shipped mesh is within 7 % of the extrapolation, and
-    half the load gives half the deflection (the linear range)."""
+    """The shipped roof (8 x 8 elements, law svk_sri) against refined meshes of the same
+    geometry (there is no structured curved-shell placement, and the benchmark's published
+    curves are nonlinear): 8 and 16 elements a side extrapolated as h^2 predict the 12 x 12
+    result to 1e-3 (the observed order is 2), the shipped mesh is within 1.5 % of the
+    extrapolation (measured 1.0 %; 6 % with svk, whose extrapolation is 0.3 % from this one),
+    and half the load gives half the deflection (the linear range)."""
     scene = load_scene(scenes.path("roof"))
     load = scene.loads[0].force[2]
 
@@ -323,7 +324,7 @@ def test_roof_centre_deflection_converges_with_the_mesh(tmp_path):
     limit = w[16] + (w[16] - w[8]) / 3            # w(h) = w0 + C h^2 from h = 1/8, 1/16
     predicted = limit - (limit - w[8]) * 64 / 144
     assert w[12] == pytest.approx(predicted, rel=1e-3)
-    assert w[8] == pytest.approx(limit, rel=0.07)
+    assert w[8] == pytest.approx(limit, rel=0.015)
     assert centre("roof8.vtu", load / 2) == pytest.approx(w[8] / 2, rel=1e-3)
 
 

@@ -11,8 +11,9 @@ typedef double vd __attribute__((vector_size(8 * ANCF_LANES)));
 /* Law coefficients per domain of svk: St. Venant-Kirchhoff, isotropic D over the volume.
    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
    volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+   volume_gauss2x2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2x2 (Pa)
    Operations per element: 11. */
-void shell3d_3833_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out)
+void shell3d_3833_laws_law_svk(long m, const double *material_in, long material_stride, double *volume_out, double *volume_gauss2x2_out)
 {
   vd material[2];
   for (long first = 0; first < m; first += ANCF_LANES) {
@@ -23,6 +24,8 @@ void shell3d_3833_laws_law_svk(long m, const double *material_in, long material_
         for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
     vd volume[9];
     for (int i = 0; i < 9; i++) volume[i] = (vd){0};
+    vd volume_gauss2x2[9];
+    for (int i = 0; i < 9; i++) volume_gauss2x2[i] = (vd){0};
     const vd t0 = material[0]*(1.0/((1.0 + material[1])));
     const vd t1 = t0*(1.0/((-1.0 + 2.0*material[1])));
     const vd t2 = t1*(-1.0 + material[1]);
@@ -37,9 +40,72 @@ void shell3d_3833_laws_law_svk(long m, const double *material_in, long material_
     volume[6] = t4;
     volume[7] = t4;
     volume[8] = t4;
+    volume_gauss2x2[0] = SPLAT(0.0);
+    volume_gauss2x2[1] = SPLAT(0.0);
+    volume_gauss2x2[2] = SPLAT(0.0);
+    volume_gauss2x2[3] = SPLAT(0.0);
+    volume_gauss2x2[4] = SPLAT(0.0);
+    volume_gauss2x2[5] = SPLAT(0.0);
+    volume_gauss2x2[6] = SPLAT(0.0);
+    volume_gauss2x2[7] = SPLAT(0.0);
+    volume_gauss2x2[8] = SPLAT(0.0);
 
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 9; i++) volume_out[(first + j) * 9 + i] = volume[i][j];
+      for (int i = 0; i < 9; i++) volume_gauss2x2_out[(first + j) * 9 + i] = volume_gauss2x2[i][j];
+    }
+  }
+}
+
+/* Law coefficients per domain of svk_sri: svk with selective reduced integration of the surface: the plane-stress part and the shears at 2 x 2 Gauss points, the thickness-normal part over the volume (no membrane or shear locking of thin shells).
+   material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+   volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+   volume_gauss2x2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2x2 (Pa)
+   Operations per element: 19. */
+void shell3d_3833_laws_law_svk_sri(long m, const double *material_in, long material_stride, double *volume_out, double *volume_gauss2x2_out)
+{
+  vd material[2];
+  for (long first = 0; first < m; first += ANCF_LANES) {
+    long lane[ANCF_LANES];
+    for (int j = 0; j < ANCF_LANES; j++) lane[j] = first + j < m ? first + j : m - 1;
+    if (first == 0 || material_stride != 0)  /* a shared (stride 0) input is loaded once */
+      for (int i = 0; i < 2; i++)
+        for (int j = 0; j < ANCF_LANES; j++) material[i][j] = material_in[lane[j] * material_stride + i];
+    vd volume[9];
+    for (int i = 0; i < 9; i++) volume[i] = (vd){0};
+    vd volume_gauss2x2[9];
+    for (int i = 0; i < 9; i++) volume_gauss2x2[i] = (vd){0};
+    const vd t0 = (material[1]*material[1]);
+    const vd t1 = -1.0 + material[1];
+    const vd t2 = material[0]*(1.0/((1.0 + material[1])));
+    const vd t3 = t2*(1.0/((-1.0 + 2.0*material[1])));
+    const vd t4 = t0*t3*(1.0/(t1));
+    const vd t5 = -material[1]*t3;
+    const vd t6 = material[0]*(1.0/((-1.0 + t0)));
+    const vd t7 = -t6;
+    const vd t8 = 0.5*t2;
+    volume[0] = t4;
+    volume[1] = t4;
+    volume[2] = t5;
+    volume[3] = t4;
+    volume[4] = t5;
+    volume[5] = t1*t3;
+    volume[6] = SPLAT(0.0);
+    volume[7] = SPLAT(0.0);
+    volume[8] = SPLAT(0.0);
+    volume_gauss2x2[0] = t7;
+    volume_gauss2x2[1] = -material[1]*t6;
+    volume_gauss2x2[2] = SPLAT(0.0);
+    volume_gauss2x2[3] = t7;
+    volume_gauss2x2[4] = SPLAT(0.0);
+    volume_gauss2x2[5] = SPLAT(0.0);
+    volume_gauss2x2[6] = t8;
+    volume_gauss2x2[7] = t8;
+    volume_gauss2x2[8] = t8;
+
+    for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
+      for (int i = 0; i < 9; i++) volume_out[(first + j) * 9 + i] = volume[i][j];
+      for (int i = 0; i < 9; i++) volume_gauss2x2_out[(first + j) * 9 + i] = volume_gauss2x2[i][j];
     }
   }
 }

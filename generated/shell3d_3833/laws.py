@@ -9,11 +9,13 @@ def law_svk(material_in):
 
     material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
     volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+    volume_gauss2x2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2x2 (Pa)
     Operations per element: 11.
     """
     material = np.ascontiguousarray(material_in.T)
     m = material.shape[1]
     volume = np.zeros((9, m))
+    volume_gauss2x2 = np.zeros((9, m))
     t0 = material[0]*(1.0/((1.0 + material[1])))
     t1 = t0*(1.0/((-1.0 + 2.0*material[1])))
     t2 = t1*(-1.0 + material[1])
@@ -28,5 +30,57 @@ def law_svk(material_in):
     volume[6] = t4
     volume[7] = t4
     volume[8] = t4
+    volume_gauss2x2[0] = 0.0
+    volume_gauss2x2[1] = 0.0
+    volume_gauss2x2[2] = 0.0
+    volume_gauss2x2[3] = 0.0
+    volume_gauss2x2[4] = 0.0
+    volume_gauss2x2[5] = 0.0
+    volume_gauss2x2[6] = 0.0
+    volume_gauss2x2[7] = 0.0
+    volume_gauss2x2[8] = 0.0
 
-    return volume.T
+    return volume.T, volume_gauss2x2.T
+
+
+def law_svk_sri(material_in):
+    """Law coefficients per domain of svk_sri: svk with selective reduced integration of the surface: the plane-stress part and the shears at 2 x 2 Gauss points, the thickness-normal part over the volume (no membrane or shear locking of thin shells).
+
+    material (batch, 2): Young's modulus E (Pa), Poisson's ratio nu
+    volume (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume (Pa)
+    volume_gauss2x2 (output, 9): law coefficients (D11, D12, D13, D22, D23, D33, D44, D55, D66) on the volume_gauss2x2 (Pa)
+    Operations per element: 19.
+    """
+    material = np.ascontiguousarray(material_in.T)
+    m = material.shape[1]
+    volume = np.zeros((9, m))
+    volume_gauss2x2 = np.zeros((9, m))
+    t0 = (material[1]*material[1])
+    t1 = -1.0 + material[1]
+    t2 = material[0]*(1.0/((1.0 + material[1])))
+    t3 = t2*(1.0/((-1.0 + 2.0*material[1])))
+    t4 = t0*t3*(1.0/(t1))
+    t5 = -material[1]*t3
+    t6 = material[0]*(1.0/((-1.0 + t0)))
+    t7 = -t6
+    t8 = 0.5*t2
+    volume[0] = t4
+    volume[1] = t4
+    volume[2] = t5
+    volume[3] = t4
+    volume[4] = t5
+    volume[5] = t1*t3
+    volume[6] = 0.0
+    volume[7] = 0.0
+    volume[8] = 0.0
+    volume_gauss2x2[0] = t7
+    volume_gauss2x2[1] = -material[1]*t6
+    volume_gauss2x2[2] = 0.0
+    volume_gauss2x2[3] = t7
+    volume_gauss2x2[4] = 0.0
+    volume_gauss2x2[5] = 0.0
+    volume_gauss2x2[6] = t8
+    volume_gauss2x2[7] = t8
+    volume_gauss2x2[8] = t8
+
+    return volume.T, volume_gauss2x2.T

@@ -359,13 +359,20 @@ def _observers(observers: Sequence[Observer]) -> list[Observer]:
     return list(observers)
 
 
+#: The laws with svk's normal block over the whole thickness, which lock in bending at
+#: nu != 0 as ``ElementKind.svk_locking`` states (svk_sri reduces the surface rule only: the
+#: Poisson thickness locking of plates without r_zz stays).
+SVK_LOCKING_LAWS = ("svk", "svk_sri")
+
+
 def locking_warnings(scene: Scene) -> list[str]:
-    """A warning per material and kind of domain (beams, plates) that uses the svk law with
-    nu != 0 (Poisson locking, by the amount ``ElementKind.svk_locking`` states)."""
+    """A warning per material and kind of domain (beams, plates) that uses a law of
+    ``SVK_LOCKING_LAWS`` with nu != 0 (Poisson locking, by the amount
+    ``ElementKind.svk_locking`` states)."""
     out = []
     for name in sorted({body.material for body in scene.bodies}):
         material = scene.materials[name]
-        if material.law != "svk":
+        if material.law not in SVK_LOCKING_LAWS:
             continue
         nu = material.nu
         locking = dict(filter(None, (element_kind(b.element).svk_locking(nu)
@@ -378,11 +385,12 @@ def locking_warnings(scene: Scene) -> list[str]:
                        f"E, 2D and 3D beams alike: deflections up to {excess / (1 + excess):.0%}"
                        f" too small); use law = \"ecm\" (docs/laws.md)")
         if "plates" in locking:
-            out.append(f"material.{name}: law \"svk\" with nu = {nu:g} locks in bending "
-                       f"(Poisson thickness locking): its plates come out about "
-                       f"{locking['plates']:.0%} too stiff in bending, and no locking-free law "
-                       f"applies to plates yet (ecm needs a beam axis); with nu = 0 they do not "
-                       f"lock")
+            out.append(f"material.{name}: law \"{material.law}\" with nu = {nu:g} locks in "
+                       f"bending (Poisson thickness locking): its plates come out about "
+                       f"{locking['plates']:.0%} too stiff in bending (their thickness strain "
+                       f"is constant across the thickness; no law removes that, ecm needs a "
+                       f"beam axis); shell3d_3833 (r_zz) does not lock, nor do plates at "
+                       f"nu = 0")
     return out
 
 

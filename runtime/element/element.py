@@ -58,6 +58,8 @@ class Element:
     law: ``svk`` (St. Venant-Kirchhoff, default) | ``ecm`` (enhanced continuum mechanics, no
     Poisson locking) | ``ecm_sri`` (ecm with selective reduced integration along x: no locking
     of slender 2-node beams in large rotations; general invariants, straight or not) |
+    ``svk_sri`` (plates and shells: svk with the plane-stress and shear part at 2 x 2 Gauss
+    points of the surface, no membrane or shear locking; general invariants) |
     ``elastic_line`` (2-node beams: a structural Euler-Bernoulli beam of the centre line,
     axial strain, bending r_xx on the nodal frames and torsion along x, shear and section
     strains at the nodes; straight references only; ``section_stiffness`` gives its

@@ -21,9 +21,10 @@ from runtime.model.schema import plain, table
 class Material:
     """Elastic material ``name``: E (Pa) > 0, -1 < nu < 0.5, rho (kg/m^3) > 0.
 
-    law: ``svk`` (St. Venant-Kirchhoff) or ``ecm`` (elastic continuum mechanics with a shear
-    correction); shear_correction: the ecm shear correction factor (> 0), None for the default
-    (always None with svk); damping: Kelvin-Voigt coefficient alpha (s) >= 0, 0 for none.
+    law: ``svk`` (St. Venant-Kirchhoff) or another law of docs/laws.md (``ecm``, elastic
+    continuum mechanics with a shear correction; ``svk_sri`` for plates and shells, ...);
+    shear_correction: the ecm shear correction factor (> 0), None for the default (always
+    None with svk and svk_sri); damping: Kelvin-Voigt coefficient alpha (s) >= 0, 0 for none.
     In TOML the name is the key of the table ``[material.NAME]``.
     """
 
