@@ -281,7 +281,7 @@ class BodyPrismatic(NodeSide, Constraint):
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         vectors.exclusive_sides(data, path)
         joint = super().parse(data, path, context)
-        vectors.check_frame_node(joint.node, path, context, f"a {cls.type} holds")
+        vectors.check_frame_node(joint.node, f"{path}.node", context, f"a {cls.type} holds")
         if joint.other is not None:
             if joint.other == joint.body:
                 raise SceneError(f"{path}.other: expected another body than "
@@ -340,11 +340,12 @@ class BodyPrismatic(NodeSide, Constraint):
         owner = f"{self.type} of {self.body} on {side}"
         axis = np.asarray(self.axis)
         turns = isinstance(model.rigid[self.body].item, RigidBody)    # not a point mass
-        built.blocks.append(vectors.frame_rows(model, self.body, self.point, side,
-                                               normals_of(axis), turns, owner))
+        here = vectors.body_point(model, self.body, self.point)
+        built.blocks.append(vectors.frame_rows(model, here, side, normals_of(axis), owner,
+                                               self.body if turns else None))
         if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
-            along = vectors.frame_rows(model, self.body, self.point, side, axis[None, :],
-                                       False, f"{owner} (displacement)")
+            along = vectors.frame_rows(model, here, side, axis[None, :],
+                                       f"{owner} (displacement)")
             k = along.dofs.size
             unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
                                   np.zeros((1, k)), -np.ones(1))
