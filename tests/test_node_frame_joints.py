@@ -17,6 +17,7 @@ from test_multibody import _finite_difference_check, run, scene_of
 from runtime.model.errors import SceneError
 from runtime.model.model import Model
 from runtime.model.scene import parse_scene
+from runtime.solve.modal import modal
 
 #: the direction of both beams, the prismatic and cylindrical axis
 ALONG = np.array([0.6, 0.8, 0.0])
@@ -327,8 +328,8 @@ def test_a_prismatic_joint_between_beam2d_nodes_holds_the_slide_and_the_angle():
      'constraint[0].nodes: the second node must lie on the axis through the first at t = 0'),
     (_beams(0.0) + f"[[constraint]]\n{UNIVERSAL.replace('-0.8, 0.6', '0.6, 0.8')}".replace(
         "axis = [0, 0, 1]", "axis = [0, 0.6, 0.8]"),
-     "constraint[0].other_axis: expected an axis normal to axis (the cross of the joint), "
-     "got an angle of 61.3"),
+     "constraint[0].other_axis: expected an axis normal to axis at t = 0 (the cross of the "
+     "joint), got an angle of 61.3"),
     (_beams(0.1) + f"[[constraint]]\n{UNIVERSAL}",
      "constraint[0].nodes: the nodes of a joint share their position"),
 ])
@@ -358,3 +359,16 @@ def test_node_joints_round_trip_through_toml(name):
     table, gap, _, _ = JOINTS[name]
     scene = scene_of(f"{_beams(gap)}[[constraint]]\n{table}")
     assert parse_scene(tomllib.loads(scene.to_toml())) == scene
+
+
+@pytest.mark.parametrize("name", JOINTS)
+def test_the_modes_of_the_pair_show_the_joints_free_motions_at_zero_frequency(name):
+    """a clamped at its start, b on the joint, unloaded: one zero frequency per free
+    relative motion (the slide, the turn about the axis, the pins), then b's elastic
+    modes."""
+    _, _, free, _ = JOINTS[name]
+    model = _model(name, '[[constraint]]\ntype = "clamp"\nnode = "a:0"\n')
+    omega = modal(model, model.reference, len(free) + 1)
+    # zero to the round-off of the eigenvalues, sqrt(eps lambda_max) ~ 1e-2 rad/s here
+    assert np.abs(omega[:len(free)]).max() <= 1e-3 * omega[len(free)]
+    assert omega[len(free)] > 70.0                                       # rad/s

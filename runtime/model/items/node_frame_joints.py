@@ -32,7 +32,7 @@ import numpy as np
 
 from runtime.model.errors import SceneError
 from runtime.model.items import body_vectors as vectors
-from runtime.model.items.axis_joints import NORMAL
+from runtime.model.items.axis_joints import check_normal
 from runtime.model.items.base import ModelView
 from runtime.model.items.constraints import Built, Joint, NodePair, normals_of
 from runtime.model.schema import Context, NodeRef, Record, key, unit_axis
@@ -168,11 +168,8 @@ class Universal(Joint):
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         joint = super().parse(data, path, context)
-        cosine = float(np.asarray(joint.axis) @ np.asarray(joint.other_axis))
-        if abs(cosine) > NORMAL:
-            raise SceneError(f"{path}.other_axis: expected an axis normal to axis (the "
-                             f"cross of the joint), got an angle of "
-                             f"{np.degrees(np.arccos(np.clip(cosine, -1, 1))):.6g} degrees")
+        check_normal(np.asarray(joint.axis), np.asarray(joint.other_axis),
+                     f"{path}.other_axis", "axis")
         return joint
 
     def rows(self, dim: int, per_node: int) -> int:
