@@ -7,6 +7,7 @@ agree, and bad input names its key."""
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 
 import numpy as np
@@ -14,6 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 from test_multibody import _finite_difference_check, run, scene_of
 
+from runtime import run_scene
 from runtime.model.errors import SceneError
 from runtime.model.model import Model
 from runtime.model.scene import parse_scene
@@ -185,6 +187,20 @@ def test_a_prismatic_slide_under_gravity_along_its_axis_follows_g_t2_over_2(inte
     assert np.abs(positions[:, :, 0] - slide).max() <= 1e-11
     assert np.abs(positions[:, :, 1:] - reference[None, :, 1:]).max() <= 1e-11
     assert 3.0 * times[-1] ** 2 > 7e-3                                  # 7.5 mm
+
+
+def test_a_free_prismatic_slide_carries_no_force():
+    """The joint's reaction on b (its multipliers) is zero to the Newton tolerance (1e-10
+    of the forces): below 1e-9 of the force of gravity on b (generalized-alpha; the
+    trapezoidal rule's multipliers wander, to 2e-8 of it here)."""
+    sensors = "".join(f'[[sensor]]\ntype = "reaction"\nname = "{quantity}"\nnode = "b:0"\n'
+                      f'quantity = "{quantity}"\n' for quantity in ("force", "moment"))
+    scene = _model("prismatic", SLIDE + sensors).scene
+    result = run_scene(dataclasses.replace(scene, dynamic=dataclasses.replace(
+        scene.dynamic, integrator="generalized_alpha")), progress=False)
+    weight = 7800.0 * 0.02**2 * 0.6 * 6.0                                # N, along the axis
+    assert np.abs(result.sensors["force"]).max() <= 1e-9 * weight
+    assert np.abs(result.sensors["moment"]).max() <= 1e-9 * weight * 0.6
 
 
 #: a beam clamped at its start, under gravity across the axis, for a short run
