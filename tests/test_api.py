@@ -459,7 +459,8 @@ def random_scene(rng: random.Random) -> Scene:
         if isinstance(joint, Revolute | Cylindrical) and dim == 3 and rng.random() < 0.5:
             joint = dataclasses.replace(joint, axis=_vector(rng, 3))   # normalised
         if isinstance(joint, Prismatic) and rng.random() < 0.5:
-            joint = dataclasses.replace(joint, axis=_vector(rng, dim))
+            joint = dataclasses.replace(joint, axis=_vector(rng, dim), displacement=rng.choice(
+                [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]))
         if isinstance(joint, Universal) and rng.random() < 0.5:     # the cross: normal axes
             axis = _vector(rng, 3)
             joint = dataclasses.replace(joint, axis=axis, other_axis=tuple(

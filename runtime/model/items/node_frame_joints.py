@@ -10,7 +10,8 @@ coordinates (``runtime.model.holonomic``), as the rows of the rigid bodies' join
   place at t = 0 along the axis fixed in A's section ((r_B - r_Q) . n_k(A) = 0 for two
   normals n_k of the axis: 1 row in 2D), and B's frame keeps its orientation relative to
   A's (the small rotation of ``body_vectors.frame_rows``: 3 rows, 1 in 2D): 5 rows, the
-  slide along the axis left;
+  slide along the axis left, or prescribed by a ``displacement`` law d(t) (m, from t = 0:
+  the rheonomic row a . (r_B - r_Q) - d(t) = 0, as a ``body_prismatic``'s);
 * cylindrical (the axis a fixed in A, the line and its normals n_k in B): a . n_k(B) = 0
   and (r_A - r_Q) . n_k(B) = 0 with Q B's point at A's place at t = 0: 4 rows, a rotation
   about and a slide along the axis left;
@@ -31,11 +32,14 @@ from typing import Any, ClassVar
 import numpy as np
 
 from runtime.model.errors import SceneError
+from runtime.model.holonomic import Driver
 from runtime.model.items import body_vectors as vectors
 from runtime.model.items.axis_joints import check_normal
 from runtime.model.items.base import ModelView
+from runtime.model.items.body_joints import driven_travel, motion_key
 from runtime.model.items.constraints import Built, Joint, NodePair, normals_of
 from runtime.model.schema import Context, NodeRef, Record, key, unit_axis
+from runtime.model.time_laws import Law
 
 __all__ = ["Cylindrical", "Prismatic", "Universal"]
 
@@ -83,10 +87,15 @@ class NodeLine(NodePair):
 class Prismatic(NodeLine):
     """A slide along the ``axis`` (global at t = 0, default z; x in 2D), fixed in the first
     node's section, of the second node, whose frame keeps its orientation relative to the
-    first's (module docstring): 5 rows in 3D, 2 in 2D.  Both nodes carry a frame."""
+    first's (module docstring): 5 rows in 3D, 2 in 2D, and one more with a
+    ``displacement`` law.  Both nodes carry a frame."""
 
     type: ClassVar[str] = "prismatic"
     axis: tuple[float, ...] | None = key(_axis_key, None)
+    displacement: Law | None = key(motion_key("a displacement in m"), None)
+
+    def drivers(self) -> tuple[Driver, ...]:
+        return () if self.displacement is None else (Driver(self.displacement),)
 
     @classmethod
     def parse(cls, data: dict, path: str, context: Context) -> Record:
@@ -103,14 +112,19 @@ class Prismatic(NodeLine):
         return self
 
     def rows(self, dim: int, per_node: int) -> int:
-        return 5 if dim == 3 else 2
+        return (5 if dim == 3 else 2) + (self.displacement is not None)
 
     def apply(self, model: ModelView, built: Built) -> None:
         first, second = self.nodes
+        owner = f"{self.type} of {first} and {second}"
+        axis = np.asarray(self.axis)
         here = vectors.point(model, second, _reference_position(model, second))
-        built.blocks.append(vectors.frame_rows(
-            model, here, first, normals_of(np.asarray(self.axis)),
-            f"{self.type} of {first} and {second}", second))
+        built.blocks.append(vectors.frame_rows(model, here, first, normals_of(axis), owner,
+                                               second))
+        if self.displacement is not None:   # a . (r_B - r_Q) - d(t) = 0
+            built.blocks.append(driven_travel(vectors.frame_rows(
+                model, here, first, axis[None, :], f"{owner} (displacement)"),
+                built.drivers[0]))
 
 
 @dataclass(frozen=True)
