@@ -29,6 +29,7 @@ combination of the body's u and v = perp(u) (2 rows per gradient).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -159,7 +160,7 @@ class BodySpherical(NodeSide, Constraint):
             built.rows.append(row)
 
 
-def motion_key(what: str):
+def motion_key(what: str) -> Callable[[Any, str, Context], Law]:
     """A time law of prescribed joint motion (``what``: its unit), zero at t = 0: the
     motion is measured from the joint's pose at t = 0."""
     def parse(value: Any, path: str, context: Context) -> Law:

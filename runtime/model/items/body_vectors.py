@@ -204,7 +204,7 @@ def frame_rows(model: ModelView, here: Affine, side: Side, along: np.ndarray, ow
     frame) three more, the small rotation of its axes a_k (``side_axes``) relative to the
     side's directions b_k that are a_k at t = 0 (rad, the axial vector of the skew part of
     [a_i . b_j]: theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...; it changes sign when the
-    sides swap; in 2D the one rotation about z, theta_3).  All 0 at t = 0, bilinear
+    sides swap; in 2D one, the rotation about z, theta_3).  All 0 at t = 0, bilinear
     (linear to the ground)."""
     slide = here - point(model, side, here.at(model.reference), f"{owner}: the point")
     pairs = [(slide, direction(model, side, d, f"{owner}: the direction")) for d in along]
