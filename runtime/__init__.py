@@ -35,6 +35,7 @@ from runtime.model.items.loads import (
     SpringDamper,
     TorsionalSpring,
 )
+from runtime.model.items.node_frame_joints import Cylindrical, Prismatic, Universal
 from runtime.model.items.rigid import PointMass, RigidBody
 from runtime.model.items.sensors import (
     Acceleration,
@@ -82,13 +83,15 @@ __all__ = [
     "BodyPosition", "BodyPrismatic",
     "BodyReaction", "BodyRevolute", "BodySpherical", "BodyTorque", "BodyUniversal", "BodyVelocity",
     "BodyWeld", "Bushing", "Clamp", "Constant", "ConstantRate", "ConstraintViolation",
-    "CosineRamp", "Displacement", "DissipatedEnergy", "DistributedForce", "Dynamic", "Element",
+    "CosineRamp", "Cylindrical", "Displacement", "DissipatedEnergy", "DistributedForce",
+    "Dynamic", "Element",
     "End", "FaceForce", "Fix", "Gravity", "Hub", "KineticEnergy", "LineForce", "LineMoment",
     "LinearRamp", "Material", "Modal", "NodeRef", "Output", "Pin", "PointForce", "PointMass",
-    "PointMoment", "Position", "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad",
+    "PointMoment", "Position", "PotentialEnergy", "Pressure", "Prismatic", "PythonLaw",
+    "PythonLoad",
     "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
     "SectionForce", "Sensor", "Sine", "Slide", "Sliding", "Solver", "Spherical", "Spin",
     "SpinUp", "SpringDamper",
     "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table", "TorsionalSpring",
-    "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene"
+    "TotalEnergy", "Universal", "Velocity", "Weld", "load_scene", "run_scene"
 ]

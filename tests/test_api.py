@@ -37,6 +37,7 @@ from runtime import (
     ConstantRate,
     ConstraintViolation,
     CosineRamp,
+    Cylindrical,
     Displacement,
     DissipatedEnergy,
     DistributedForce,
@@ -61,6 +62,7 @@ from runtime import (
     Position,
     PotentialEnergy,
     Pressure,
+    Prismatic,
     Rectangle,
     Revolute,
     RigidBody,
@@ -80,6 +82,7 @@ from runtime import (
     Table,
     TorsionalSpring,
     TotalEnergy,
+    Universal,
     Velocity,
     Weld,
     load_scene,
@@ -270,7 +273,8 @@ def test_registries_are_keyed_by_type():
     for registry in (CONSTRAINTS, LOADS, SENSORS):
         assert all(cls.type == name for name, cls in registry.items())
     assert list(CONSTRAINTS) == ["clamp", "pin", "symmetry", "fix", "prescribed_rotation",
-                                 "spherical", "revolute", "weld", "body_spherical",
+                                 "spherical", "revolute", "weld", "prismatic",
+                                 "cylindrical", "universal", "body_spherical",
                                  "body_revolute",
                                  "body_prismatic", "body_weld", "body_cylindrical",
                                  "body_universal", "sliding"]
@@ -448,11 +452,19 @@ def random_scene(rng: random.Random) -> Scene:
         full = all(element_kind(x.element).vectors == ("r", *element_kind(x.element)
                                                        .first_gradients)
                    and len(element_kind(x.element).first_gradients) == dim for x in (a, b))
-        joints = [Spherical] + ([Weld] if full else []) + ([Revolute] if dim == 2 or full
-                                                          else [])
+        joints = ([Spherical] + ([Weld, Prismatic] if full else [])
+                  + ([Revolute] if dim == 2 or full else [])
+                  + ([Cylindrical, Universal] if full and dim == 3 else []))
         joint = rng.choice(joints)((f"{a.name}:-1", NodeRef(b.name, 0)))
-        if isinstance(joint, Revolute) and dim == 3 and rng.random() < 0.5:
+        if isinstance(joint, Revolute | Cylindrical) and dim == 3 and rng.random() < 0.5:
             joint = dataclasses.replace(joint, axis=_vector(rng, 3))   # normalised
+        if isinstance(joint, Prismatic) and rng.random() < 0.5:
+            joint = dataclasses.replace(joint, axis=_vector(rng, dim), displacement=rng.choice(
+                [None, CosineRamp(_number(rng, 0.1, 2), _number(rng, -1, 1))]))
+        if isinstance(joint, Universal) and rng.random() < 0.5:     # the cross: normal axes
+            axis = _vector(rng, 3)
+            joint = dataclasses.replace(joint, axis=axis, other_axis=tuple(
+                float(x) for x in np.cross(axis, _vector(rng, 3))))
         constraints.append(joint)
     if plate is not None:
         edge = rng.choice(["x=0", "x=-1", "y=0", "y=-1"])

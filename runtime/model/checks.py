@@ -6,7 +6,8 @@
   two prescribed rotations are refused); a symmetry or fix (which hold parts of a node)
   contradicts a prescribed rotation (beside a clamp or pin it holds what they leave free,
   as at the corner of a clamped edge and a symmetry edge); joints join two
-  distinct nodes at the same place in the reference, each pair once, and never two nodes whose
+  distinct nodes, each pair once; those that share a position (all but prismatic and
+  cylindrical) join nodes at the same place in the reference, never two nodes whose
   positions are already held or already tied by other joints (the multipliers would be
   singular); a weld joins nodes that carry every gradient;
 * loads: a point force acts on a node whose position is free, a point moment on a node whose
@@ -24,7 +25,14 @@ import numpy as np
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body
 from runtime.model.errors import SceneError, number_text, show
-from runtime.model.items.constraints import Constraint, Hub, Joint, NodeConstraint, Weld
+from runtime.model.items.constraints import (
+    Constraint,
+    Hub,
+    Joint,
+    NodeConstraint,
+    NodePair,
+    Weld,
+)
 from runtime.model.items.loads import Load
 from runtime.model.items.sensors import Sensor
 from runtime.model.schema import NodeRef
@@ -96,16 +104,18 @@ def check_constraints(constraints: tuple[Constraint, ...], bodies: tuple[Body, .
         ties.setdefault(None, []).append(i)
     joined: dict[frozenset, int] = {}
     for i, c in enumerate(constraints):
-        if not isinstance(c, Joint):
+        if not isinstance(c, NodePair):
             continue
         a, b = c.nodes
         path = f"constraint[{i}].nodes"
-        if isinstance(c, Weld):
-            check_weld(path, by_name[a.body], by_name[b.body])
         j = joined.setdefault(frozenset(c.nodes), i)
         if j != i:
             raise SceneError(f"{path}: the same joint as constraint[{j}] (nodes {a} and {b}); "
                              f"expected each pair of nodes joined once")
+        if not isinstance(c, Joint):      # a prismatic or cylindrical: the nodes apart
+            continue
+        if isinstance(c, Weld):
+            check_weld(path, by_name[a.body], by_name[b.body])
         pa = by_name[a.body].node_position(a.index)
         pb = by_name[b.body].node_position(b.index)
         gap = math.dist(pa, pb)

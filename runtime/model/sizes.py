@@ -13,7 +13,7 @@ import math
 from runtime.kernels.kind import element_kind
 from runtime.model.bodies import Body
 from runtime.model.errors import SceneError, number_text
-from runtime.model.items.constraints import Constraint, Joint, NodeConstraint
+from runtime.model.items.constraints import Constraint, NodeConstraint, NodePair
 from runtime.model.items.sensors import Sensor
 from runtime.model.settings import Dynamic, Modal, Static
 
@@ -88,7 +88,7 @@ def check_sizes(bodies: tuple[Body, ...], constraints: tuple[Constraint, ...],
     held = sum(c.held(kinds[node.body]) for c in constraints
                if isinstance(c, NodeConstraint) for node in c.targets())
     free = coordinates - held
-    joints = [c for c in constraints if isinstance(c, Joint)]
+    joints = [c for c in constraints if isinstance(c, NodePair)]
     dofs = free - sum(c.rows(dim, kinds[c.nodes[0].body].per_node) for c in joints)
     if dofs <= 0:
         raise SceneError(f"constraint: the constraints hold all {coordinates} coordinates of "

@@ -31,7 +31,7 @@ from runtime.model.items.constraints import Built, Constraint, NodeSide, normals
 from runtime.model.items.rigid import check_rigid_bodies, rigid_key
 from runtime.model.schema import Context, NodeRef, Record, key, node_key, unit_axis, vector
 
-__all__ = ["BodyCylindrical", "BodyUniversal"]
+__all__ = ["BodyCylindrical", "BodyUniversal", "check_normal"]
 
 #: the two axes of a universal joint are normal at t = 0 to this (cosine of their angle)
 NORMAL = 1e-9
@@ -118,7 +118,7 @@ class BodyUniversal(AxisJoint):
             mine = np.array(context.rigid[joint.body].frame) @ np.asarray(joint.axis)
             theirs = np.asarray(joint.other_axis) if joint.other is None else (
                 np.array(context.rigid[joint.other].frame) @ np.asarray(joint.other_axis))
-            _check_normal(mine, theirs, f"{path}.other_axis")
+            check_normal(mine, theirs, f"{path}.other_axis")
         return joint
 
     def apply(self, model: ModelView, built: Built) -> None:
@@ -127,7 +127,7 @@ class BodyUniversal(AxisJoint):
         owner = f"{self.type} of {self.body}"
         theirs = vectors.side_axis(model, side, self.other_axis, f"{owner}: other_axis")
         if self.node is not None:
-            _check_normal(axis, theirs, f"{owner}: other_axis (the node's reference frame)")
+            check_normal(axis, theirs, f"{owner}: other_axis (the node's reference frame)")
         unit = [vectors.direction(model, None, e) for e in np.eye(3)]
         built.blocks.append(vectors.dot_rows(
             owner, [(slide, e) for e in unit]
@@ -135,10 +135,11 @@ class BodyUniversal(AxisJoint):
                 vectors.direction(model, side, theirs, f"{owner}: other_axis"))]))
 
 
-def _check_normal(mine: np.ndarray, theirs: np.ndarray, where: str) -> None:
+def check_normal(mine: np.ndarray, theirs: np.ndarray, where: str,
+                 first: str = "the body's axis") -> None:
     """SceneError at ``where`` unless the axes ``mine`` and ``theirs`` (3,; unit, global
-    at t = 0) are normal to each other (``NORMAL``)."""
+    at t = 0) are normal to each other (``NORMAL``); ``first`` names ``mine``."""
     if abs(float(mine @ theirs)) > NORMAL:
-        raise SceneError(f"{where}: expected an axis normal to the body's axis at t = 0 "
+        raise SceneError(f"{where}: expected an axis normal to {first} at t = 0 "
                          f"(the cross of the joint), got an angle of "
                          f"{np.degrees(np.arccos(np.clip(mine @ theirs, -1, 1))):.6g} degrees")

@@ -29,6 +29,7 @@ combination of the body's u and v = perp(u) (2 rows per gradient).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -52,7 +53,8 @@ from runtime.model.schema import (
 )
 from runtime.model.time_laws import Law
 
-__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld", "angle_forms"]
+__all__ = ["BodyPrismatic", "BodyRevolute", "BodySpherical", "BodyWeld", "angle_forms",
+           "driven_travel", "motion_key"]
 
 #: the joined points must coincide at t = 0 to this, relative to the scene's size
 COINCIDENT = 1e-9
@@ -158,7 +160,7 @@ class BodySpherical(NodeSide, Constraint):
             built.rows.append(row)
 
 
-def _motion_key(what: str):
+def motion_key(what: str) -> Callable[[Any, str, Context], Law]:
     """A time law of prescribed joint motion (``what``: its unit), zero at t = 0: the
     motion is measured from the joint's pose at t = 0."""
     def parse(value: Any, path: str, context: Context) -> Law:
@@ -205,7 +207,7 @@ class BodyRevolute(BodySpherical):
     type: ClassVar[str] = "body_revolute"
     axis: tuple[float, ...] = key(_axis_key, (0.0, 0.0, 1.0),
                                   only_3d="a 2D revolute joint turns about z")
-    angle: Law | None = key(_motion_key("an angle in rad"), None)
+    angle: Law | None = key(motion_key("an angle in rad"), None)
 
     def drivers(self) -> tuple[Driver, ...]:
         if self.angle is None:
@@ -251,6 +253,16 @@ class BodyRevolute(BodySpherical):
         built.blocks.append(vectors.dot_rows(f"{self.type} of {self.body}", pairs))
 
 
+def driven_travel(travel: QuadraticBlock, driver: int) -> DrivenBlock:
+    """The rheonomic row ``travel - d(t) = 0`` of the one-row block ``travel`` (a slide
+    along a prismatic joint's axis from t = 0, m) and the driver coordinate ``driver`` of
+    the ``displacement`` law d(t)."""
+    k = travel.dofs.size
+    unit = QuadraticBlock(travel.owner, travel.dofs, np.zeros((1, k, k)), np.zeros((1, k)),
+                          -np.ones(1))
+    return DrivenBlock(travel.owner, (travel, unit), (-1, int(driver)))
+
+
 def _global_axis_key(value: Any, path: str, context: Context) -> tuple[float, ...]:
     return unit_axis(value, path, context.dim)
 
@@ -273,7 +285,7 @@ class BodyPrismatic(NodeSide, Constraint):
     body: str = key(rigid_key)
     point: tuple[float, ...] = key(_point_key, (0.0, 0.0, 0.0))
     axis: tuple[float, ...] = key(_global_axis_key, (1.0, 0.0, 0.0))
-    displacement: Law | None = key(_motion_key("a displacement in m"), None)
+    displacement: Law | None = key(motion_key("a displacement in m"), None)
     other: str | None = key(rigid_key, None)
     node: NodeRef | str | None = key(node_key, None)
 
@@ -281,7 +293,7 @@ class BodyPrismatic(NodeSide, Constraint):
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         vectors.exclusive_sides(data, path)
         joint = super().parse(data, path, context)
-        vectors.check_frame_node(joint.node, path, context, f"a {cls.type} holds")
+        vectors.check_frame_node(joint.node, f"{path}.node", context, f"a {cls.type} holds")
         if joint.other is not None:
             if joint.other == joint.body:
                 raise SceneError(f"{path}.other: expected another body than "
@@ -314,13 +326,10 @@ class BodyPrismatic(NodeSide, Constraint):
                                            -rows @ model.reference[dofs]))
         if self.displacement is not None:   # a . (r_P - r_P0) - d(t) = 0
             along = np.asarray(self.axis) @ position
-            zero = np.zeros((1, dofs.size, dofs.size))
-            owner = f"{self.type} of {self.body} (displacement)"
-            built.blocks.append(DrivenBlock(owner, (
-                QuadraticBlock(owner, dofs, zero, along[None, :],
-                               np.array([-along @ model.reference[dofs]])),
-                QuadraticBlock(owner, dofs, zero, np.zeros((1, dofs.size)), -np.ones(1))),
-                (-1, int(built.drivers[0]))))
+            built.blocks.append(driven_travel(QuadraticBlock(
+                f"{self.type} of {self.body} (displacement)", dofs,
+                np.zeros((1, dofs.size, dofs.size)), along[None, :],
+                np.array([-along @ model.reference[dofs]])), built.drivers[0]))
         rigid = model.rigid[self.body]
         if not isinstance(rigid.item, RigidBody):
             return
@@ -340,16 +349,13 @@ class BodyPrismatic(NodeSide, Constraint):
         owner = f"{self.type} of {self.body} on {side}"
         axis = np.asarray(self.axis)
         turns = isinstance(model.rigid[self.body].item, RigidBody)    # not a point mass
-        built.blocks.append(vectors.frame_rows(model, self.body, self.point, side,
-                                               normals_of(axis), turns, owner))
+        here = vectors.body_point(model, self.body, self.point)
+        built.blocks.append(vectors.frame_rows(model, here, side, normals_of(axis), owner,
+                                               self.body if turns else None))
         if self.displacement is not None:   # a . (r_P - r_Q) - d(t) = 0
-            along = vectors.frame_rows(model, self.body, self.point, side, axis[None, :],
-                                       False, f"{owner} (displacement)")
-            k = along.dofs.size
-            unit = QuadraticBlock(along.owner, along.dofs, np.zeros((1, k, k)),
-                                  np.zeros((1, k)), -np.ones(1))
-            built.blocks.append(DrivenBlock(along.owner, (along, unit),
-                                            (-1, int(built.drivers[0]))))
+            built.blocks.append(driven_travel(vectors.frame_rows(
+                model, here, side, axis[None, :], f"{owner} (displacement)"),
+                built.drivers[0]))
 
 
 @dataclass(frozen=True)

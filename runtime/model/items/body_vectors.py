@@ -27,8 +27,8 @@ from runtime.model.items.rigid import natural_map
 from runtime.model.schema import Context, NodeRef
 
 __all__ = ["Affine", "Side", "body_point", "check_frame_node", "combined", "direction", "dot_rows",
-           "exclusive_sides", "frame_deflection", "frame_rows", "point", "side_axis",
-           "side_of"]
+           "exclusive_sides", "frame_deflection", "frame_rows", "point", "side_axes",
+           "side_axis", "side_of"]
 
 #: the other side of a joint: the ground (None), a rigid body (its name) or a node
 Side = str | NodeRef | None
@@ -70,15 +70,16 @@ def exclusive_sides(data: dict, path: str) -> None:
                          "the ground), got both")
 
 
-def check_frame_node(node: NodeRef | None, path: str, context: Context, needs: str) -> None:
-    """SceneError when the ``node`` (None: no node side) lacks the gradients of a frame
-    fixed in it (r_x, r_y (, r_z) spanning the scene's space; a cable node's r_x fixes one
-    direction only); ``needs`` says what needs the frame, as "a body_prismatic holds"."""
+def check_frame_node(node: NodeRef | None, where: str, context: Context, needs: str) -> None:
+    """SceneError at the key path ``where`` when the ``node`` (None: no node side) lacks the
+    gradients of a frame fixed in it (r_x, r_y (, r_z) spanning the scene's space; a cable
+    node's r_x fixes one direction only); ``needs`` says what needs the frame, as "a
+    body_prismatic holds"."""
     if node is None:
         return
     kind = element_kind(context.node.bodies[node.body].element)
     if len(kind.first_gradients) < context.dim:
-        raise SceneError(f"{path}.node: {needs} the node's frame, which needs its "
+        raise SceneError(f"{where}: {needs} the node's frame, which needs its "
                          f"{('two', 'three')[context.dim - 2]} gradients "
                          f"{', '.join(('r_x', 'r_y', 'r_z')[:context.dim])} (a "
                          f"{'beam2d' if context.dim == 2 else 'beam3d or plate3d'} node); node "
@@ -186,24 +187,32 @@ def combined(block: QuadraticBlock, matrix: np.ndarray) -> QuadraticBlock:
                           matrix @ block.linear, matrix @ block.constant)
 
 
-def frame_rows(model: ModelView, body: str, local: tuple[float, ...], side: Side,
-               along: np.ndarray, rotation: bool, owner: str) -> QuadraticBlock:
-    """The displacement (m) of the point ``local`` of the rigid body or point mass ``body``
-    from the ``side``'s point Q that is there at t = 0, along the side's directions b_k
-    that are the rows of ``along`` (n, 3) at t = 0: n rows (r_P - r_Q) . b_k; with
-    ``rotation`` (a rigid body) three more, the small rotation of the body's axes a_k
-    relative to the side's directions b_k that are a_k at t = 0 (rad, the axial vector of
-    the skew part of [a_i . b_j]: theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...; it changes
-    sign when the sides swap; in 2D the one rotation about z, theta_3).  All 0 at t = 0,
-    bilinear (linear to the ground)."""
-    here = body_point(model, body, local)
+def side_axes(model: ModelView, side: Side) -> np.ndarray:
+    """The axes (rows, (dim, dim)) at t = 0 of the frame of a rigid body or of a node's
+    reference frame (its gradients orthonormalised, ``ModelView.node_frame``)."""
+    if isinstance(side, NodeRef):
+        return model.node_frame(model.reference, model.node_index(side)).T
+    return np.asarray(model.rigid[side].item.frame, float).T
+
+
+def frame_rows(model: ModelView, here: Affine, side: Side, along: np.ndarray, owner: str,
+               turning: Side = None) -> QuadraticBlock:
+    """The displacement (m) of the point ``here`` (dim: a rigid body's point, a node's
+    position) from the ``side``'s point Q that is there at t = 0, along the side's
+    directions b_k that are the rows of ``along`` (n, dim) at t = 0: n rows
+    (r_P - r_Q) . b_k; with ``turning`` (the side of P: a rigid body or a node with a
+    frame) three more, the small rotation of its axes a_k (``side_axes``) relative to the
+    side's directions b_k that are a_k at t = 0 (rad, the axial vector of the skew part of
+    [a_i . b_j]: theta_1 = (a_2 . b_3 - a_3 . b_2) / 2, ...; it changes sign when the
+    sides swap; in 2D one, the rotation about z, theta_3).  All 0 at t = 0, bilinear
+    (linear to the ground)."""
     slide = here - point(model, side, here.at(model.reference), f"{owner}: the point")
     pairs = [(slide, direction(model, side, d, f"{owner}: the direction")) for d in along]
     n = len(pairs)
-    if not rotation:
+    if turning is None:
         return dot_rows(owner, pairs)
-    axes = model.rigid[body].item.frame.T                 # a_k at t = 0 (rows)
-    mine = [direction(model, body, a) for a in axes]
+    axes = side_axes(model, turning)                      # a_k at t = 0 (rows)
+    mine = [direction(model, turning, a) for a in axes]
     theirs = [direction(model, side, a, f"{owner}: the axis") for a in axes]
     planes = ((1, 2), (2, 0), (0, 1)) if len(axes) == 3 else ((0, 1),)
     for i, j in planes:                                   # a_i . b_j and a_j . b_i
@@ -221,4 +230,5 @@ def frame_deflection(model: ModelView, body: str, local: tuple[float, ...], side
     ``body`` from the ``side``'s point there at t = 0 along the side's directions that are
     the body's axes at t = 0 (m), and the small rotation of the body's axes relative to
     them (rad); all 0 at t = 0."""
-    return frame_rows(model, body, local, side, model.rigid[body].item.frame.T, True, owner)
+    return frame_rows(model, body_point(model, body, local), side, side_axes(model, body),
+                      owner, body)

@@ -1,7 +1,7 @@
 """The registry of every ``[[constraint]]`` type, ``CONSTRAINTS``: the node constraints and
-joints between ANCF nodes (``runtime.model.items.constraints``) and the joints of rigid
-bodies, which build on them (``runtime.model.items.body_joints``, ``axis_joints``).  A new
-constraint class is one entry here."""
+joints between ANCF nodes (``runtime.model.items.constraints``, ``node_frame_joints``) and
+the joints of rigid bodies, which build on them (``runtime.model.items.body_joints``,
+``axis_joints``).  A new constraint class is one entry here."""
 
 from __future__ import annotations
 
@@ -16,11 +16,13 @@ from runtime.model.items.constraints import (
     Spherical,
     Weld,
 )
+from runtime.model.items.node_frame_joints import Cylindrical, Prismatic, Universal
 from runtime.model.items.sliding import Sliding
 from runtime.model.items.symmetry import Fix, Symmetry
 from runtime.model.schema import registry
 
 CONSTRAINTS: dict[str, type[Constraint]] = registry(Clamp, Pin, Symmetry, Fix, Hub, Spherical,
-                                                    Revolute, Weld, BodySpherical,
+                                                    Revolute, Weld, Prismatic, Cylindrical,
+                                                    Universal, BodySpherical,
                                                     BodyRevolute, BodyPrismatic, BodyWeld,
                                                     BodyCylindrical, BodyUniversal, Sliding)

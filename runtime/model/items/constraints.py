@@ -2,8 +2,10 @@
 
 A constraint either holds coordinates of one node (``NodeConstraint``: clamp, pin, a hub
 whose rotation is prescribed; ``symmetry`` and ``fix``, which hold combinations of them:
-``runtime.model.items.symmetry``) or ties two nodes together with linear joint rows
-``A q = 0`` solved with Lagrange multipliers (``Joint``: spherical, revolute, weld).  Each
+``runtime.model.items.symmetry``) or ties two nodes together with joint rows solved
+with Lagrange multipliers (``NodePair``; ``Joint``: spherical, revolute, weld, linear rows
+``A q = 0`` and the revolute's quadratic ones; the prismatic, cylindrical and universal
+joints of ``runtime.model.items.node_frame_joints``).  Each
 class declares its TOML keys as fields (``runtime.model.schema.Record``) and implements its effect
 on a model in ``apply``; adding one is one class here and one entry in ``CONSTRAINTS``
 (``runtime.model.items.constraint_types``, which also holds the joints of rigid bodies).
@@ -35,7 +37,7 @@ from runtime.model.schema import (
 from runtime.model.time_laws import Law
 
 __all__ = ["Clamp", "Constraint", "HeldNodes", "Hub", "Joint", "NodeConstraint",
-           "Pin", "Revolute", "Spherical", "Weld"]
+           "NodePair", "Pin", "Revolute", "Spherical", "Weld"]
 
 # weld coefficients below this (relative to 1: the reference frames are unit) are the
 # round-off of cosines of right angles, written as exact zeros
@@ -197,14 +199,27 @@ def _nodes_key(value: Any, path: str, context: Context) -> tuple[NodeRef, NodeRe
 
 
 @dataclass(frozen=True)
-class Joint(Constraint):
-    """A joint between two distinct ``nodes`` at the same place in the reference: linear rows
-    ``A q = 0`` (Lagrange multipliers).  This base ties the positions: r_A = r_B."""
+class NodePair(Constraint):
+    """A joint between two distinct ``nodes`` (``"BODY:INDEX"``) of meshed bodies."""
 
     nodes: tuple[NodeRef | str, NodeRef | str] = key(_nodes_key)
 
     def rows(self, dim: int, per_node: int) -> int:
-        """Number of joint rows (multipliers) it adds."""
+        """Number of joint rows (multipliers) it adds in a ``dim``-D scene, ``per_node``
+        coordinates per node."""
+        raise NotImplementedError
+
+    def targets(self) -> list[NodeRef]:
+        """The two nodes it joins."""
+        return list(self.nodes)
+
+
+@dataclass(frozen=True)
+class Joint(NodePair):
+    """A joint between two nodes at the same place in the reference: linear rows
+    ``A q = 0`` (Lagrange multipliers).  This base ties the positions: r_A = r_B."""
+
+    def rows(self, dim: int, per_node: int) -> int:
         return dim
 
     def apply(self, model: ModelView, built: Built) -> None:

@@ -531,7 +531,7 @@ class Bushing(RigidForceElement):
     def parse(cls, data: dict, path: str, context: Context) -> Record:
         exclusive_sides(data, path)
         load = super().parse(data, path, context)
-        check_frame_node(load.node, path, context, "a bushing turns with")
+        check_frame_node(load.node, f"{path}.node", context, "a bushing turns with")
         return load
 
     def state_force(self, model: ModelView) -> BushingForce:

@@ -21,7 +21,6 @@ from runtime.kernels.kind import element_kind
 from runtime.model.errors import SceneError, show
 from runtime.model.items import material_points as material
 from runtime.model.items.base import ModelView
-from runtime.model.items.constraints import Joint
 from runtime.model.items.rigid import check_rigid_bodies, planar_defaults, rigid_key
 from runtime.model.schema import (
     NAME_LENGTH,
@@ -535,8 +534,7 @@ def _blocks(model: ModelView):
 
 def check_reactions(sensors: tuple[Sensor, ...], constraints: tuple) -> None:
     """SceneError naming a reaction sensor whose node no constraint holds or joins."""
-    held = {ref for c in constraints for ref in
-            (c.nodes if isinstance(c, Joint) else c.targets())}
+    held = {ref for c in constraints for ref in c.targets()}
     for i, sensor in enumerate(sensors):
         if not isinstance(sensor, Reaction):
             continue
