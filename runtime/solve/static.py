@@ -144,12 +144,15 @@ def force_scale(force: np.ndarray, load: np.ndarray) -> float:
 
 @dataclass
 class StaticResult:
-    """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used."""
+    """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used,
+    and the torsional springs' joint angles (loads,; rad, turns counted from one load level
+    to the next: ``StateLoads.spring_angles``; None: each within half a turn of 0)."""
 
     q: np.ndarray
     multipliers: np.ndarray
     iterations: int
     load_steps: int
+    spring_angles: np.ndarray | None = None
 
 
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
@@ -197,9 +200,10 @@ def load_factors(model: Model, factor: float) -> np.ndarray:
 def solve_static(model: Model, settings, newton=None) -> StaticResult:
     """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
     solves one load increment (default ``newton_static``, in Python; the compiled engine's
-    ``CompiledStatic`` is the other)."""
+    ``CompiledStatic`` is the other) and counts the torsional springs' turns up to each
+    converged one (``newton.state_loads``: ``StateLoads.accept``)."""
     if newton is not None:     # generated code: no BLAS threads to hold back
-        return _solve_static(model, settings, newton)
+        return _solve_static(model, settings, newton, newton.state_loads)
 
     convergence = Convergence.of(model, settings.tolerance)
     state_loads = StateLoads(model)
@@ -212,17 +216,19 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
                              convergence, follower)
 
     with single_threaded_blas():
-        return _solve_static(model, settings, python_newton)
+        return _solve_static(model, settings, python_newton, state_loads)
 
 
-def _solve_static(model: Model, settings, newton) -> StaticResult:
+def _solve_static(model: Model, settings, newton, state_loads: StateLoads) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
     lets the next grow again (doubling, up to the initial increment).  An
     IllConditionedError is not retried.  An increment that jumps past a limit point to
-    another branch (``_snapped``) fails like one that does not converge.
+    another branch (``_snapped``) fails like one that does not converge.  The torsional
+    springs of ``state_loads`` (those ``newton`` evaluates) count turns from one converged
+    increment to the next.
     """
     check_held(model)
     q = model.reference.copy()
@@ -247,10 +253,12 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
                                        f"{done:.4g} of it{limit}") from None
             continue
         q, multipliers, done = q_new, mu_new, target
+        state_loads.accept(q)
         iterations += used
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
-    return StaticResult(q, multipliers, iterations, steps)
+    return StaticResult(q, multipliers, iterations, steps,
+                        state_loads.spring_angles(q[None, :])[0])
 
 
 def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
