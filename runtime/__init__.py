@@ -53,6 +53,7 @@ from runtime.model.items.sensors import (
     SectionForce,
     Sensor,
     Slide,
+    SpringAngle,
     Strain,
     StrainEnergy,
     Stress,
@@ -88,7 +89,7 @@ __all__ = [
     "PointMoment", "Position", "PotentialEnergy", "Pressure", "PythonLaw", "PythonLoad",
     "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
     "SectionForce", "Sensor", "Sine", "Slide", "Sliding", "Solver", "Spherical", "Spin",
-    "SpinUp", "SpringDamper",
+    "SpinUp", "SpringAngle", "SpringDamper",
     "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table", "TorsionalSpring",
     "TotalEnergy", "Velocity", "Weld", "load_scene", "run_scene"
 ]
