@@ -633,14 +633,13 @@ class Model:
         total = np.zeros(rows.shape[0])
         near = None if angles is None else np.broadcast_to(
             np.atleast_2d(angles), (rows.shape[0], len(self.scene.loads)))
-        for load in self.scene.loads:
+        for index, load in enumerate(self.scene.loads):
             if not hasattr(load, "coupled_dofs"):
                 continue
             element = load.state_force(self)
             scale = 1.0 if t is None else load.time_law.sample(
                 np.broadcast_to(np.atleast_1d(np.asarray(t, float)), total.shape))[0]
             if near is not None and hasattr(element, "turned"):
-                index = self.scene.loads.index(load)
                 energies = [element.energy(x, float(n)) for x, n in zip(rows, near[:, index],
                                                                        strict=True)]
             else:

@@ -708,13 +708,14 @@ class CompiledEngine:
 
     def _run(self, t_end: float, step: float, observe_block, progress) -> State:
         dae = self.dae
+        dae.state_loads.reset_turns()      # a run counts turns afresh (in Python and in C)
         state = initial_state(dae, mass=self.mass)
         m, self._prepared = self._prepared, None
         if m is None or m.h != step:
             m = self._model(step)
         s = self._state(state)
         turned = self._turned(m)
-        turned[:] = 0.0                  # a run counts turns afresh
+        turned[:] = 0.0
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))

@@ -553,11 +553,11 @@ class Integrator:
                           np.array([state.extra["dissipated"]]), loads.spring_angles(q_full))
 
     def _run(self, t_end: float, step: float, observe_block, progress) -> State:
+        self.dae.state_loads.reset_turns()      # a run counts turns afresh
         state = self.initial_state()
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
-        self.dae.state_loads.reset_turns()
         self._observe(observe_block, state, True)
         for n in range(1, steps + 1):
             state = self.advance(state, n, step)
