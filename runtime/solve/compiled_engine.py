@@ -858,8 +858,7 @@ class CompiledStatic:
         self._qp = dae.prescribed_motion([0.0])[0][0]
         self._qp_buffer = self.engine._buffer(self._qp)
         self.max_iterations = settings.max_iterations
-        #: the state loads whose torsional springs count turns (``accept``) for the step
-        self.state_loads = _Counted(dae.state_loads, self.engine._turned(self._m))
+        self._turned = self.engine._turned(self._m)
 
     def __call__(self, q: np.ndarray, load_fraction: float,
                  multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
@@ -886,20 +885,16 @@ class CompiledStatic:
         return (dae.full_coordinates(state_q.copy(), self._qp), state_lam.copy(),
                 s.newton_iterations - before)
 
-
-class _Counted:
-    """The ``StateLoads`` of a compiled static solve whose accepted turns (``accept``) also
-    go to the step's fe_turned (``turned``, a view)."""
-
-    def __init__(self, state_loads, turned: np.ndarray) -> None:
-        self.loads, self.turned = state_loads, turned
-
     def accept(self, q_full: np.ndarray) -> None:
-        """Count the turns up to the converged state q_full (size,), in both."""
-        self.loads.accept(q_full)
-        for element, (_, evaluate, _) in enumerate(self.loads.compiled):
-            self.turned[element] = getattr(evaluate, "turned", 0.0)
+        """Count the torsional springs' turns up to the converged state q_full (size,), for
+        the next solves (``StateLoads.accept``, and the step's fe_turned)."""
+        loads = self.engine.dae.state_loads
+        loads.accept(q_full)
+        for element, (_, evaluate, _) in enumerate(loads.compiled):
+            self._turned[element] = getattr(evaluate, "turned", 0.0)
 
     def spring_angles(self, q_full: np.ndarray) -> np.ndarray:
-        """``StateLoads.spring_angles`` at the states q_full (k, size)."""
-        return self.loads.spring_angles(q_full)
+        """The torsional springs' joint angles at the states q_full (k, size), turns
+        counted (``StateLoads.spring_angles``)."""
+        return self.engine.dae.state_loads.spring_angles(q_full)
+

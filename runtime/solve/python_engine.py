@@ -299,8 +299,7 @@ class OutputDynamics:
         """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
         the states (k, size) of the output times (k,) (s), the torsional springs at their
         joint angles ``angles`` (k, loads; ``Samples.spring_angles``; None: as they are
-        counted); BLAS on one thread
-        (small banded solves, which threads only slow down)."""
+        counted); BLAS on one thread (small banded solves, which threads only slow down)."""
         with single_threaded_blas():
             return self._evaluate(times, q_full, v_full, angles)
 

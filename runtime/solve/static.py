@@ -17,6 +17,7 @@ does not retry.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import scipy.sparse
@@ -200,10 +201,9 @@ def load_factors(model: Model, factor: float) -> np.ndarray:
 def solve_static(model: Model, settings, newton=None) -> StaticResult:
     """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
     solves one load increment (default ``newton_static``, in Python; the compiled engine's
-    ``CompiledStatic`` is the other) and counts the torsional springs' turns up to each
-    converged one (``newton.state_loads``: ``StateLoads.accept``)."""
+    ``CompiledStatic`` is the other, which also counts the turns: ``TurnCount``)."""
     if newton is not None:     # generated code: no BLAS threads to hold back
-        return _solve_static(model, settings, newton, newton.state_loads)
+        return _solve_static(model, settings, newton, newton)
 
     convergence = Convergence.of(model, settings.tolerance)
     state_loads = StateLoads(model)
@@ -219,7 +219,18 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
         return _solve_static(model, settings, python_newton, state_loads)
 
 
-def _solve_static(model: Model, settings, newton, state_loads: StateLoads) -> StaticResult:
+class TurnCount(Protocol):
+    """What counts the torsional springs' turns of a static solve: ``StateLoads`` (the
+    Python solves) or ``CompiledStatic``."""
+
+    def accept(self, q_full: np.ndarray) -> None:
+        """Count the turns up to the converged state q_full (size,)."""
+
+    def spring_angles(self, q_full: np.ndarray) -> np.ndarray:
+        """The joint angles (k, loads) at the states q_full (k, size), turns counted."""
+
+
+def _solve_static(model: Model, settings, newton, turns: TurnCount) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
@@ -227,7 +238,7 @@ def _solve_static(model: Model, settings, newton, state_loads: StateLoads) -> St
     lets the next grow again (doubling, up to the initial increment).  An
     IllConditionedError is not retried.  An increment that jumps past a limit point to
     another branch (``_snapped``) fails like one that does not converge.  The torsional
-    springs of ``state_loads`` (those ``newton`` evaluates) count turns from one converged
+    springs count turns (``turns``: those ``newton`` evaluates) from one converged
     increment to the next.
     """
     check_held(model)
@@ -253,12 +264,12 @@ def _solve_static(model: Model, settings, newton, state_loads: StateLoads) -> St
                                        f"{done:.4g} of it{limit}") from None
             continue
         q, multipliers, done = q_new, mu_new, target
-        state_loads.accept(q)
+        turns.accept(q)
         iterations += used
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
     return StaticResult(q, multipliers, iterations, steps,
-                        state_loads.spring_angles(q[None, :])[0])
+                        turns.spring_angles(q[None, :])[0])
 
 
 def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,
