@@ -54,6 +54,7 @@ from runtime.model.items.sensors import (
     SectionForce,
     Sensor,
     Slide,
+    SpringAngle,
     Strain,
     StrainEnergy,
     Stress,
@@ -91,7 +92,7 @@ __all__ = [
     "PythonLoad",
     "Reaction", "Rectangle", "Result", "Revolute", "RigidBody", "Scene", "SceneError",
     "SectionForce", "Sensor", "Sine", "Slide", "Sliding", "Solver", "Spherical", "Spin",
-    "SpinUp", "SpringDamper",
+    "SpinUp", "SpringAngle", "SpringDamper",
     "Static", "Strain", "StrainEnergy", "Stress", "Symmetry", "Table", "TorsionalSpring",
     "TotalEnergy", "Universal", "Velocity", "Weld", "load_scene", "run_scene"
 ]

@@ -75,6 +75,7 @@ from runtime import (
     Spherical,
     Spin,
     SpinUp,
+    SpringAngle,
     SpringDamper,
     Static,
     StrainEnergy,
@@ -287,7 +288,8 @@ def test_registries_are_keyed_by_type():
                              "potential_energy", "total_energy", "dissipated_energy",
                              "constraint_violation", "velocity", "acceleration", "reaction",
                              "strain", "stress", "section", "body_position", "body_velocity",
-                             "body_angle", "body_angular_velocity", "body_reaction", "slide"]
+                             "body_angle", "body_angular_velocity", "body_reaction", "slide",
+                             "spring_angle"]
     assert list(RIGID_BODIES) == ["rigid", "point_mass"]
 
 
@@ -632,6 +634,7 @@ def _rigid_items(rng: random.Random, chain: list, constraints: list, loads: list
     loads.append(Bushing(body="crank", stiffness=tuple(_number(rng, 0, 1e3) for _ in range(6)),
                          point=_vector(rng, 3), **rng.choice([{}, {"other": "wheel"}, *node]),
                          damping=rng.choice([None, tuple(_number(rng, 0, 5) for _ in range(6))])))
+    sensors.append(SpringAngle(f"sa{len(sensors)}", len(loads)))
     loads.append(TorsionalSpring(body="wheel", stiffness=_number(rng, 0, 100),
                                  other=rng.choice([None, "crank"]), axis=_vector(rng, 3),
                                  damping=_number(rng, 0, 10), angle=_number(rng, -1, 1)))

@@ -146,15 +146,19 @@ class Simulation:
     def _static_sensors(self, found: analysis.StaticResult) -> dict[str, float]:
         """The sensors at the static equilibrium: at rest, loads at their nominal value, the
         joint multipliers of the solution (reactions)."""
+        angles = found.spring_angles
         if not self.sensors.dynamics:
-            return self.sensors.values(found.q, t=None)
+            return self.sensors.values(found.q, t=None, spring_angles=angles)
         model = self.model
         force = model.internal_forces(found.q, jacobian=False)[0] + model.nominal_load()
         followers = StateLoads(model)
         if followers:
+            if angles is not None:
+                followers.count_turns(angles)
             force += followers.evaluate(found.q, np.ones(len(self.scene.loads)), False)[0]
         return self.sensors.values(found.q, t=None, a=np.zeros(model.size),
-                                   multipliers=found.multipliers, force=force)
+                                   multipliers=found.multipliers, force=force,
+                                   spring_angles=angles)
 
     def _solve_static(self, settings) -> analysis.StaticResult:
         """The static equilibrium with the chosen engine's Newton solve, or the end of the
@@ -187,13 +191,14 @@ class Simulation:
             return None
 
         found = arc_length.trace_path(self.model, settings, stop)
-        rows = [values(q) for q in found.states]
+        rows = [self.sensors.values(q, t=None, spring_angles=angles)
+                for q, angles in zip(found.states, found.spring_angles, strict=True)]
         self.path = {"load_factor": found.load_factors,
                      **{n: np.array([row[n] for row in rows]) for n in self.sensors.names}}
         self.summary.record_path(rows[-1], found.iterations, found.steps, found.load_factor,
                                  len(rows), found.stopped)
         return analysis.StaticResult(found.q, found.multipliers, found.iterations,
-                                     found.steps)
+                                     found.steps, found.spring_angles[-1])
 
     def _charge_setup(self, engine, seconds: float) -> None:
         """An engine built in ``seconds`` (its generated step compiled or loaded): its
@@ -219,12 +224,14 @@ class Simulation:
             observer.modal(self.modes)
 
     def _observe(self, times: np.ndarray, q: np.ndarray, v: np.ndarray,
-                 dissipated: np.ndarray) -> None:
-        """A block of output times (k,): states (k, size), dissipated energy (k,).  Raises
+                 dissipated: np.ndarray, angles: np.ndarray) -> None:
+        """A block of output times (k,): states (k, size), dissipated energy (k,), the
+        torsional springs' joint angles (k, loads; ``Samples.spring_angles``).  Raises
         Divergence at the first output whose state or sensors are non-finite or absurd
         (``StateLimits``), after observing those before it."""
-        dynamics = self._dynamics(times, q, v) if self._dynamics is not None else ()
-        values = self.sensors.block(Samples(times, q, v, dissipated, *dynamics))
+        dynamics = self._dynamics(times, q, v, angles) if self._dynamics is not None else ()
+        values = self.sensors.block(Samples(times, q, v, dissipated, *dynamics,
+                                            spring_angles=angles))
         insane = self._first_insane(q, v, values)
         if insane is not None:
             row, cause = insane

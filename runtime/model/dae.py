@@ -244,6 +244,7 @@ class StateLoads:
 
     def __init__(self, model: Model) -> None:
         self.size, self.nnz = model.size, model.pattern.nnz
+        self.scene_loads = len(model.scene.loads)
         #: (index among the scene's loads, state force, slots (m, k, k) of the Jacobian
         #: entries in the pattern, -1 where a coordinate is not free)
         self.loads = []
@@ -264,6 +265,39 @@ class StateLoads:
 
     def __len__(self) -> int:
         return len(self.loads)
+
+    @property
+    def turning(self) -> list:
+        """Its loads that count turns (torsional springs: ``turned``, ``accept``), as
+        entries of ``loads``."""
+        return [entry for entry in self.loads if hasattr(entry[1], "turned")]
+
+    def reset_turns(self) -> None:
+        """Start counting turns afresh (a new run: every spring's ``turned`` 0)."""
+        for _, evaluate, _ in self.turning:
+            evaluate.turned = 0.0
+
+    def count_turns(self, angles: np.ndarray) -> None:
+        """Count every torsional spring's turns from its joint angle in ``angles`` (loads,;
+        rad, by scene load index: ``spring_angles``)."""
+        for index, evaluate, _ in self.turning:
+            evaluate.turned = float(angles[index])
+
+    def accept(self, q_full: np.ndarray) -> None:
+        """Count the turns of the torsional springs up to the accepted state q_full (size,)."""
+        for _, evaluate, _ in self.turning:
+            evaluate.accept(q_full)
+
+    def spring_angles(self, q_full: np.ndarray, near: np.ndarray | None = None) -> np.ndarray:
+        """The joint angles phi (rad) of the torsional springs at the states q_full
+        (k, size), by scene load index (k, loads; 0 for the other loads): the branches
+        within half a turn of ``near`` (k, loads; default each spring's ``turned``)."""
+        angles = np.zeros((q_full.shape[0], self.scene_loads))
+        for index, evaluate, _ in self.turning:
+            for row, q in enumerate(q_full):
+                angles[row, index] = evaluate.joint_angle(
+                    q, None if near is None else float(near[row, index]))
+        return angles
 
     @property
     def python_loads(self) -> list[PythonForce]:

@@ -135,6 +135,10 @@ class Model:
         # energy dissipated by damping since the start of the current dynamic run (J), set
         # by the engine at each output
         self.dissipated_energy = 0.0
+        # the torsional springs' joint angles (rad, turns counted; by scene load index) at
+        # the state the sensors see, set by the engine at each output (None: each within
+        # half a turn of 0)
+        self.spring_angles: np.ndarray | None = None
         start = time.perf_counter()
         self.bodies: dict[str, BodyMesh] = {}
         self.dim = scene.dim
@@ -619,19 +623,28 @@ class Model:
                 total -= scale * ((q - self.reference) @ force)
         return float(total[0]) if q.ndim == 1 else total
 
-    def spring_energy(self, q: np.ndarray, t=0.0):
+    def spring_energy(self, q: np.ndarray, t=0.0, angles: np.ndarray | None = None):
         """Energy (J) k/2 (L - L0)^2 stored in the springs of the spring-dampers and
         k/2 (phi - phi_0)^2 in the torsional ones (times their time law at t; the nominal
-        value when t is None), at q (size,) or a block (k, size) with times t (k,)."""
+        value when t is None), at q (size,) or a block (k, size) with times t (k,); the
+        torsional springs' phi near ``angles`` (loads,) or (k, loads) (rad, turns counted:
+        ``Samples.spring_angles``; None: within half a turn of 0)."""
         rows = np.atleast_2d(q)
         total = np.zeros(rows.shape[0])
-        for load in self.scene.loads:
+        near = None if angles is None else np.broadcast_to(
+            np.atleast_2d(angles), (rows.shape[0], len(self.scene.loads)))
+        for index, load in enumerate(self.scene.loads):
             if not hasattr(load, "coupled_dofs"):
                 continue
             element = load.state_force(self)
             scale = 1.0 if t is None else load.time_law.sample(
                 np.broadcast_to(np.atleast_1d(np.asarray(t, float)), total.shape))[0]
-            total += scale * np.array([element.energy(x) for x in rows])
+            if near is not None and hasattr(element, "turned"):
+                energies = [element.energy(x, float(n)) for x, n in zip(rows, near[:, index],
+                                                                       strict=True)]
+            else:
+                energies = [element.energy(x) for x in rows]
+            total += scale * np.array(energies)
         return float(total[0]) if q.ndim == 1 else total
 
     # --- frames and rigid motions --------------------------------------------------------

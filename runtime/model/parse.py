@@ -43,6 +43,7 @@ from runtime.model.items.sensors import (
     SectionForce,
     Sensor,
     Slide,
+    SpringAngle,
     check_reactions,
 )
 from runtime.model.mesh_file import FileMesh, check_shapes
@@ -561,6 +562,11 @@ def scene_fields(data: dict, source: str = "<scene>") -> dict[str, Any]:
     check_reactions(tuple(sensors), constraints)
     _check_material_points(sensors, bodies, materials)
     for i, sensor in enumerate(sensors):
+        spring = getattr(sensor, "load", None)
+        if isinstance(sensor, SpringAngle) and (spring >= len(loads)
+                                                or loads[spring].type != "torsional_spring"):
+            raise SceneError(f"sensor[{i}].load: expected the index of a torsional_spring "
+                             f"among the {len(loads)} [[load]] tables, got {spring}")
         index = getattr(sensor, "constraint", None)
         if isinstance(sensor, Slide):
             if index >= len(constraints) or constraints[index].type != "sliding":

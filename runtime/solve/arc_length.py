@@ -45,7 +45,9 @@ SMALLEST_STEP, LARGEST_STEP = 1.0 / 1024, 8.0
 class PathResult:
     """The equilibrium path: ``load_factors`` (k,) and coordinates ``states`` (k, size) of
     its converged points, the start (lambda = 0, the reference) first; the last point's
-    multipliers, Newton iterations and steps over the whole path, and why it stopped."""
+    multipliers, Newton iterations and steps over the whole path, why it stopped, and the
+    torsional springs' joint angles at the points (k, loads; rad, turns counted from point
+    to point: ``StateLoads.spring_angles``)."""
 
     load_factors: np.ndarray
     states: np.ndarray
@@ -53,6 +55,7 @@ class PathResult:
     iterations: int
     steps: int
     stopped: str
+    spring_angles: np.ndarray
 
     @property
     def q(self) -> np.ndarray:
@@ -141,6 +144,7 @@ class _PathTracer:
             self._tangent(data, pattern, rows)[0])) / settings.load_steps)
         length, previous = first, None
         factors, states = [0.0], [q.copy()]
+        angles = [self.state_loads.spring_angles(q[None, :])[0]]
         iterations, stopped = 0, f"max_steps = {settings.max_steps} points"
         while len(states) <= settings.max_steps:
             try:
@@ -156,9 +160,11 @@ class _PathTracer:
                         f"{len(states) - 1} steps") from None
                 continue
             q, mu, lam, previous = q_new, mu_new, lam_new, step
+            self.state_loads.accept(q)
             iterations += used
             factors.append(lam)
             states.append(q.copy())
+            angles.append(self.state_loads.spring_angles(q[None, :])[0])
             reason = stop(q, lam)
             if reason is not None:
                 stopped = reason
@@ -166,7 +172,7 @@ class _PathTracer:
             growth = np.clip(np.sqrt(DESIRED_ITERATIONS / max(used, 1)), 0.5, 2.0)
             length = min(length * growth, LARGEST_STEP * first)
         return PathResult(np.array(factors), np.array(states), mu, iterations,
-                          len(states) - 1, stopped)
+                          len(states) - 1, stopped, np.array(angles))
 
     def _step(self, q: np.ndarray, mu: np.ndarray, lam: float, length: float,
               previous: np.ndarray | None):

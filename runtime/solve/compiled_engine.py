@@ -411,6 +411,7 @@ class CompiledEngine:
         k = int(np.diff(dofptr).max())
         rows = int(np.diff(rowptr).max())
         m.fe_work = self._work(3 * k + 3 * rows + 3 * rows * k + 2 * rows * rows + 2 * k * k)
+        m.fe_turned, m.fe_angle = self._work(m.nforce), self._work(m.nforce)
 
     def _holonomic(self, m) -> None:
         """Bind the quadratic constraint rows as data for the step's ``quadratic_rows``
@@ -696,9 +697,10 @@ class CompiledEngine:
             observe_block=None):
         """Integrate from rest at t = 0 to ``t_end``, as the Python engine: the states at
         t = 0 and every ``output_every`` seconds go to ``observe(t, q_full, v_full)`` one by
-        one, or to ``observe_block(times, q_full, v_full, dissipated)`` in blocks of
-        output times (k,), (k, size), (k, size), (k,): several output times per call of the
-        compiled step, so an output costs no call of its own.  Raises Divergence (the
+        one, or to ``observe_block(times, q_full, v_full, dissipated, angles)`` in blocks of
+        output times (k,), (k, size), (k, size), (k,), (k, loads) (the torsional springs'
+        joint angles, turns counted: ``StateLoads.spring_angles``): several output times per
+        call of the compiled step, so an output costs no call of its own.  Raises Divergence (the
         outputs before it observed)."""
         observe_block = observe_block or one_by_one(observe, self.dae.model)
         with single_threaded_blas():
@@ -706,16 +708,19 @@ class CompiledEngine:
 
     def _run(self, t_end: float, step: float, observe_block, progress) -> State:
         dae = self.dae
+        dae.state_loads.reset_turns()      # a run counts turns afresh (in Python and in C)
         state = initial_state(dae, mass=self.mass)
         m, self._prepared = self._prepared, None
         if m is None or m.h != step:
             m = self._model(step)
         s = self._state(state)
+        turned = self._turned(m)
+        turned[:] = 0.0
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
         self._emit(observe_block, np.zeros(1), state.q[None, :], state.v[None, :],
-                   np.zeros(1))
+                   np.zeros(1), turned[None, :])
         outputs = 1      # output times per call: sized by the time the calls take
         first = 1
         try:
@@ -752,10 +757,12 @@ class CompiledEngine:
         nf = dae.free.size
         out_q, out_v = (np.empty((output_steps.size, nf)) for _ in range(2))
         out_dissipated = np.empty(output_steps.size)
+        out_turned = np.empty((output_steps.size, len(dae.state_loads.compiled)))
         before = s.steps
         status = self._lib.ancf_advance(m, s, first, last - first + 1,
                                         *map(self._block_array, block), stride, steps,
-                                        *map(self._block_array, (out_q, out_v, out_dissipated)))
+                                        *map(self._block_array,
+                                             (out_q, out_v, out_dissipated, out_turned)))
         self._sync(s)
         failure = None
         try:
@@ -770,7 +777,7 @@ class CompiledEngine:
         if written:
             rows = output_steps[:written] - first
             self._emit(observe_block, output_steps[:written] * step, out_q[:written],
-                       out_v[:written], out_dissipated[:written],
+                       out_v[:written], out_dissipated[:written], out_turned[:written],
                        (block[0][rows], block[1][rows]))
         if failure is not None:
             raise failure
@@ -779,12 +786,26 @@ class CompiledEngine:
         return done
 
     def _emit(self, observe_block, times: np.ndarray, q_free: np.ndarray, v_free: np.ndarray,
-              dissipated: np.ndarray, prescribed: tuple | None = None) -> None:
-        """Observe a block of output states given over the free coordinates; ``prescribed``:
-        the prescribed values and rates at ``times`` if known (else computed)."""
+              dissipated: np.ndarray, turned: np.ndarray,
+              prescribed: tuple | None = None) -> None:
+        """Observe a block of output states given over the free coordinates, with the
+        force elements' ``turned`` (k, elements: fe_turned); ``prescribed``: the prescribed
+        values and rates at ``times`` if known (else computed)."""
         qp, vp = prescribed or self.dae.prescribed_motion(times)[:2]
-        observe_block(times, self.dae.full_coordinates(q_free, qp),
-                      self.dae.full_velocities(v_free, vp), dissipated)
+        q_full = self.dae.full_coordinates(q_free, qp)
+        loads = self.dae.state_loads
+        near = np.zeros((times.size, loads.scene_loads))
+        for element, (index, _, _) in enumerate(loads.compiled):
+            near[:, index] = turned[:, element]
+        observe_block(times, q_full, self.dae.full_velocities(v_free, vp), dissipated,
+                      loads.spring_angles(q_full, near))
+
+    def _turned(self, m) -> np.ndarray:
+        """The step's fe_turned (force elements,), a view (empty without them)."""
+        count = len(self.dae.state_loads.compiled)
+        if not count:
+            return np.zeros(0)
+        return np.frombuffer(self._ffi.buffer(m.fe_turned, 8 * count))
 
     def _block_array(self, array: np.ndarray):
         """A block's (steps, columns) array as a C pointer (NULL when it has no columns);
@@ -837,6 +858,7 @@ class CompiledStatic:
         self._qp = dae.prescribed_motion([0.0])[0][0]
         self._qp_buffer = self.engine._buffer(self._qp)
         self.max_iterations = settings.max_iterations
+        self._turned = self.engine._turned(self._m)
 
     def __call__(self, q: np.ndarray, load_fraction: float,
                  multipliers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
@@ -862,3 +884,17 @@ class CompiledStatic:
         self.convergence.check_resolved(s.force_scale)
         return (dae.full_coordinates(state_q.copy(), self._qp), state_lam.copy(),
                 s.newton_iterations - before)
+
+    def accept(self, q_full: np.ndarray) -> None:
+        """Count the torsional springs' turns up to the converged state q_full (size,), for
+        the next solves (``StateLoads.accept``, and the step's fe_turned)."""
+        loads = self.engine.dae.state_loads
+        loads.accept(q_full)
+        for element, (_, evaluate, _) in enumerate(loads.compiled):
+            self._turned[element] = getattr(evaluate, "turned", 0.0)
+
+    def spring_angles(self, q_full: np.ndarray) -> np.ndarray:
+        """The torsional springs' joint angles at the states q_full (k, size), turns
+        counted (``StateLoads.spring_angles``)."""
+        return self.engine.dae.state_loads.spring_angles(q_full)
+

@@ -173,11 +173,14 @@ class StateLimits:
 
 def one_by_one(observe, model: Model):
     """An ``observe_block`` that hands each output time of a block to ``observe(t, q, v)``
-    in turn, with the energy dissipated so far in ``model.dissipated_energy``."""
+    in turn, with the energy dissipated so far in ``model.dissipated_energy`` and the
+    torsional springs' joint angles in ``model.spring_angles``."""
     def observe_block(times: np.ndarray, q: np.ndarray, v: np.ndarray,
-                      dissipated: np.ndarray) -> None:
-        for t, q_row, v_row, energy in zip(times, q, v, dissipated, strict=True):
+                      dissipated: np.ndarray, angles: np.ndarray) -> None:
+        for t, q_row, v_row, energy, angle in zip(times, q, v, dissipated, angles,
+                                                  strict=True):
             model.dissipated_energy = float(energy)
+            model.spring_angles = angle
             observe(float(t), q_row, v_row)
     return observe_block
 
@@ -291,23 +294,26 @@ class OutputDynamics:
         self.load_vectors = (np.array([vector for _, vector in loads]) if loads
                              else np.zeros((0, dae.size)))
 
-    def __call__(self, times: np.ndarray, q_full: np.ndarray,
-                 v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def __call__(self, times: np.ndarray, q_full: np.ndarray, v_full: np.ndarray,
+                 angles: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(accelerations (k, size), multipliers (k, joints), applied force F (k, size)) at
-        the states (k, size) of the output times (k,) (s); BLAS on one thread (small
-        banded solves, which threads only slow down)."""
+        the states (k, size) of the output times (k,) (s), the torsional springs at their
+        joint angles ``angles`` (k, loads; ``Samples.spring_angles``; None: as they are
+        counted); BLAS on one thread (small banded solves, which threads only slow down)."""
         with single_threaded_blas():
-            return self._evaluate(times, q_full, v_full)
+            return self._evaluate(times, q_full, v_full, angles)
 
-    def _evaluate(self, times: np.ndarray, q_full: np.ndarray,
-                  v_full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _evaluate(self, times: np.ndarray, q_full: np.ndarray, v_full: np.ndarray,
+                  angles: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         dae = self.dae
         _, _, ap = dae.prescribed_motion(times)
         factors = dae.load_factors(times)
         force = factors @ self.load_vectors
         for row in range(len(times)):
             force[row] += dae.internal_forces(q_full[row], v_full[row], jacobian=False)[0]
-            if dae.state_loads:     # follower and Python loads
+            if dae.state_loads:     # follower and Python loads, force elements
+                if angles is not None:
+                    dae.state_loads.count_turns(angles[row])
                 force[row] += dae.state_loads.evaluate(q_full[row], factors[row], False,
                                                        v_full[row], float(times[row]))[0]
         rhs = force[:, dae.free] - (dae.mass_fp @ ap.T).T if ap.size else force[:, dae.free]
@@ -523,28 +529,38 @@ class Integrator:
             observe_block=None) -> State:
         """Integrate from rest at t = 0 to ``t_end``; the state at t = 0 and every
         ``output_every`` seconds goes to ``observe(t, q_full, v_full)``, or to
-        ``observe_block(times, q_full, v_full, dissipated)`` as a block of one output time
-        ((1,), (1, size), (1, size), (1,)).  Raises Divergence."""
+        ``observe_block(times, q_full, v_full, dissipated, angles)`` as a block of one
+        output time ((1,), (1, size), (1, size), (1,), (1, loads): the torsional springs'
+        joint angles in rad, turns counted, ``StateLoads.spring_angles``).  Raises
+        Divergence."""
         observe_block = observe_block or one_by_one(observe, self.dae.model)
         with single_threaded_blas():
             return self._run(t_end, step, observe_block, progress)
 
-    def _observe(self, observe_block, state: State) -> None:
+    def _observe(self, observe_block, state: State, output: bool) -> None:
+        """Count the turns of the torsional springs up to the accepted ``state``; with
+        ``output``, observe it."""
+        loads = self.dae.state_loads
+        if not (output or loads.turning):
+            return
         qp, vp, _ = self.dae.prescribed_motion([state.t])
-        observe_block(np.array([state.t]), self.dae.full_coordinates(state.q[None, :], qp),
-                      self.dae.full_velocities(state.v[None, :], vp),
-                      np.array([state.extra["dissipated"]]))
+        q_full = self.dae.full_coordinates(state.q[None, :], qp)
+        loads.accept(q_full[0])
+        if output:
+            observe_block(np.array([state.t]), q_full,
+                          self.dae.full_velocities(state.v[None, :], vp),
+                          np.array([state.extra["dissipated"]]), loads.spring_angles(q_full))
 
     def _run(self, t_end: float, step: float, observe_block, progress) -> State:
+        self.dae.state_loads.reset_turns()      # a run counts turns afresh
         state = self.initial_state()
         every = self.settings.output_every or step
         steps = int(round(t_end / step))
         stride = max(1, int(round(every / step)))
-        self._observe(observe_block, state)
+        self._observe(observe_block, state, True)
         for n in range(1, steps + 1):
             state = self.advance(state, n, step)
-            if n % stride == 0 or n == steps:
-                self._observe(observe_block, state)
+            self._observe(observe_block, state, n % stride == 0 or n == steps)
             if progress is not None:
                 progress.update(state.t)
         return state

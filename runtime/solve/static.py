@@ -17,6 +17,7 @@ does not retry.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import scipy.sparse
@@ -144,12 +145,15 @@ def force_scale(force: np.ndarray, load: np.ndarray) -> float:
 
 @dataclass
 class StaticResult:
-    """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used."""
+    """Equilibrium coordinates (size,), joint multipliers, iterations and load steps used,
+    and the torsional springs' joint angles (loads,; rad, turns counted from one load level
+    to the next: ``StateLoads.spring_angles``; None: each within half a turn of 0)."""
 
     q: np.ndarray
     multipliers: np.ndarray
     iterations: int
     load_steps: int
+    spring_angles: np.ndarray | None = None
 
 
 def newton_static(model: Model, q: np.ndarray, load: np.ndarray, settings,
@@ -197,9 +201,9 @@ def load_factors(model: Model, factor: float) -> np.ndarray:
 def solve_static(model: Model, settings, newton=None) -> StaticResult:
     """Equilibrium under every load at its nominal value (see ``_solve_static``); ``newton``
     solves one load increment (default ``newton_static``, in Python; the compiled engine's
-    ``CompiledStatic`` is the other)."""
+    ``CompiledStatic`` is the other, which also counts the turns: ``TurnCount``)."""
     if newton is not None:     # generated code: no BLAS threads to hold back
-        return _solve_static(model, settings, newton)
+        return _solve_static(model, settings, newton, newton)
 
     convergence = Convergence.of(model, settings.tolerance)
     state_loads = StateLoads(model)
@@ -212,17 +216,30 @@ def solve_static(model: Model, settings, newton=None) -> StaticResult:
                              convergence, follower)
 
     with single_threaded_blas():
-        return _solve_static(model, settings, python_newton)
+        return _solve_static(model, settings, python_newton, state_loads)
 
 
-def _solve_static(model: Model, settings, newton) -> StaticResult:
+class TurnCount(Protocol):
+    """What counts the torsional springs' turns of a static solve: ``StateLoads`` (the
+    Python solves) or ``CompiledStatic``."""
+
+    def accept(self, q_full: np.ndarray) -> None:
+        """Count the turns up to the converged state q_full (size,)."""
+
+    def spring_angles(self, q_full: np.ndarray) -> np.ndarray:
+        """The joint angles (k, loads) at the states q_full (k, size), turns counted."""
+
+
+def _solve_static(model: Model, settings, newton, turns: TurnCount) -> StaticResult:
     """Equilibrium under every load at its nominal value (time laws are not applied).
 
     The load is applied in ``settings.load_steps`` increments; an increment that fails is
     halved (down to 1/1024 of the load) before the analysis gives up, and one that succeeds
     lets the next grow again (doubling, up to the initial increment).  An
     IllConditionedError is not retried.  An increment that jumps past a limit point to
-    another branch (``_snapped``) fails like one that does not converge.
+    another branch (``_snapped``) fails like one that does not converge.  The torsional
+    springs count turns (``turns``: those ``newton`` evaluates) from one converged
+    increment to the next.
     """
     check_held(model)
     q = model.reference.copy()
@@ -247,10 +264,12 @@ def _solve_static(model: Model, settings, newton) -> StaticResult:
                                        f"{done:.4g} of it{limit}") from None
             continue
         q, multipliers, done = q_new, mu_new, target
+        turns.accept(q)
         iterations += used
         steps += 1
         increment = min(2 * increment, 1.0 / settings.load_steps)
-    return StaticResult(q, multipliers, iterations, steps)
+    return StaticResult(q, multipliers, iterations, steps,
+                        turns.spring_angles(q[None, :])[0])
 
 
 def _rigid_multipliers(model: Model, q: np.ndarray, load: np.ndarray,

@@ -53,6 +53,8 @@ class ModelView(Protocol):
     bodies: dict[str, BodyView]
     scene: Any
     dissipated_energy: float
+    #: the torsional springs' joint angles (rad, turns counted) by scene load index, or None
+    spring_angles: np.ndarray | None
     #: the rigid bodies and point masses (``RigidCoordinates``: ``item``, ``dofs``) by name
     rigid: dict[str, Any]
 
@@ -86,6 +88,8 @@ class ModelView(Protocol):
     def gravity_potential(self, q: np.ndarray, t: float | None = 0.0) -> float:
         """Potential energy (J) of the gravity loads at ``q`` and time ``t``."""
 
-    def spring_energy(self, q: np.ndarray, t: float | None = 0.0) -> float:
+    def spring_energy(self, q: np.ndarray, t: float | None = 0.0,
+                      angles: np.ndarray | None = None) -> float:
         """Energy (J) stored in the springs of the force elements (spring-dampers, torsional
-        springs, bushings) at ``q`` and time ``t``."""
+        springs, bushings) at ``q`` and time ``t``, the torsional springs' angles near
+        ``angles`` (turns counted)."""

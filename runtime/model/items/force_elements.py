@@ -22,7 +22,11 @@ phi = atan2(S, C), with the exact gradient and Hessian
              - phi_x (2 C C_x + 2 S S_x)^T / rho;
 
 its moment m = k (phi - phi_0) + c phi' (phi' = phi_x . x') gives Q = -m phi_x, with
-dQ/dx = -phi_x (k phi_x + c phi_xx x')^T - m phi_xx and dQ/dx' = -c phi_x phi_x^T.
+dQ/dx = -phi_x (k phi_x + c phi_xx x')^T - m phi_xx and dQ/dx' = -c phi_x phi_x^T.  The
+spring counts turns: phi is unwrapped from ``turned``, its angle at the last accepted state
+(0 at the start of a run), as phi = turned + remainder(atan2(S, C) - turned, 2 pi): smooth
+in x for any rotation of less than half a turn per step, so the derivatives above hold; the
+engines move ``turned`` on at every accepted step (``accept``).
 
 The linear bushing (``BushingForce``) acts on six quadratic forms delta(x) of the
 coordinates (relative displacements and small rotations of two frames), with the energy
@@ -142,8 +146,9 @@ class TorsionalSpringForce:
     """The state force of a torsional spring-damper of ``stiffness`` k (N m/rad),
     ``damping`` c (N m s/rad) and free angle ``angle`` phi_0 (rad) on the relative rotation
     phi of a joint, given by its ``forms`` (a ``QuadraticBlock`` of the two rows [C, S] =
-    sqrt(rho) [cos phi, sin phi] on its coordinates; module docstring); phi - phi_0 in
-    (-pi, pi].  Reads velocities (``reads_velocity``)."""
+    sqrt(rho) [cos phi, sin phi] on its coordinates; module docstring); phi counts turns
+    from ``turned`` (rad), its value at the last accepted state.  Reads velocities
+    (``reads_velocity``)."""
 
     reads_velocity = True
 
@@ -152,21 +157,33 @@ class TorsionalSpringForce:
         self.forms = forms
         self.dofs = np.asarray(forms.dofs, np.int64)[None, :]
         self.stiffness, self.damping, self.angle = stiffness, damping, angle
+        #: the unwrapped joint angle phi (rad) at the last accepted state (``accept``)
+        self.turned = 0.0
 
     def compiled(self) -> CompiledForce:
         """Its data for the compiled step: the rows [C, S]."""
         return CompiledForce("torsional_spring", self.forms,
                              np.array([self.stiffness, self.damping, self.angle]))
 
-    def deflection(self, q: np.ndarray) -> float:
-        """phi - phi_0 (rad) in (-pi, pi] at the coordinates q (size,)."""
+    def joint_angle(self, q: np.ndarray, near: float | None = None) -> float:
+        """The joint angle phi (rad) at the coordinates q (size,): the branch of atan2(S, C)
+        within half a turn of ``near`` (default ``turned``)."""
         c, s = self.forms.value(q[self.dofs[0]])
-        ca, sa = math.cos(self.angle), math.sin(self.angle)
-        return math.atan2(s * ca - c * sa, c * ca + s * sa)
+        near = self.turned if near is None else near
+        return near + math.remainder(math.atan2(s, c) - near, 2.0 * math.pi)
 
-    def energy(self, q: np.ndarray) -> float:
-        """The energy k (phi - phi_0)^2 / 2 (J) in its spring at q (size,)."""
-        return 0.5 * self.stiffness * self.deflection(q) ** 2
+    def accept(self, q: np.ndarray) -> None:
+        """Count the turns up to the accepted coordinates q (size,)."""
+        self.turned = self.joint_angle(q)
+
+    def deflection(self, q: np.ndarray, near: float | None = None) -> float:
+        """phi - phi_0 (rad) at the coordinates q (size,), phi near ``near`` (``joint_angle``)."""
+        return self.joint_angle(q, near) - self.angle
+
+    def energy(self, q: np.ndarray, near: float | None = None) -> float:
+        """The energy k (phi - phi_0)^2 / 2 (J) in its spring at q (size,), phi near
+        ``near`` (``joint_angle``)."""
+        return 0.5 * self.stiffness * self.deflection(q, near) ** 2
 
     def __call__(self, q: np.ndarray, jacobian: bool, v: np.ndarray | None = None,
                  t: float = 0.0) -> MotionPatches:

@@ -462,8 +462,9 @@ class TorsionalSpring(RigidForceElement):
     revolute joint of the rigid ``body``: on its rotation relative to the ground, to the
     rigid body ``other`` or to a ``node`` of a meshed body (``angle_forms``), the moment
     k (phi - phi_0) + c phi' with ``stiffness`` k (N m/rad), ``damping`` c (N m s/rad) and
-    free ``angle`` phi_0 (rad, from the pose at t = 0; default 0), with exact Jacobians
-    (``runtime.model.items.force_elements``), times its ``time_law``."""
+    free ``angle`` phi_0 (rad, from the pose at t = 0; default 0), phi counting turns (no
+    jump past half a turn), with exact Jacobians (``runtime.model.items.force_elements``),
+    times its ``time_law``."""
 
     type: ClassVar[str] = "torsional_spring"
     joins: ClassVar[str] = "needs a rigid body"

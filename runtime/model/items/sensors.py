@@ -41,7 +41,7 @@ from runtime.model.schema import (
 __all__ = ["ENERGY_TYPES", "SENSORS", "Acceleration", "ConstraintViolation", "DissipatedEnergy",
            "Displacement", "KineticEnergy", "Position", "PotentialEnergy", "Reaction", "Samples",
            "SectionForce", "Sensor", "Sensors", "StrainEnergy", "Strain", "Stress",
-           "Slide", "TotalEnergy", "Velocity", "check_reactions"]
+           "Slide", "SpringAngle", "TotalEnergy", "Velocity", "check_reactions"]
 
 # names of sensors become CSV columns and PNG file names: ASCII letters, digits, "_", "." and
 # "-", not starting with "." or "-", at most NAME_LENGTH characters, unique ignoring case (file
@@ -69,7 +69,10 @@ def _name_key(value: Any, path: str, context: Context) -> str:
 class Samples:
     """States at k output times: ``t`` (k,) in s (None: a static state, loads at their
     nominal value), coordinates ``q`` and velocities ``v`` (k, size), and the energy
-    ``dissipated`` (k,) in J by damping since the start of the dynamic run.
+    ``dissipated`` (k,) in J by damping since the start of the dynamic run, and
+    ``spring_angles`` (k, loads): the joint angle phi (rad) of every torsional spring, turns
+    counted (``runtime.model.dae.StateLoads.spring_angles``), by scene load index (None:
+    each within half a turn of 0).
 
     For the sensors that need them (``Sensor.dynamics``), the equations of motion at these
     states: accelerations ``a`` (k, size) in m/s^2 (fixed coordinates zero, prescribed ones
@@ -85,6 +88,7 @@ class Samples:
     a: np.ndarray | None = None
     multipliers: np.ndarray | None = None
     force: np.ndarray | None = None
+    spring_angles: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -432,6 +436,13 @@ def _checked_component(sensor: Reaction | BodyReaction, path: str, context: Cont
     return sensor
 
 
+def _load_index_key(value: Any, path: str, context: Context) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise SceneError(f"{path}: expected the index (0, 1, ...) of a [[load]] table, got "
+                         f"{show(value)}")
+    return value
+
+
 def _constraint_index_key(value: Any, path: str, context: Context) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
         raise SceneError(f"{path}: expected the index (0, 1, ...) of a [[constraint]] of "
@@ -764,7 +775,7 @@ class PotentialEnergy(Sensor):
 
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return (model.gravity_potential(samples.q, samples.t)
-                + model.spring_energy(samples.q, samples.t))
+                + model.spring_energy(samples.q, samples.t, samples.spring_angles))
 
 
 @dataclass(frozen=True)
@@ -776,7 +787,7 @@ class TotalEnergy(Sensor):
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return (model.strain_energy(samples.q) + model.kinetic_energy(samples.v)
                 + model.gravity_potential(samples.q, samples.t)
-                + model.spring_energy(samples.q, samples.t))
+                + model.spring_energy(samples.q, samples.t, samples.spring_angles))
 
 
 @dataclass(frozen=True)
@@ -790,6 +801,25 @@ class DissipatedEnergy(Sensor):
     def values(self, model: ModelView, samples: Samples) -> np.ndarray:
         return samples.dissipated.copy() if samples.t is not None else \
             np.zeros(len(samples.q))
+
+
+@dataclass(frozen=True)
+class SpringAngle(Sensor):
+    """The deflection phi - phi_0 (rad) of the torsional spring ``load`` (its index among
+    the [[load]] tables, a ``torsional_spring`` one), turns counted: past half a turn it
+    goes on growing (``runtime.model.items.force_elements``)."""
+
+    type: ClassVar[str] = "spring_angle"
+    unit: ClassVar[str] = "rad"
+    energy: ClassVar[bool] = False
+    load: int = key(_load_index_key)
+
+    def values(self, model: ModelView, samples: Samples) -> np.ndarray:
+        spring = model.scene.loads[self.load].state_force(model)
+        if samples.spring_angles is None:
+            return np.array([spring.deflection(q) for q in samples.q])
+        return np.array([spring.deflection(q, float(near)) for q, near in
+                         zip(samples.q, samples.spring_angles[:, self.load], strict=True)])
 
 
 @dataclass(frozen=True)
@@ -816,7 +846,7 @@ SENSORS: dict[str, type[Sensor]] = registry(
     Displacement, Position, StrainEnergy, KineticEnergy, PotentialEnergy, TotalEnergy,
     DissipatedEnergy, ConstraintViolation, Velocity, Acceleration, Reaction, Strain, Stress,
     SectionForce, BodyPosition, BodyVelocity, BodyAngle, BodyAngularVelocity, BodyReaction,
-    Slide)
+    Slide, SpringAngle)
 ENERGY_TYPES = tuple(name for name, cls in SENSORS.items() if cls.energy)
 
 
@@ -834,12 +864,14 @@ class Sensors:
     def values(self, q: np.ndarray, v: np.ndarray | None = None,
                t: float | None = 0.0, *, a: np.ndarray | None = None,
                multipliers: np.ndarray | None = None,
-               force: np.ndarray | None = None) -> dict[str, float]:
+               force: np.ndarray | None = None,
+               spring_angles: np.ndarray | None = None) -> dict[str, float]:
         """{sensor name: value} at coordinates q (and velocities v, zero if None), time t
         (None: loads at their nominal value, as in the static analysis), with the
         accelerations a (size,), joint multipliers and applied force (size,) of
         ``Samples`` where a sensor needs them; the energy dissipated so far is the model's
-        ``dissipated_energy``."""
+        ``dissipated_energy``, the torsional springs' angles (loads,) ``spring_angles`` or
+        else the model's."""
         v = np.zeros_like(q) if v is None else v
 
         def row(x):
@@ -847,7 +879,8 @@ class Sensors:
 
         samples = Samples(None if t is None else np.array([t], float), q[None, :], v[None, :],
                           np.array([self.model.dissipated_energy]), row(a), row(multipliers),
-                          row(force))
+                          row(force), row(self.model.spring_angles if spring_angles is None
+                                          else spring_angles))
         return {name: float(value[0]) for name, value in self.block(samples).items()}
 
     def block(self, samples: Samples) -> dict[str, np.ndarray]:
