@@ -40,6 +40,10 @@ LINEAR_SOLVERS = ("banded", "sparse")
 BENDING_MODELS = ("simple", "exact_curvature")
 #: The material law of a material that names none.
 DEFAULT_LAW = "svk"
+#: The continuum laws with St. Venant-Kirchhoff's normal block over the whole thickness
+#: (``symgen.laws``: svk; svk_sri reduces the surface rule only), which lock in bending at
+#: nu != 0 as ``ElementKind.svk_locking`` states (the run warns).
+POISSON_LOCKING_LAWS = ("svk", "svk_sri")
 
 
 def generated_dir() -> Path:

@@ -61,7 +61,7 @@ def test_an_absurd_output_stops_the_run_keeping_the_outputs_before_it(row, chang
     q, v = np.tile(model.reference, (5, 1)), np.zeros((5, model.size))
     change(q[row], v[row])
     with pytest.raises(Divergence) as info:
-        simulation._observe(times, q, v, np.zeros(5))
+        simulation._observe(times, q, v, np.zeros(5), np.zeros((5, len(model.scene.loads))))
     assert info.value.time == times[row] and cause in info.value.cause
     assert simulation.history["t"] == list(times[:row])
 

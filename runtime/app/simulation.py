@@ -19,7 +19,7 @@ import numpy as np
 from runtime.app.result import Modes, Observer, Result, States
 from runtime.app.signal import dominant_frequency
 from runtime.app.summary import DynamicSummary, Summary
-from runtime.catalog import INTEGRATORS
+from runtime.catalog import INTEGRATORS, POISSON_LOCKING_LAWS
 from runtime.kernels.kind import element_kind
 from runtime.model.dae import StateLoads
 from runtime.model.items.python_loads import load_notes
@@ -366,20 +366,14 @@ def _observers(observers: Sequence[Observer]) -> list[Observer]:
     return list(observers)
 
 
-#: The laws with svk's normal block over the whole thickness, which lock in bending at
-#: nu != 0 as ``ElementKind.svk_locking`` states (svk_sri reduces the surface rule only: the
-#: Poisson thickness locking of plates without r_zz stays).
-SVK_LOCKING_LAWS = ("svk", "svk_sri")
-
-
 def locking_warnings(scene: Scene) -> list[str]:
     """A warning per material and kind of domain (beams, plates) that uses a law of
-    ``SVK_LOCKING_LAWS`` with nu != 0 (Poisson locking, by the amount
+    ``catalog.POISSON_LOCKING_LAWS`` with nu != 0 (Poisson locking, by the amount
     ``ElementKind.svk_locking`` states)."""
     out = []
     for name in sorted({body.material for body in scene.bodies}):
         material = scene.materials[name]
-        if material.law not in SVK_LOCKING_LAWS:
+        if material.law not in POISSON_LOCKING_LAWS:
             continue
         nu = material.nu
         locking = dict(filter(None, (element_kind(b.element).svk_locking(nu)
