@@ -273,12 +273,11 @@ class RigidBody(RigidItem):
         rotation of an ``angle`` (which it replaces)."""
         if context.dim == 3:
             return self
-        defaults = {name: (0.0, 0.0) for name in ("centre_of_mass", "position")
-                    if len(getattr(self, name)) == 3}
+        body = planar_defaults(self, context, ("centre_of_mass", "position"))
         if self.angle is not None or len(self.rotation) == 3:
-            defaults["rotation"] = tuple(tuple(float(x) for x in row)
-                                         for row in planar_frame(self.angle or 0.0))
-        return dataclasses.replace(self, angle=None, **defaults)
+            body = dataclasses.replace(body, rotation=tuple(
+                tuple(float(x) for x in row) for row in planar_frame(self.angle or 0.0)))
+        return dataclasses.replace(body, angle=None)
 
     @property
     def dim(self) -> int:
