@@ -379,7 +379,8 @@ def parser() -> argparse.ArgumentParser:
     report.add_argument("--out", help="folder of report.md and its figures (default: docs; "
                                       "with --quick results/report)")
     report.add_argument("--quick", action="store_true",
-                        help="small versions (smoke test), never into docs/ unless --out says")
+                        help="small versions (smoke test: four of the shipped scenes), never into "
+                             "docs/ unless --out says")
     report.add_argument("--scheduler", help="address of an existing dask scheduler")
     report.add_argument("--workers", type=int, help="local dask workers (default: cores)")
     report.set_defaults(run=cmd_report)

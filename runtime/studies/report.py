@@ -32,6 +32,10 @@ from runtime.studies import invariant_comparison as invariant_report
 
 #: the shipped scenes run for section 4
 SCENES = tuple(scenes.names())
+#: the scenes of section 4 in ``--quick`` (a smoke test of the page: a dynamic beam, a
+#: rotating one, a mechanism with rigid bodies and joints and a static analysis; every
+#: shipped scene is run in the tests anyway)
+QUICK_SCENES = ("cantilever", "rotating_beam", "slider_crank_2d", "deep_arch")
 
 
 def machine() -> str:
@@ -60,13 +64,14 @@ def machine() -> str:
             f"`{naming.compile_flags(0)[0]}`: element.json `optimization`).")
 
 
-def _scenes(out: Path, figures: Path, warm: bool = True) -> str:
-    """Section 4: every shipped scene run (after a warm-up run when ``warm``: kernels
-    compiled and imports done before the timed run)."""
+def _scenes(out: Path, figures: Path, names: tuple[str, ...] = SCENES,
+            warm: bool = True) -> str:
+    """Section 4: the shipped scenes ``names`` run (after a warm-up run when ``warm``:
+    kernels compiled and imports done before the timed run)."""
     lines = ["| scene | status | key results | steps | Newton iterations | compile s | "
              "pre-processing s | simulation s | post-processing s | total s |",
              "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for name in SCENES:
+    for name in names:
         folder = out / "scenes" / name
         if warm:
             run(scenes.path(name), folder, quiet=True)  # kernels compiled, imports done
@@ -128,7 +133,9 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
               "integrator's own work (Newton loop, banded solves), which does not depend on "
               "the method; the `in kernels` column isolates the element forces and Jacobians.",
               "", paper.markdown(results)]
-    parts += ["## 4. Shipped scenes (`ancf run`)", "", _scenes(work, figures, warm=not quick),
+    scene_names = QUICK_SCENES if quick else SCENES
+    parts += ["## 4. Shipped scenes (`ancf run`)", "",
+              _scenes(work, figures, scene_names, warm=not quick),
               "![rotating beam tip](figures/rotating_beam_tip_transverse.png)", "",
               "![rotating beam energies](figures/rotating_beam_energies.png)", ""]
     parts += ["## 5. Whole runs and the cost of a step: engines, Newton modes, Exudyn "
