@@ -18,7 +18,8 @@ Cases (trapezoidal, h = 1e-3, gram method, C kernels, loaded from the first step
   96 coordinates each) clamped on its face x = 0 under gravity (``scenes/brick_cantilever.toml``'s
   body and material), loaded from the first step.
 
-Each case runs ``repeats`` times on one model (min and median per step).  For each case and
+Each case runs ``repeats`` times on one model (min and median per step), its Newton modes
+interleaved.  For each case and
 linear solver (``runtime.catalog.LINEAR_SOLVERS``; ``auto`` is the model's
 automatic choice) and Newton mode: milliseconds per step, microseconds per element-step,
 Newton iterations per step and the shares of the step spent in the element kernels (with
@@ -116,27 +117,39 @@ def _dynamic(scene: Scene, steps: int) -> Scene:
     return dataclasses.replace(scene, static=None, modal=None, dynamic=dynamic)
 
 
-def step_cost(scene: Scene, case: str, linear_solver: str = AUTO, newton: str = "full",
-              engine: str = "compiled", method: str = "gram", repeats: int = 3) -> dict:
-    """One row: the cost of the steps of ``scene`` with ``linear_solver`` (``AUTO``: the
-    model's choice), Newton mode ``newton`` and ``engine``, run ``repeats`` times on one
-    model (min and median per step; the shares are those of the fastest run)."""
+def step_costs(scene: Scene, case: str, linear_solver: str = AUTO,
+               newtons: tuple[str, ...] = ("full",), engine: str = "compiled",
+               method: str = "gram", repeats: int = 3) -> list[dict]:
+    """One row per Newton mode of ``newtons``: the cost of the steps of ``scene`` with
+    ``linear_solver`` (``AUTO``: the model's choice) and ``engine``, run ``repeats`` times
+    on one model, the modes interleaved (repeat 1 of every mode, then repeat 2, ...: a
+    shared machine's load falls on all of them alike); min and median per step, the
+    shares those of the fastest run."""
     solver = dataclasses.replace(scene.solver, method=method,
                                  linear_solver=None if linear_solver == AUTO else linear_solver)
     scene = dataclasses.replace(scene, solver=solver)
-    settings = dataclasses.replace(scene.dynamic, newton=newton)
     start = time.perf_counter()
     model = Model(scene, method=method)
-    engines.make(engine, model, settings, model.reference)     # compiled once, untimed
+    settings = {newton: dataclasses.replace(scene.dynamic, newton=newton) for newton in newtons}
+    for newton in newtons:                        # compiled once, untimed
+        engines.make(engine, model, settings[newton], model.reference)
     build = time.perf_counter() - start
-    runs = []
+    runs: dict[str, list] = {newton: [] for newton in newtons}
     for _ in range(repeats):
-        runner = engines.make(engine, model, settings, model.reference)
-        runner.run(settings.t_end, settings.step, lambda t, q, v: None)
-        runs.append((runner.timing["steps_s"] / runner.counters.steps, runner))
+        for newton in newtons:
+            runner = engines.make(engine, model, settings[newton], model.reference)
+            runner.run(settings[newton].t_end, settings[newton].step, lambda t, q, v: None)
+            runs[newton].append((runner.timing["steps_s"] / runner.counters.steps, runner))
+    elements = sum(body.elements for body in model.bodies.values())
+    return [_row(case, model, elements, linear_solver, newton, engine, build, runs[newton])
+            for newton in newtons]
+
+
+def _row(case: str, model: Model, elements: int, linear_solver: str, newton: str,
+         engine: str, build: float, runs: list) -> dict:
+    """The table row of one Newton mode's ``runs`` ((seconds per step, runner) each)."""
     per_step, runner = min(runs, key=lambda run: run[0])
     timing, counters = runner.timing, runner.counters
-    elements = sum(body.elements for body in model.bodies.values())
     # the KKT path factorises the joints with the matrix: no time of their own
     kkt = getattr(runner, "kkt", None) not in (None, False)
     return {"case": case, "elements": elements, "coordinates": model.free.size,
@@ -195,16 +208,23 @@ def plan(plates=(4, 8, 16, 32), chains=(1000, 10_000), solvers=(AUTO, *LINEAR_SO
 def measure(cases: list[tuple], method: str = "gram", repeats: int = 3,
             progress: bool = True) -> list[dict]:
     """Run every case ``repeats`` times with ``method`` (in this process, one case after
-    the other)."""
+    the other; the Newton modes of a case, consecutive in ``cases``, interleaved:
+    ``step_costs``)."""
+    groups: list[tuple[tuple, list[str]]] = []
+    for make, size, label, solver, newton in cases:
+        if groups and groups[-1][0] == (make, size, label, solver):
+            groups[-1][1].append(newton)
+        else:
+            groups.append(((make, size, label, solver), [newton]))
     rows = []
-    with enabled(progress), Bar("bench steps", len(cases), "cases") as bar:
-        for make, size, label, solver, newton in cases:
+    with enabled(progress), Bar("bench steps", len(groups), "cases") as bar:
+        for (make, size, label, solver), newtons in groups:
             elements = (size * size if make is plate_scene else size**3
                         if make is block_scene else size + (
                             make in (joint_chain_scene, free_links_scene)))
-            rows.append(step_cost(make(size, _steps(elements)), label, solver, newton,
-                                  method=method, repeats=repeats))
-            bar.advance(f"{label}, {solver}, {newton}")
+            rows += step_costs(make(size, _steps(elements)), label, solver, tuple(newtons),
+                               method=method, repeats=repeats)
+            bar.advance(f"{label}, {solver}, {'/'.join(newtons)}")
     return rows
 
 
