@@ -646,11 +646,11 @@ def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
     dk = [materialize(point, temps, [(c - kv * g_) * inv_g for c, g_ in zip(row, dg, strict=True)])
           for row, kv in zip(dc, kappa, strict=True)]
 
+    hessians = _curvature_hessians(spec, tuple(s1), tuple(s2), tuple(map(tuple, dk)),
+                                   tuple(dg), tuple(kappa), inv_g)
+
     def hessian(v: int, i: int, j: int):
-        (k, a), (m, b) = dofs[i], dofs[j]
-        d2c = (s1[k] * s2[m] - s1[m] * s2[k]) * energies.cross(unit[a], unit[b])[v]
-        d2g = 2 * s1[k] * s1[m] if a == b else 0
-        return (d2c - dk[v][i] * dg[j] - dg[i] * dk[v][j] - kappa[v] * d2g) * inv_g
+        return hessians[v][i][j]
 
     components = range(len(cross))
     force = [-weight * sum(measure[v] * dk[v][i] for v in components) for i in range(ndof)]
@@ -684,6 +684,27 @@ def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
     flat = {"force": damping, "jacobian": [x for row in jacobian for x in row],
             "jacobian_dot": [x for row in jacobian_dot for x in row]}
     return {q: flat[q] for q in wanted}
+
+
+@cache
+def _curvature_hessians(spec: ElementSpec, s1: tuple, s2: tuple, dk: tuple, dg: tuple,
+                        kappa: tuple, inv_g) -> tuple:
+    """H[v][i][j] = d2 kappa_v / d q_i d q_j = (d2c - dk dg^T - dg dk^T - kappa d2g) / g
+    (``_exact_bending``) from the materialised dk, dg, kappa and 1/g.  Cached: the kernels of
+    the exact-curvature families with one translation share them (their bending loops start
+    from the same temporaries)."""
+    d, n = spec.dim, spec.n_shape
+    unit = [[int(a == b) for b in range(d)] for a in range(d)]
+    dofs = [(k, a) for k in range(n) for a in range(d)]
+
+    def hessian(v: int, i: int, j: int):
+        (k, a), (m, b) = dofs[i], dofs[j]
+        d2c = (s1[k] * s2[m] - s1[m] * s2[k]) * energies.cross(unit[a], unit[b])[v]
+        d2g = 2 * s1[k] * s1[m] if a == b else 0
+        return (d2c - dk[v][i] * dg[j] - dg[i] * dk[v][j] - kappa[v] * d2g) * inv_g
+
+    return tuple(tuple(tuple(hessian(v, i, j) for j in range(len(dofs)))
+                       for i in range(len(dofs))) for v in range(len(dk)))
 
 
 def build(spec: ElementSpec) -> list[Kernel]:
