@@ -19,6 +19,7 @@ symbolic integration produced, so small elements keep their emitted code byte fo
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cache
@@ -47,7 +48,19 @@ class Factored:
 
 
 def _add(a, b):
-    return tuple(x + y for x, y in zip(a, b, strict=True))
+    return tuple(map(operator.add, a, b))
+
+
+def _exact_dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The product of two integer matrices, exact: in int64 where no sum can overflow (every
+    term and partial sum bounded by max|x| max|y| times the inner size), else in Python
+    integers (object arrays)."""
+    if not x.size or not y.size:
+        return np.zeros((x.shape[0], y.shape[1]), dtype=np.int64)
+    bound = int(np.abs(x).max()) * int(np.abs(y).max()) * x.shape[1]
+    if bound < 2**63:
+        return x.astype(np.int64).dot(y.astype(np.int64))
+    return x.astype(object).dot(y.astype(object))
 
 
 @cache
@@ -193,20 +206,22 @@ def domain_tables(spec: ElementSpec, subdomain: str) -> DomainTables:
     for a in range(spec.dim):
         if not keys[a]:
             continue
-        left = mats[a].dot(mom)
+        left = _exact_dot(mats[a], mom)
+        row_exps = [_add(directions[a][kl][0], measure) for kl in keys[a]]
         for b in range(a, spec.dim):
             if not keys[b]:
                 continue
-            values = left.dot(mats[b].T)
+            values = _exact_dot(left, mats[b].T)
+            if a == b:  # symmetric: each canonical key (psi_key) once, at kl <= mn
+                values = np.triu(values)
             scale = Fraction(1, dens[a] * dens[b] * den_m) * extent
-            rows, cols = np.nonzero(values != 0)
-            for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
-                kl, mn = keys[a][i], keys[b][j]
-                key = psi_key(a, b, kl, mn)
-                if key in psi:
-                    continue
-                exps = _add(_add(directions[a][kl][0], directions[b][mn][0]), measure)
-                psi[key] = (exps, Fraction(values[i, j]) * scale)
+            rows, cols = np.nonzero(values)
+            for i, j, value in zip(rows.tolist(), cols.tolist(), values[rows, cols].tolist(),
+                                   strict=True):
+                mn = keys[b][j]
+                psi[(a, b, keys[a][i], mn)] = (_add(row_exps[i], directions[b][mn][0]),
+                                               Fraction(value * scale.numerator,
+                                                        scale.denominator))
     volume = domain.unit_moment((0,) * spec.dim, subdomain) * extent
     return DomainTables({measure: volume}, pi, psi)
 
@@ -225,9 +240,11 @@ class StraightTables:
 
 def _accumulate(target: dict, key, exps, value) -> None:
     entry = target.setdefault(key, {})
-    entry[exps] = entry.get(exps, 0) + value
-    if not entry[exps]:
-        del entry[exps]
+    total = entry[exps] + value if exps in entry else value
+    if total:
+        entry[exps] = total
+    else:
+        entry.pop(exps, None)
         if not entry:
             del target[key]
 
@@ -253,8 +270,8 @@ def straight_tables(spec: ElementSpec) -> StraightTables:
         # int P_kl P_mn = sum_xy psi^xy_(kl)(mn); for a < b the key (a, b, kl, mn) is the
         # xy = ab term and (a, b, mn, kl) the xy = ba one, the same key when kl == mn
         i, j = index[kl], index[mn]
-        times = 2 if a != b and kl == mn else 1
-        _accumulate(i4, (min(i, j), max(i, j)), exps, times * value)
+        _accumulate(i4, (min(i, j), max(i, j)), exps,
+                    2 * value if a != b and kl == mn else value)
     return StraightTables(volume_tables.measure, mass, i2, i4)
 
 

@@ -186,8 +186,9 @@ def patterns(spec: ElementSpec, variant: str) -> Patterns:
         return not any(total.values())
 
     gram = []
+    upper = pairs(n)
     for a, b in all_i4:
-        (k, m), (p, q) = pairs(n)[a], pairs(n)[b]
+        (k, m), (p, q) = upper[a], upper[b]
         if key(k, m, p, q) in i4 or not both_zero(key(k, p, m, q), key(k, q, m, p)):
             gram.append((a, b))
     cij = [(k, p, m, q) for k in range(n) for p in range(k, n) for m in range(n)

@@ -61,18 +61,15 @@ def banner(spec: ElementSpec, family: str) -> str:
 def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> list[dict]:
     """Template-ready statements; marks which ones hold per-element (vector) values."""
 
-    def is_vector(expr: sp.Expr) -> bool:
-        for symbol in sp.sympify(expr).free_symbols:
-            name = symbol.name
-            if name.split("[")[0] in vector_arrays or name in vector_temps:
-                return True
-        return False
+    def is_vector(names: list[str]) -> bool:
+        return any(name.split("[")[0] in vector_arrays or name in vector_temps
+                   for name in names)
 
     out = []
     for st in body:
         if isinstance(st, Assign):
-            vector = is_vector(st.expr)
             names = sorted(s.name for s in sp.sympify(st.expr).free_symbols)
+            vector = is_vector(names)
             uses = [name for name in names if "[" not in name]  # temporaries
             reads = sorted({name.split("[")[0] for name in names if "[" in name})  # arrays
             if "[" in st.target:

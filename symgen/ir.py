@@ -111,11 +111,11 @@ def refs(name: str, size: int) -> list[sp.Symbol]:
 
 
 class Temporaries:
-    """Numbered temporaries t0, t1, ... unique within one kernel."""
+    """Numbered temporaries t0, t1, ... unique within one kernel (the first ``start``)."""
 
-    def __init__(self, prefix: str = "t") -> None:
+    def __init__(self, prefix: str = "t", start: int = 0) -> None:
         self.prefix = prefix
-        self.count = 0
+        self.count = start
 
     def __iter__(self):
         return self

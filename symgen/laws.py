@@ -44,6 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
 
 import sympy as sp
 
@@ -188,6 +189,7 @@ def _ecm_sri(dim: int) -> tuple[LawPart, ...]:
             LawPart("Dv", "axis_lobatto2", dv.voigt))
 
 
+@cache  # factored once: applicability checks ask for the parts of every law
 def _svk_sri(dim: int) -> tuple[LawPart, ...]:
     # the isotropic normal block C with the thickness axis last, C = [[Cpp, c], [c^T, C33]]:
     # eps^T C eps = e_p^T (Cpp - c c^T / C33) e_p + C33 (E33 + c^T e_p / C33)^2 exactly, the

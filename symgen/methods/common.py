@@ -5,6 +5,8 @@ stores, and the pair tables of looped kernels."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import sympy as sp
 
 from symgen import derive, energies
@@ -152,21 +154,36 @@ def translate(spec: ElementSpec, body: list, temps: Temporaries, with_reference:
     return q, q0, dq
 
 
+#: Stages ``materialize`` keeps (the latest): a few hundred per element.
+MATERIALIZED_CACHE = 2048
+
+
 def materialize(body: list, temps: Temporaries, exprs: list) -> list:
     """Assign every non-trivial expression of a stage to a temporary (with CSE)."""
-    exprs = [sp.sympify(x) for x in exprs]
-    replacements, reduced = sp.cse(exprs, symbols=temps, order="none")
-    for symbol, expr in replacements:
-        body.append(Assign(symbol.name, expr))
+    statements, out, temps.count = _materialized(tuple(sp.sympify(x) for x in exprs),
+                                                 temps.prefix, temps.count)
+    body.extend(statements)
+    return list(out)
+
+
+@lru_cache(maxsize=MATERIALIZED_CACHE)
+def _materialized(exprs: tuple, prefix: str, start: int) -> tuple[tuple, tuple, int]:
+    """``materialize`` with temporaries numbered ``prefix`` from ``start``: the statements,
+    the values (temporaries or atoms) and the next number.  Cached: families of one element
+    repeat whole stages (the damping kernels of ``damping`` and ``damping_curvature``, the
+    elastic parts of a family's kernels), and CSE is most of a stage's time."""
+    temps = Temporaries(prefix, start)
+    replacements, reduced = sp.cse(list(exprs), symbols=temps, order="none")
+    statements = [Assign(symbol.name, expr) for symbol, expr in replacements]
     out = []
     for expr in reduced:
         if expr.is_Atom:
             out.append(expr)
         else:
             symbol = next(temps)
-            body.append(Assign(symbol.name, expr))
+            statements.append(Assign(symbol.name, expr))
             out.append(symbol)
-    return out
+    return tuple(statements), tuple(out), temps.count
 
 
 def store(body: list, name: str, values: list, accumulate: bool = False) -> None:

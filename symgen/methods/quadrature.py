@@ -4,6 +4,8 @@ with Kelvin-Voigt damping), and the looped point Jacobian of large elements."""
 
 from __future__ import annotations
 
+from functools import cache
+
 import sympy as sp
 
 from symgen import derive, energies, laws
@@ -511,6 +513,18 @@ def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Tempora
     ``axial``), and their exact derivatives (F = -dU/de - alpha dPhi/de_dot) at the
     node-relative reference ``q0`` and displacements ``dq``: by SymPy for the polynomial
     parts, in closed form for the exact curvature (``_exact_bending``)."""
+    point, temps.count = _cable_point(spec, name, tuple(q0), tuple(dq), temps.prefix,
+                                      temps.count, bending, axial)
+    return list(point)
+
+
+@cache
+def _cable_point(spec: ElementSpec, name: str, q0: tuple, dq: tuple, prefix: str, start: int,
+                 bending: str, axial: bool) -> tuple[tuple, int]:
+    """``cable_point`` with its temporaries numbered ``prefix`` from ``start``: the statements
+    and the next number.  Cached: the elastic kernels of ``quadrature`` and ``quadrature_law``
+    are the same, and so are the bending loops of ``gram_curvature`` and ``cij_curvature``."""
+    temps = Temporaries(prefix, start)
     n = spec.n_shape
     tab = refs("tab", cable_table_width(spec, bending))
     s1, s2, w_bending = tab[:n], tab[n:2 * n], tab[2 * n + 1]
@@ -533,36 +547,29 @@ def cable_point(spec: ElementSpec, name: str, q0: list, dq: list, temps: Tempora
                        for q, v in outputs.items()}
     if name == "energy":
         store(point, "energy", outputs["energy"], accumulate=True)
-        return point
+        return tuple(point), temps.count
     for quantity in wanted:
         store(point, quantity, materialize(point, temps, outputs[quantity]), accumulate=True)
-    return point
+    return tuple(point), temps.count
 
 
-def _derived(spec: ElementSpec, name: str, wanted: list, s1, s2, q0: list, dq: list, w_axial,
+def _derived(spec: ElementSpec, name: str, wanted: list, s1, s2, q0, dq, w_axial,
              w_bending) -> dict[str, list]:
     """The ``wanted`` outputs (flat, row-major) of the cable kernel ``name`` at one point for
     the polynomial energy of ``energies.point_energy`` (simple bending, or the axial part
     alone with ``w_bending = 0``): its SymPy derivatives at the reference ``q0`` plus ``dq``."""
-    d, ndof = spec.dim, spec.ndof
+    ndof = spec.ndof
     shift = sp.symbols(f"dq0:{ndof}")
     rate = sp.symbols(f"qd0:{ndof}")
-    energy = energies.point_energy(s1, s2, q0, shift, d, w_axial, w_bending)
+    energy, force, stiffness = _elastic_derivatives(spec, tuple(s1), tuple(s2), tuple(q0),
+                                                    w_axial, w_bending)
     subs = dict(zip(shift, dq, strict=True))
     if name == "energy":
         return {"energy": [energy.xreplace(subs)]}
-    force = [-sp.diff(energy, v) for v in shift]
-    stiffness = [[sp.diff(f, v) for v in shift] for f in force]
     if name in DAMPING_KERNELS:
-        alpha = ref("alpha", 0)
-        # the dissipation in the current position q = q0 + dq, relative to the first node
-        current = [a + b for a, b in zip(q0, shift, strict=True)]
-        dissipation = alpha * energies.point_dissipation(s1, s2, current, rate, d, w_axial,
-                                                         w_bending)
+        damping, jacobian, jacobian_dot = _damping_derivatives(
+            spec, tuple(s1), tuple(s2), tuple(q0), w_axial, w_bending)
         subs.update(zip(rate, relative_velocities(spec), strict=True))
-        damping = [-sp.diff(dissipation, v) for v in rate]
-        jacobian = [[sp.diff(f, v) for v in shift] for f in damping]
-        jacobian_dot = [[sp.diff(f, v) for v in rate] for f in damping]
         if name == "damped_force_jacobians":
             damping = [a + b for a, b in zip(force, damping, strict=True)]
             jacobian = [[a + b for a, b in zip(ra, rb, strict=True)]
@@ -572,6 +579,36 @@ def _derived(spec: ElementSpec, name: str, wanted: list, s1, s2, q0: list, dq: l
         outputs = {"force": force, "jacobian": stiffness}
     flat = {q: v if q == "force" else [x for row in v for x in row] for q, v in outputs.items()}
     return {q: [v.xreplace(subs) for v in flat[q]] for q in wanted}
+
+
+@cache
+def _elastic_derivatives(spec: ElementSpec, s1: tuple, s2: tuple, q0: tuple, w_axial,
+                         w_bending) -> tuple:
+    """``energies.point_energy`` at the reference ``q0`` plus the displacements dq0, dq1, ...
+    (symbols), its force -dU/d dq (ndof) and stiffness (ndof x ndof lists).  Cached: every
+    kernel of a family derives them (``_derived``)."""
+    shift = sp.symbols(f"dq0:{spec.ndof}")
+    energy = energies.point_energy(s1, s2, q0, shift, spec.dim, w_axial, w_bending)
+    force = [-sp.diff(energy, v) for v in shift]
+    return energy, force, [[sp.diff(f, v) for v in shift] for f in force]
+
+
+@cache
+def _damping_derivatives(spec: ElementSpec, s1: tuple, s2: tuple, q0: tuple, w_axial,
+                         w_bending) -> tuple:
+    """The damping force -alpha dPhi/d qd (``energies.point_dissipation`` in the current
+    position q0 + dq, velocities qd0, qd1, ... relative to the first node, symbols) and its
+    Jacobians with respect to dq and qd (ndof x ndof lists).  Cached as
+    ``_elastic_derivatives``."""
+    shift = sp.symbols(f"dq0:{spec.ndof}")
+    rate = sp.symbols(f"qd0:{spec.ndof}")
+    alpha = ref("alpha", 0)
+    current = [a + b for a, b in zip(q0, shift, strict=True)]
+    dissipation = alpha * energies.point_dissipation(s1, s2, current, rate, spec.dim, w_axial,
+                                                     w_bending)
+    damping = [-sp.diff(dissipation, v) for v in rate]
+    return (damping, [[sp.diff(f, v) for v in shift] for f in damping],
+            [[sp.diff(f, v) for v in rate] for f in damping])
 
 
 def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
@@ -609,11 +646,11 @@ def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
     dk = [materialize(point, temps, [(c - kv * g_) * inv_g for c, g_ in zip(row, dg, strict=True)])
           for row, kv in zip(dc, kappa, strict=True)]
 
+    hessians = _curvature_hessians(spec, tuple(s1), tuple(s2), tuple(map(tuple, dk)),
+                                   tuple(dg), tuple(kappa), inv_g)
+
     def hessian(v: int, i: int, j: int):
-        (k, a), (m, b) = dofs[i], dofs[j]
-        d2c = (s1[k] * s2[m] - s1[m] * s2[k]) * energies.cross(unit[a], unit[b])[v]
-        d2g = 2 * s1[k] * s1[m] if a == b else 0
-        return (d2c - dk[v][i] * dg[j] - dg[i] * dk[v][j] - kappa[v] * d2g) * inv_g
+        return hessians[v][i][j]
 
     components = range(len(cross))
     force = [-weight * sum(measure[v] * dk[v][i] for v in components) for i in range(ndof)]
@@ -647,6 +684,27 @@ def _exact_bending(spec: ElementSpec, name: str, wanted: list, point: list,
     flat = {"force": damping, "jacobian": [x for row in jacobian for x in row],
             "jacobian_dot": [x for row in jacobian_dot for x in row]}
     return {q: flat[q] for q in wanted}
+
+
+@cache
+def _curvature_hessians(spec: ElementSpec, s1: tuple, s2: tuple, dk: tuple, dg: tuple,
+                        kappa: tuple, inv_g) -> tuple:
+    """H[v][i][j] = d2 kappa_v / d q_i d q_j = (d2c - dk dg^T - dg dk^T - kappa d2g) / g
+    (``_exact_bending``) from the materialised dk, dg, kappa and 1/g.  Cached: the kernels of
+    the exact-curvature families with one translation share them (their bending loops start
+    from the same temporaries)."""
+    d, n = spec.dim, spec.n_shape
+    unit = [[int(a == b) for b in range(d)] for a in range(d)]
+    dofs = [(k, a) for k in range(n) for a in range(d)]
+
+    def hessian(v: int, i: int, j: int):
+        (k, a), (m, b) = dofs[i], dofs[j]
+        d2c = (s1[k] * s2[m] - s1[m] * s2[k]) * energies.cross(unit[a], unit[b])[v]
+        d2g = 2 * s1[k] * s1[m] if a == b else 0
+        return (d2c - dk[v][i] * dg[j] - dg[i] * dk[v][j] - kappa[v] * d2g) * inv_g
+
+    return tuple(tuple(tuple(hessian(v, i, j) for j in range(len(dofs)))
+                       for i in range(len(dofs))) for v in range(len(dk)))
 
 
 def build(spec: ElementSpec) -> list[Kernel]:
