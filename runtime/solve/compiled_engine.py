@@ -63,9 +63,10 @@ from templates import environment
 STEPPER_VERSION = "7"
 #: Elements per kernel call: each chunk's Jacobians are assembled while still in cache.
 CHUNK = 64
-#: on several threads, chunks computed (by the next free thread) before their sums are
-#: added in order, per thread: a thread descheduled by other work on the machine holds up
-#: one chunk of a block, not every chunk after its own (docs/design.md, "Threads")
+#: on several threads, chunks computed (by the next free thread) in a block while the
+#: block before is added in order, per thread: a thread descheduled by other work on the
+#: machine holds up one chunk of a block, not every chunk after its own (docs/design.md,
+#: "Threads")
 BLOCK_CHUNKS_PER_THREAD = 4
 #: the automatic thread count: the cores (at most MAX_THREADS) when one evaluation of the
 #: element kernels counts at least THREAD_OPERATIONS operations and at least
@@ -614,6 +615,16 @@ class CompiledEngine:
         for name in ("matrix", "factor", "common", "handles"):
             setattr(target, prefix + name,
                     self._ffi.cast("void *", cholmod.address(getattr(cholesky, name))))
+        if cholesky.source is not None:     # analysed in its factor's order (Cholesky)
+            permutation = self._ffi.new("ancf_permutation *")
+            permutation.entries = cholesky.source.size
+            permutation.source = self._buffer(cholesky.source, "int")
+            permutation.perm = self._buffer(cholesky.perm, "int")
+            permutation.values = self._ffi.from_buffer("double[]", cholesky.values)
+            permutation.permuted = self._ffi.from_buffer("double[]", cholesky.permuted)
+            permutation.work = self._work(cholesky.n * max(self.dae.constraint_rows, 1))
+            self._keep.append(permutation)
+            setattr(target, prefix + "permutation", permutation)
 
     def _sparse(self, m) -> None:
         """Bind the sparse solver: the pattern, the mass at its entries, CHOLMOD's analysis
@@ -650,7 +661,8 @@ class CompiledEngine:
         self._keep += callbacks
 
     def _block_chunks(self) -> int:
-        """Chunks of elements computed before their sums are added: 1 on one thread."""
+        """Chunks of elements in a block (the kernels of one block run while the block
+        before is added): 1 on one thread."""
         return 1 if self.threads == 1 else self.threads * BLOCK_CHUNKS_PER_THREAD
 
     def _group(self, target, group) -> None:
@@ -665,7 +677,7 @@ class CompiledEngine:
         family = element.kernel_family
         for kernel in ELASTIC:
             setattr(target, f"{kernel}_kernel", self._ffi.cast("void *", family.address(kernel)))
-        chunks = min(elements, CHUNK) * self._block_chunks()   # a block's chunk buffers
+        chunks = min(elements, CHUNK) * 2 * self._block_chunks()   # two blocks' buffers
         target.e = self._work(chunks * ndof)
         target.force = self._work(chunks * ndof)
         target.jacobian = self._work(chunks * ndof * ndof)
