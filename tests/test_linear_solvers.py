@@ -136,6 +136,30 @@ def test_cholmod_factorises_in_place_and_names_the_failing_column():
         cholesky.factorize(-values)
 
 
+def test_cholmod_factorises_the_matrix_in_its_factors_order(monkeypatch):
+    """The lower triangle of P A P^T, gathered from the pattern-order values and analysed in
+    its natural order (no transpose per factorisation), solves as scipy's direct solve; a
+    CHOLMOD whose common block has another layout keeps the factor's own permutation."""
+    pattern = _grid_pattern(6)
+    values = _values(pattern, np.random.default_rng(4), 40.0)
+    matrix = _matrix(pattern, values).tocsc()
+    rhs = np.random.default_rng(5).standard_normal((pattern.shape[0], 3))
+    expected = scipy.sparse.linalg.spsolve(matrix, rhs)
+    permuted = cholmod.Cholesky(pattern)
+    assert permuted.source is not None
+    assert np.array_equal(np.sort(permuted.perm), np.arange(pattern.shape[0]))
+    assert not np.array_equal(permuted.perm, np.arange(pattern.shape[0]))   # AMD reorders
+    monkeypatch.setattr(cholmod, "_natural_order", lambda common: False)
+    own = cholmod.Cholesky(pattern)
+    assert own.source is None and own.perm is None
+    for cholesky in (permuted, own):
+        cholesky.factorize(values)
+        assert np.abs(cholesky.solve(rhs) - expected).max() <= 1e-12 * np.abs(expected).max()
+        assert np.abs(cholesky.solve(rhs[:, 0]) - expected[:, 0]).max() <= (
+            1e-12 * np.abs(expected).max())
+    assert np.abs(permuted.solve(rhs) - own.solve(rhs)).max() <= 1e-14 * np.abs(expected).max()
+
+
 def test_cholmod_releases_its_factor_without_naming_c_types():
     """The finaliser runs wherever the garbage collector starts, also inside cffi's
     non-reentrant parser (a kernel's cdef): naming a C type there waited forever."""
