@@ -38,6 +38,8 @@ import sympy as sp
 #: Local coordinates of every domain, in axis order.
 x, y, z = sp.symbols("x y z", real=True)
 LOCAL = (x, y, z)
+#: Letters of the local axes in nodal vector names (``r_<letters>``).
+AXIS_LETTERS = "xyz"
 #: Rules of reduced integration of a subdomain axis: name -> (points, weights) on [-1, 1].
 AXIS_RULES = {"gauss2": ((-1 / sp.sqrt(3), 1 / sp.sqrt(3)), (1, 1)),
               "lobatto2": ((-1, 1), (1, 1))}

@@ -14,14 +14,19 @@ from functools import cached_property
 
 import sympy as sp
 
-from symgen import domains
-from symgen.domains import LOCAL, Domain, x, y, z  # noqa: F401  (element files import these)
+from symgen import domains, energies
+from symgen.domains import (  # noqa: F401  (element files import these)
+    AXIS_LETTERS,
+    LOCAL,
+    Domain,
+    x,
+    y,
+    z,
+)
 
 # The beam box parameters, kept importable from here for the element files.
 length, height, width = domains.length, domains.height, domains.width
 
-#: Letters of the local axes in nodal vector names (``r_<letters>``).
-AXIS_LETTERS = "xyz"
 
 
 def vector_axes(name: str, dim: int) -> tuple[int, ...] | None:
@@ -94,8 +99,6 @@ class ElementSpec:
             )
         if len(self.quadrature) != self.dim:
             raise ValueError(f"element {self.name!r}: quadrature needs {self.dim} orders")
-        from symgen import energies
-
         energies.check(self)
         allowed = set(self.coordinates) | set(self.domain.parameters)
         for s in self.shape_functions:

@@ -49,11 +49,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from symgen import domains, laws
-from symgen.element import AXIS_LETTERS, ElementSpec
+from symgen.domains import AXIS_LETTERS
+
+if TYPE_CHECKING:      # symgen.element checks its energy through this module
+    from symgen.element import ElementSpec
 
 #: The directions of the centre line the strains dot, per dimension: names of the local
 #: derivatives of r (``r_<name>``) at the point, or ``<name>@<node>`` at a node's x (``@0``:
