@@ -113,6 +113,24 @@ def cantilever():
     return scene, run_scene(dataclasses.replace(scene, modal=Modal(modes=1)), progress=False)
 
 
+def test_a_bent_brick_keeps_its_nodes_through_the_thickness():
+    """``bent_reference`` of a solid bends it about the z axis through (0, R): each corner
+    keeps its z, lies at R - y from the axis, and the element is unstrained there (the
+    mapping was degenerate when z was dropped: ``ancf invariants --reference curved``)."""
+    from runtime.element.reference import bent_reference
+
+    kind, radius, geometry = element_kind(KIND), 2.0, (1.0, 0.1, 0.1)
+    points = kind.node_points(*geometry)
+    e0 = bent_reference(kind, geometry, radius).reshape(len(points), -1, 3)
+    positions = e0[:, 0]
+    np.testing.assert_allclose(positions[:, 2], points[:, 2], atol=1e-15)
+    distance = np.hypot(positions[:, 0], positions[:, 1] - radius)
+    np.testing.assert_allclose(distance, radius - points[:, 1], rtol=1e-14)
+    brick = Element(KIND, *geometry, E=2.1e11, nu=0.3, rho=7800.0, e0=e0.ravel())
+    assert np.abs(brick.elastic_force(e0.ravel())).max() <= 1e-6
+    assert brick.strain_energy(e0.ravel()) <= 1e-12
+
+
 def test_box_cantilever_bends_as_timoshenko_beam(cantilever):
     """Tip deflection against P L^3 / (3 E I) + P L / (k G A), k = 5/6, at nu = 0 (the shear
     part is 0.6 % of the bending one at L / h = 10); measured -0.75 % with 40 x 1 x 1 bricks

@@ -134,9 +134,10 @@ def rectangle_reference(kind: ElementKind, origin, side_x, side_y) -> np.ndarray
 
 def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
     """e0 of one element of ``geometry`` (length, height, width) bent along its local x onto
-    a circle of ``radius`` (x is arc length): beams in the x-y plane from the origin towards
-    +y (r_y pointing to the centre); plates into a cylindrical panel about an axis parallel
-    to y, towards +z (r_z the outward normal of the flat panel turned with it)."""
+    a circle of ``radius`` (x is arc length): beams and solids in the x-y plane from the
+    origin towards +y (r_y pointing to the centre; a solid's z kept); plates into a
+    cylindrical panel about an axis parallel to y, towards +z (r_z the outward normal of
+    the flat panel turned with it)."""
     curved_reference_check(kind, "bent", curvature=True)
     points = kind.node_points(*geometry)
     positions, frames, curvatures = [], [], []
@@ -150,6 +151,8 @@ def bent_reference(kind: ElementKind, geometry, radius: float) -> np.ndarray:
             curvatures.append(np.array([-s, 0.0, c]) / radius)
         else:
             position = radius * np.array([s, 1 - c, 0.0]) + p[1] * np.array([-s, c, 0.0])
+            if len(p) > 2:      # a solid's nodes off the x-y plane keep their z
+                position[2] += p[2]
             frame = np.column_stack([[c, s, 0], [-s, c, 0], [0, 0, 1]])
             # d^2/dx^2 of the position: (1/R) (1 - y/R) towards the centre (0, R)
             curvature = (1 - p[1] / radius) / radius * np.array([-s, c, 0.0])
