@@ -100,8 +100,11 @@ def _scenes(out: Path, figures: Path, names: tuple[str, ...] = SCENES,
 
 def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | None = None,
           workers: int | None = None) -> Path:
-    """Run every measurement and write ``<out_dir>/report.md`` (figures in ``figures/``)."""
+    """Run every measurement and write ``<out_dir>/report.md`` (figures in ``figures/``).
+    ``quick``: the small versions (a smoke test of the page), their sweeps in this process
+    unless a ``scheduler`` is given, and each kernel figure timed for a tenth of the budget."""
     start = time.perf_counter()
+    serial = quick and scheduler is None
     out = Path(out_dir)
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
@@ -115,7 +118,8 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
         "copied by hand. Timings are wall-clock seconds on a machine that may run other work.",
         "",
         "## 1. Kernel cost per element (`ancf bench kernels`)", "",
-        bench.run(["beam3d"] if quick else None, batch=1000 if quick else 10_000),
+        bench.run(["beam3d"] if quick else None, batch=1000 if quick else 10_000,
+                  budget_s=0.02 if quick else 0.2),
         "## 2. Closed-form against quadrature invariants (`ancf invariants`)", "",
     ]
     for kind, reference in ([("beam3d", "straight")] if quick else
@@ -124,7 +128,7 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
                              if reference == "straight"
                              or "general" in element_kind(kind).energy.variants]):
         parts.append(invariant_report.report(invariant_report.compare(kind, reference)))
-    results = paper.bench_paper(quick, scheduler, workers)
+    results = paper.bench_paper(quick, scheduler, workers, serial=serial)
     paper.write(results, work / "paper")
     parts += ["## 3. The paper's Tables I and II (`ancf bench paper`)", "",
               "With invariants: `gram` (this project's compressed form) and `cij` (the "
@@ -148,9 +152,10 @@ def build(out_dir: str | Path = "docs", quick: bool = False, scheduler: str | No
               _demote(bench_solvers.run(quick=quick, repeats=1 if quick else 3,
                                         progress=False), 1)]
     parts += ["## 6. Error against run time (`ancf study error-vs-time`)", ""]
-    parts += _error_vs_time(work, figures, quick, scheduler, workers)
+    parts += _error_vs_time(work, figures, quick, scheduler, workers, serial)
     parts += ["## 7. Stability on stiff and extreme cases (`ancf study stability`)", ""]
-    rows = stability.stability_study(scheduler=scheduler, workers=workers, quick=quick)
+    rows = stability.stability_study(scheduler=scheduler, workers=workers, quick=quick,
+                                     serial=serial)
     stability.write(rows, work / "stability")
     parts.append(_failures(rows))
     parts.append(_demote(stability.markdown(rows), 2))
@@ -212,7 +217,8 @@ def _failures(rows) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers) -> list[str]:
+def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers,
+                   serial: bool = False) -> list[str]:
     """The work-precision studies of the cantilever and the rotating beam."""
     parts = []
     # (label, scene, sweep overrides of the scene's [study] table)
@@ -225,7 +231,7 @@ def _error_vs_time(work: Path, figures: Path, quick: bool, scheduler, workers) -
     for label, scene, sweep in studies:
         folder = work / "error_vs_time" / label
         error_vs_time.study(scenes.path(scene), folder, scheduler=scheduler,
-                            workers=workers, **sweep)
+                            workers=workers, serial=serial, **sweep)
         parts.append(_demote((folder / "error_vs_time.md").read_text(), 2))
         png = folder / "error_vs_time.png"
         if png.exists():
