@@ -186,8 +186,7 @@ class Cholesky:
         self.source = self.perm = self.permuted = None
         self.matrix = self._sparse(self.indptr, self.indices, self.values, 1)
         self.factor = self._analyze()
-        if not indefinite:
-            self._permute_before_factorising()
+        self._permute_before_factorising()
         #: CHOLMOD's solution buffers, allocated by the first solve and reused
         self.handles = ffi.new("cholmod_dense *[3]")
         #: the factor's handle for ``__del__``, made here: a finaliser runs wherever the
@@ -220,10 +219,11 @@ class Cholesky:
         """Analyse the lower triangle of P A P^T (P: the fill-reducing, postordered order of
         the first analysis) in its natural order: ``cholmod_factorize`` then factorises
         the matrix as given, where with a permutation it transposes A into that triangle at
-        every call (14 % of a 32 x 32 plate's factorisation).  The triangle is gathered
-        from A's upper entries, as CHOLMOD's transpose takes them: the same matrix (the
-        solutions agree with the permuting factor's to round-off, 2e-17 on a plate).  Kept
-        as analysed when ``common``'s layout is unknown."""
+        every call (14 % of a 32 x 32 plate's factorisation, 15 % of the 200-joint chain's
+        KKT L D L^T).  The triangle is gathered from A's upper entries, as CHOLMOD's
+        transpose takes them: the same matrix (the solutions agree with the permuting
+        factor's to round-off, 2e-17 on a plate).  Kept as analysed when ``common``'s layout
+        is unknown."""
         ffi, lib = self._ffi, self._lib
         if not _natural_order(self._common_block):
             return
