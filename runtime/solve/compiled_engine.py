@@ -566,20 +566,20 @@ class CompiledEngine:
     def _kkt(self, m, rows: scipy.sparse.csr_matrix) -> None:
         """Bind the KKT system of the joints' rows ``rows`` (the step's constraint CSR, whose
         entry order the slots follow): its pattern, slots, CHOLMOD analysis and buffers."""
-        system = linear.KKTSystem(self.dae.model.pattern, rows)
+        system = linear.KKTSystem(self.dae.model.pattern, rows,
+                                  refinements=linear.ITERATION_KKT_REFINEMENTS)
         self._kkt_system = system             # CHOLMOD's analysis lives as long as the step
-        pattern, cholesky, total = system.pattern, system.cholesky, system.n + system.m
+        pattern, total = system.pattern, system.n + system.m
         m.kkt_nnz = pattern.nnz
         m.kkt_indptr = self._buffer(pattern.indptr, "int")
         m.kkt_indices = self._buffer(pattern.indices, "int")
         for name in ("s_slots", "below_slots", "above_slots", "diagonal_slots", "s_diagonal"):
             setattr(m, f"kkt_{name}", self._buffer(getattr(system, name), "int"))
         m.kkt_diagonal_count = system.s_diagonal.size
-        self._bind_kkt(m.kkt, cholesky)
+        self._bind_kkt(m.kkt, system)
         for name in ("rhs", "solution", "correction"):
             setattr(m, f"kkt_{name}", self._work(total))
-        m.kkt_regularisation, m.kkt_refinements = (linear.KKT_REGULARISATION,
-                                                   linear.KKT_REFINEMENTS)
+        m.kkt_regularisation = linear.KKT_REGULARISATION
 
     def _projection(self, m, rows: scipy.sparse.csr_matrix, ld: int) -> None:
         """Bind what the step's trapezoidal projection onto nonlinear rows (``project``)
@@ -590,7 +590,7 @@ class CompiledEngine:
         nf, nj, pattern = self.dae.free.size, self.dae.constraint_rows, self.dae.model.pattern
         if self.kkt:
             self._kkt_mass_system = linear.KKTSystem(pattern, rows)
-            self._bind_kkt(m.kkt_mass, self._kkt_mass_system.cholesky)
+            self._bind_kkt(m.kkt_mass, self._kkt_mass_system)
             return
         mass = m.mass
         mass.kind = 0
@@ -604,10 +604,12 @@ class CompiledEngine:
         mass.schur = self._work(nj * nj)
         mass.schur_pivots = self._work(nj, "int")
 
-    def _bind_kkt(self, target, cholesky) -> None:
-        """Bind a KKT matrix (``ancf_kkt``): the values and analysis of ``cholesky``."""
-        target.values = self._ffi.from_buffer("double[]", cholesky.values)
-        self._bind_cholmod(target, cholesky)
+    def _bind_kkt(self, target, system: linear.KKTSystem) -> None:
+        """Bind a KKT matrix (``ancf_kkt``): the values and analysis of ``system``'s
+        CHOLMOD object and its refinements."""
+        target.values = self._ffi.from_buffer("double[]", system.cholesky.values)
+        target.refinements = system.refinements
+        self._bind_cholmod(target, system.cholesky)
 
     def _bind_cholmod(self, target, cholesky, prefix: str = "") -> None:
         """Bind the CHOLMOD objects of ``cholesky`` (matrix, factor, common, handles) to the

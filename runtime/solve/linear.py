@@ -154,8 +154,15 @@ class SchurSolver:
 #: ordering does not know them apart) does not lose more digits than the refinements win back
 KKT_REGULARISATION = 1e-8
 #: refinement steps of a KKT solve against the unregularised system (each gains about
-#: -log10(KKT_REGULARISATION) digits)
+#: -log10(KKT_REGULARISATION) digits): the solves that must be exact, as the trapezoidal
+#: projection onto the joints
 KKT_REFINEMENTS = 1
+#: refinement steps of the Newton iterations' KKT solves: none.  Their regularised solution
+#: is an inexact Newton step (relative error about KKT_REGULARISATION; the residual and the
+#: constraints are evaluated exactly, so the iteration converges to the same root in the
+#: same iterations), and the refinement's second solve and product were 30 % of a
+#: 200-joint chain's step with auto Newton (``ancf bench steps --joints 200``)
+ITERATION_KKT_REFINEMENTS = 0
 #: the constraint rows from which joints go through the KKT system instead of the Schur
 #: complement (whose multi-column solve and dense LU grow with the rows: 92-98 % of a step
 #: at 50-200 spherical joints, ``ancf bench steps --joints``)
@@ -166,13 +173,16 @@ class KKTSystem:
     """Saddle systems [[S, C^T], [C, 0]] of one structure (S of the CSR ``pattern`` (n, n),
     C of the CSR structure ``rows`` (m, n)) by CHOLMOD's simplicial L D L^T of the
     quasi-definite [[S, C^T], [C, -delta I]] (fill-reducing ordering and symbolic analysis
-    once, here; ``KKT_REGULARISATION``), each solve refined against the unregularised
-    system (``KKT_REFINEMENTS``).  Used instead of the Schur complement of many constraint
+    once, here; ``KKT_REGULARISATION``), each solve refined ``refinements`` times against
+    the unregularised system (``KKT_REFINEMENTS``; the Newton iterations'
+    ``ITERATION_KKT_REFINEMENTS``).  Used instead of the Schur complement of many constraint
     rows (``KKT_ROWS``): one sparse factorisation of n + m, no m-column solve, no dense LU."""
 
-    def __init__(self, pattern: scipy.sparse.csr_matrix, rows: scipy.sparse.csr_matrix) -> None:
+    def __init__(self, pattern: scipy.sparse.csr_matrix, rows: scipy.sparse.csr_matrix,
+                 refinements: int = KKT_REFINEMENTS) -> None:
         n, m = pattern.shape[0], rows.shape[0]
         self.n, self.m = n, m
+        self.refinements = refinements
         self.rows_structure = rows.tocoo()
         s_rows, s_cols = _coordinates(pattern)
         r_rows, r_cols = self.rows_structure.row, self.rows_structure.col
@@ -246,7 +256,7 @@ class KKTFactor:
                                else rhs_constraints])
         cholesky = self.system.cholesky
         solution = cholesky.solve(full)
-        for _ in range(KKT_REFINEMENTS):
+        for _ in range(self.system.refinements):
             solution += cholesky.solve(full - self.matrix @ solution)
         return solution[:n], solution[n:]
 

@@ -225,7 +225,8 @@ def constraint_system(dae: DAESystem, solver) -> linear.KKTSystem | None:
     if not uses_kkt(dae, solver):
         return None
     rows = dae.constraint_matrix(dae.model.reference) if dae.nonlinear else dae.joints_free
-    return linear.KKTSystem(dae.model.pattern, rows)
+    return linear.KKTSystem(dae.model.pattern, rows,
+                            refinements=linear.ITERATION_KKT_REFINEMENTS)
 
 
 def dae_system(model: Model, q_full: np.ndarray) -> DAESystem:
