@@ -3,6 +3,7 @@
 import shutil
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from runtime.kernels import jit
 from runtime.kernels import loader as kernels
 from runtime.kernels.errors import CompilerNotFoundError
 from runtime.kernels.loader import kernel_family
+from runtime.studies.bench_kernels import seconds_per_call
 from symgen import emit
 from symgen.elements import registry
 
@@ -72,6 +74,20 @@ def test_bench_kernels_command():
         capture_output=True, text=True, check=True, timeout=300)
     assert "quadrature/gram time ratio, numpy, batch 50" in result.stdout
     assert result.stdout.count("| numpy |") == 4      # 2 methods x batches 1 and 50
+
+
+def test_seconds_per_call_times_a_call_longer_than_the_budget_twice():
+    calls = []
+
+    def slow(argument):
+        calls.append(argument)
+        time.sleep(0.03)
+
+    seconds = seconds_per_call(slow, 1, budget_s=0.02)
+    assert len(calls) == 2 and 0.03 <= seconds < 1.0
+    calls.clear()
+    assert seconds_per_call(calls.append, 1, budget_s=0.01, repeats=3) < 0.01
+    assert len(calls) > 5          # a short call: looped over repeats within the budget
 
 
 def test_missing_compiler_is_one_clear_sentence(tmp_path, monkeypatch):
