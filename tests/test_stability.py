@@ -144,3 +144,19 @@ def test_tiny_sweep_on_a_two_worker_local_cluster(quick_rows):
 def test_unreachable_scheduler_is_named():
     with pytest.raises(SchedulerError, match="tcp://127.0.0.1:9"):
         stability.stability_study(quick=True, scheduler="tcp://127.0.0.1:9")
+
+
+def test_full_study_runs_each_law_of_its_beams_and_the_elastic_line_against_euler_bernoulli():
+    # the full study's locking rows once took every law of every kind (the cables' and
+    # shells'), and `ancf study stability` stopped at a scene error
+    from runtime.kernels.kind import element_kind
+    from runtime.studies.stability.locking import beam_theory, euler_bernoulli
+
+    locking = [c for c in stability.cases(quick=False) if c["study"] in ("poisson",
+                                                                          "chrono_beam")]
+    kind = {"poisson": "beam2d", "chrono_beam": "beam3d"}
+    assert all(c["law"] in element_kind(kind[c["study"]]).laws for c in locking)
+    assert {c["law"] for c in locking} >= {"svk", "ecm", "elastic_line"}
+    row, = stability.run_case(study="poisson", nu=0.3, elements=2, law="elastic_line")
+    assert row["passed"] and abs(row["measured"]) < 1e-6     # P L^3 / 3EI, shear-free
+    assert euler_bernoulli() < beam_theory(0.3)
