@@ -13,7 +13,9 @@ from dataclasses import fields
 import pytest
 
 from runtime.catalog import generated_kinds
+from runtime.kernels.kind import element_kind
 from runtime.studies import stability
+from runtime.studies.stability.locking import beam_theory, euler_bernoulli
 from runtime.studies.sweep import SchedulerError
 
 FIELDS = {"group", "case", "method", "measured", "tolerance", "passed", "detail", "cause"}
@@ -149,9 +151,6 @@ def test_unreachable_scheduler_is_named():
 def test_full_study_runs_each_law_of_its_beams_and_the_elastic_line_against_euler_bernoulli():
     # the full study's locking rows once took every law of every kind (the cables' and
     # shells'), and `ancf study stability` stopped at a scene error
-    from runtime.kernels.kind import element_kind
-    from runtime.studies.stability.locking import beam_theory, euler_bernoulli
-
     locking = [c for c in stability.cases(quick=False) if c["study"] in ("poisson",
                                                                           "chrono_beam")]
     kind = {"poisson": "beam2d", "chrono_beam": "beam3d"}

@@ -206,7 +206,7 @@ def cij_operators(kind: ElementKind, variant: str, cij: np.ndarray):
     C^{(k,a),(p,b)} holds c^{kp}_{mq} at ((m,a), (q,b)).  Both are linear in ``cij``: their
     structure and the maps from ``cij`` to their entries are built once per kind and
     variant (``_cij_structure``; seconds for the brick's 96 coordinates), each element
-    then costs two sparse products.
+    then sums its values into them (``_operator``).
     """
     return tuple(_operator(structure, np.asarray(cij, float))
                  for structure in _cij_structure(kind.name, variant))

@@ -22,21 +22,15 @@ QUANTITIES = {"force": "elastic_force", "jacobian": "elastic_jacobian",
 
 def seconds_per_call(function, argument, budget_s: float = 0.2, repeats: int = 5) -> float:
     """Best-of-``repeats`` wall time of one call, each repeat looping for about budget_s/repeats.
-    A call longer than the budget is timed twice, the first call included (the brick's NumPy
-    quadrature at batch 625 takes seconds a call; a warm-up would be a third)."""
+    The first call is timed too: a call longer than the budget is repeated once and the
+    better of the two taken (the brick's NumPy quadrature at batch 625 takes seconds a
+    call), one longer than a repeat's share counts among the repeats."""
     start = time.perf_counter()
     function(argument)
     first = max(time.perf_counter() - start, 1e-7)
-    if first >= budget_s:
-        start = time.perf_counter()
-        function(argument)
-        return min(first, time.perf_counter() - start)
-    start = time.perf_counter()
-    function(argument)
-    once = max(time.perf_counter() - start, 1e-7)
-    loops = max(1, int(budget_s / repeats / once))
-    repeats = min(repeats, max(1, int(budget_s / once)))
-    best = once if loops == 1 else float("inf")
+    loops = max(1, int(budget_s / repeats / first))
+    repeats = min(repeats, max(1, int(budget_s / first)))
+    best = first if loops == 1 else float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
         for _ in range(loops):

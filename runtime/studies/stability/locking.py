@@ -20,19 +20,18 @@ def beam_theory(nu: float, shear_coefficient: float | None = None,
     E_b to E."""
     p = POISSON
     area = p["height"] * p["width"]
-    inertia = p["width"] * p["height"] ** 3 / 12
     shear = p["E"] / (2 * (1 + nu))
     k = 10 * (1 + nu) / (12 + 11 * nu) if shear_coefficient is None else shear_coefficient
-    modulus = p["E"] if bending_modulus is None else bending_modulus
-    return (p["load"] * p["length"] ** 3 / (3 * modulus * inertia)
-            + p["load"] * p["length"] / (k * shear * area))
+    return euler_bernoulli(bending_modulus) + p["load"] * p["length"] / (k * shear * area)
 
 
-def euler_bernoulli() -> float:
-    """Tip deflection (m) of the Poisson cantilever without shear: P L^3 / (3 E I), the
-    reference of the ``elastic_line`` law (a centre-line energy: no shear deflection)."""
+def euler_bernoulli(bending_modulus: float | None = None) -> float:
+    """Tip deflection (m) of the Poisson cantilever without shear: P L^3 / (3 E_b I), E_b
+    defaulting to E; the reference of the ``elastic_line`` law (a centre-line energy: no
+    shear deflection)."""
     p = POISSON
-    return p["load"] * p["length"] ** 3 / (3 * p["E"] * p["width"] * p["height"] ** 3 / 12)
+    modulus = p["E"] if bending_modulus is None else bending_modulus
+    return p["load"] * p["length"] ** 3 / (3 * modulus * p["width"] * p["height"] ** 3 / 12)
 
 
 def poisson_case(nu: float, elements: int, law: str = "svk") -> list[dict]:
