@@ -217,7 +217,7 @@ GROUP_CASES = [
      lambda s: s.group()({"e": s.batch, "e0": s.e0s(1)}, {"force": np.zeros((2, s.ndof))}),
      "out['force']: " + OUT + "(3, {ndof}), got float64 array of shape (2, {ndof})"),
     ("unknown kernel", lambda s: s.group("forces"),
-     "kernel: expected one of energy, force, force_jacobian, jacobian for {kind}"),
+     "kernel: expected one of energy, force, force_jacobian for {kind}"),
     ("one-shot: e of the wrong width",
      lambda s: s.one_shot("force", e=np.zeros((1, 10)), e0=s.e0s(1)),
      "e: " + WIDTH_24 + "(1, 10)"),

@@ -69,7 +69,7 @@ class Element:
     shear_correction: the ECM shear-correction factors, one number for every
     transverse shear or a tuple (k1 on 2E13, k2 on 2E12 in 3D; k on 2E12 in 2D), default
     10 (1 + nu) / (12 + 11 nu); damping: Kelvin-Voigt alpha in s (stress = D (eps + alpha
-    eps_dot)), used by ``damping_force``, ``damping_jacobians``, ``internal_force_and_jacobians``.
+    eps_dot)), used by ``damping_force`` and ``internal_force_and_jacobians``.
 
     Every invalid argument raises ValueError naming it (wrong types included, so callers catch
     one class): numbers are real (NumPy scalars accepted; bools, strings, NaN and inf
@@ -286,8 +286,7 @@ class Element:
             self._damping_fixed = fixed
             bound = dict(fixed, e0=self.e0[None, :])
             self._damping_bound = {name: kernels.bind(name, bound)
-                                   for name in ("damping_force", "damping_jacobians",
-                                                "damped_force_jacobians")}
+                                   for name in ("damping_force", "damped_force_jacobians")}
         return self._damping_bound
 
     def _run_damped(self, kernel: str, e, e_dot, out: dict) -> tuple[dict, bool]:
@@ -318,24 +317,13 @@ class Element:
         result, single = self._run_damped("damping_force", e, e_dot, {"force": ("out", out)})
         return result["force"][0] if single else result["force"]
 
-    def damping_jacobians(self, e, e_dot, out_jacobian: np.ndarray | None = None,
-                          out_jacobian_dot: np.ndarray | None = None):
-        """(d/de, d/de_dot) of ``damping_force`` (N/m, N s/m): two (ndof, ndof) arrays, or
-        (m, ndof, ndof) for a batch; d/de_dot is symmetric."""
-        result, single = self._run_damped("damping_jacobians", e, e_dot,
-                                          {"jacobian": ("out_jacobian", out_jacobian),
-                                           "jacobian_dot": ("out_jacobian_dot",
-                                                            out_jacobian_dot)})
-        shape = (-1, self.ndof, self.ndof)
-        de, de_dot = (result["jacobian"].reshape(shape), result["jacobian_dot"].reshape(shape))
-        return (de[0], de_dot[0]) if single else (de, de_dot)
-
     def internal_force_and_jacobians(self, e, e_dot, out_force: np.ndarray | None = None,
                                      out_jacobian: np.ndarray | None = None,
                                      out_jacobian_dot: np.ndarray | None = None):
         """(force, d force/de, d force/de_dot) of the elastic plus damping force in one kernel
-        pass (what an implicit integrator needs); shapes as ``elastic_force_and_jacobian`` and
-        ``damping_jacobians``."""
+        pass (what an implicit integrator needs): (ndof,), (ndof, ndof), (ndof, ndof) for one
+        (e, e_dot), with a leading m for a batch; d force/de_dot, the damping force's alone,
+        is symmetric."""
         result, single = self._run_damped("damped_force_jacobians", e, e_dot,
                                           {"force": ("out_force", out_force),
                                            "jacobian": ("out_jacobian", out_jacobian),
@@ -365,7 +353,7 @@ class Element:
         return dict(self._damping_fixed)
 
     def damping_group_kernel(self, kernel: str):
-        """``kernel`` (damping_force, damping_jacobians, damped_force_jacobians) for a group
+        """``kernel`` (damping_force, damped_force_jacobians) for a group
         of elements sharing this element's invariants (as ``group_kernel``): call it with
         ``{"e": (m, ndof), "e0": (m, ndof), "e_dot": (m, ndof)}`` and optional ``out``."""
         self._damping_kernels()
@@ -484,8 +472,10 @@ class Element:
         return result["force"][0] if single else result["force"]
 
     def elastic_jacobian(self, e, out: np.ndarray | None = None) -> np.ndarray:
-        """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch (``out`` as above)."""
-        result, single = self._run("jacobian", e, {"jacobian": ("out", out)})
+        """d(force)/de (N/m): (ndof, ndof), or (m, ndof, ndof) for a batch (``out`` as above).
+        The combined kernel's (``elastic_force_and_jacobian``): a Jacobian-only kernel would
+        save a few per cent of a call and double the C a family compiles."""
+        result, single = self._run("force_jacobian", e, {"jacobian": ("out", out)})
         jacobian = result["jacobian"].reshape(-1, self.ndof, self.ndof)
         return jacobian[0] if single else jacobian
 
@@ -506,7 +496,7 @@ class Element:
         return float(energy[0, 0]) if single else energy[:, 0].copy()
 
     def group_kernel(self, kernel: str):
-        """``kernel`` (force, jacobian, energy, force_jacobian) for a group of elements that
+        """``kernel`` (force, energy, force_jacobian) for a group of elements that
         share this element's invariants but each have their own reference: call it with
         ``{"e": (m, ndof), "e0": (m, ndof) or (1, ndof)}`` and optional ``out``, checked as
         ``runtime.kernels.loader.BoundKernel`` documents (C-contiguous float64 input is not copied).

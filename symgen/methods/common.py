@@ -15,8 +15,11 @@ from symgen.ir import Array, Assign, Temporaries, refs
 
 QUANTITIES = ("force", "jacobian", "energy")
 #: The kernels of every method family: each computes the listed quantities in one pass
-#: (a Newton iteration needs force and Jacobian together and shares their common part).
-KERNELS = (("force",), ("jacobian",), ("energy",), ("force", "jacobian"))
+#: (a Newton iteration needs force and Jacobian together and shares their common part).  The
+#: Jacobian alone is the combined kernel's (``runtime.element.Element.elastic_jacobian``): a
+#: kernel of its own would cost a few per cent less at run time but double the largest
+#: functions a family compiles (beam3d's quadrature_law: 16 s to compile instead of 31).
+KERNELS = (("force",), ("energy",), ("force", "jacobian"))
 
 
 def kernel_name(quantities) -> str:
@@ -25,9 +28,10 @@ def kernel_name(quantities) -> str:
 
 
 #: Kelvin-Voigt damping kernels (stress = D (eps + alpha eps_dot)) of the gram and
-#: quadrature_law families: the damping force alone, its two Jacobians, and the elastic plus
-#: damping force with both Jacobians in one pass.
-DAMPING_KERNELS = ("damping_force", "damping_jacobians", "damped_force_jacobians")
+#: quadrature_law families: the damping force alone, and the elastic plus damping force with
+#: both Jacobians in one pass (the Jacobians of the damping force alone are that kernel's
+#: minus the elastic ones, ``runtime.element.Element.damping_jacobians``).
+DAMPING_KERNELS = ("damping_force", "damped_force_jacobians")
 
 
 #: Elements with more shape functions than this get the looped forms: gram and damping

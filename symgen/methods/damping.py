@@ -33,11 +33,11 @@ def damping_arrays(spec: ElementSpec, name: str) -> tuple[Array, list[Array]]:
     if name in force_doc:
         outputs.append(Array("force", spec.ndof, "output", force_doc[name]))
     if name != "damping_force":
-        which = "damping force" if name == "damping_jacobians" else "elastic plus damping force"
         outputs += [Array("jacobian", spec.ndof**2, "output",
-                          f"d({which})/de (N/m), row-major ndof x ndof"),
+                          "d(elastic plus damping force)/de (N/m), row-major ndof x ndof"),
                     Array("jacobian_dot", spec.ndof**2, "output",
-                          f"d({which})/d(e_dot) (N s/m), row-major ndof x ndof")]
+                          "d(elastic plus damping force)/d(e_dot) (N s/m), row-major ndof x "
+                          "ndof")]
     return e_dot, [alpha, *outputs]
 
 
@@ -90,14 +90,12 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str,
         return (4 if k == m else 2) * vec[pidx[(k, m)]]
 
     doc = {"damping_force": "Kelvin-Voigt damping force -T'(Dm alpha gd) Q",
-           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
            "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
            "respect to e and e_dot, in one pass"}[name]
     kernel = Kernel(name, doc + " (gram form).", arrays, body)
-    if name != "damping_jacobians":
-        store(body, "force", [-sum(tprime(k, m) * q[m * d + c]
-                                   + alpha * tprime(k, m, linear) * qd[m * d + c]
-                                   for m in range(n)) for k in range(n) for c in range(d)])
+    store(body, "force", [-sum(tprime(k, m) * q[m * d + c]
+                               + alpha * tprime(k, m, linear) * qd[m * d + c]
+                               for m in range(n)) for k in range(n) for c in range(d)])
     if name == "damping_force":
         return kernel
 
@@ -129,9 +127,7 @@ def gram_damping_kernel(spec: ElementSpec, name: str, variant: str,
     for i in range(ndof):
         for j in range(ndof):
             (p, b), (qn, c) = divmod(i, d), divmod(j, d)
-            value = 2 * gamma_t(wd, i, j)
-            if combined:
-                value += 2 * material[(min(i, j), max(i, j))]
+            value = 2 * gamma_t(wd, i, j) + 2 * material[(min(i, j), max(i, j))]
             if b == c:
                 value += tprime(p, qn)
             full.append(-value)
@@ -163,22 +159,16 @@ def looped_damping_kernel(spec: ElementSpec, name: str, variant: str) -> Kernel:
         body += [Loop("pair_products", "strain", ("Q0", "DQ")),
                  Loop("pair_products", "strain", ("DQ", "Q"))]
     body += [Loop("zero", "h", (npairs,)), Loop("sym_pattern", "h", ("gram", "strain"))]
-    if name != "damping_jacobians":
-        body.append(Loop("pair_force", "force", ("h", "Q"), -1))
-    if name != "damping_force":
-        local.append(Array("W", npairs * ndof, "local", "Dm Gamma, then Dm (Gamma [+] alpha "
+    body.append(Loop("pair_force", "force", ("h", "Q"), -1))
+    if combined:
+        local.append(Array("W", npairs * ndof, "local", "Dm Gamma, then Dm (Gamma + alpha "
                            "Gammadot)"))
         body += [Loop("zero", "W", (npairs * ndof,)), Loop("gamma", "W", ("gram", "Q")),
-                 Loop("gamma_t", "jacobian_dot", ("Q", "W"), -2 * alpha)]
-        if combined:
-            body.append(Loop("gamma", "W", ("gram", "QD"), alpha))
-            body.append(Loop("gamma_t", "jacobian", ("Q", "W"), -2))
-        else:
-            body += [Loop("zero", "W", (npairs * ndof,)), Loop("gamma", "W", ("gram", "QD")),
-                     Loop("gamma_t", "jacobian", ("Q", "W"), -2 * alpha)]
-        body.append(Loop("kron_pair", "jacobian", ("h",), -1))
+                 Loop("gamma_t", "jacobian_dot", ("Q", "W"), -2 * alpha),
+                 Loop("gamma", "W", ("gram", "QD"), alpha),
+                 Loop("gamma_t", "jacobian", ("Q", "W"), -2),
+                 Loop("kron_pair", "jacobian", ("h",), -1)]
     doc = {"damping_force": "Kelvin-Voigt damping force -T'(Dm alpha gd) Q",
-           "damping_jacobians": "Jacobians of the damping force with respect to e and e_dot",
            "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
            "respect to e and e_dot, in one pass"}[name]
     arrays = [*coordinate_arrays(spec, True), e_dot,

@@ -41,11 +41,9 @@ from symgen.methods.common import (
 from symgen.methods.damping import damping_arrays
 
 #: What each kernel of the quadrature_law families computes (their docstrings).
-KERNEL_DOCS = {"force": "elastic force", "jacobian": "elastic Jacobian",
-               "energy": "strain energy", "force_jacobian": "elastic force and Jacobian",
+KERNEL_DOCS = {"force": "elastic force", "energy": "strain energy",
+               "force_jacobian": "elastic force and Jacobian",
                "damping_force": "Kelvin-Voigt damping force",
-               "damping_jacobians": "Jacobians of the damping force with respect to e and "
-               "e_dot",
                "damped_force_jacobians": "elastic plus damping force and its Jacobians with "
                "respect to e and e_dot"}
 
@@ -179,7 +177,7 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
     upper_d = derive.pairs(d)
     width_ = quadrature_law_table_width(spec)
     damped = name in DAMPING_KERNELS
-    quantities = {"damping_force": ("force",), "damping_jacobians": ("jacobian", "jacobian_dot"),
+    quantities = {"damping_force": ("force",),
                   "damped_force_jacobians": ("force", "jacobian", "jacobian_dot")}.get(
         name, tuple(name.split("_")))
     arrays = [*coordinate_arrays(spec, True)]
@@ -274,13 +272,8 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
         bs = sp.Matrix(n, d, materialize(point, temps, list(bmat * s_total)))
         store(point, "force", list(-(bs * f.T)), accumulate=True)
     if "jacobian" in quantities and looped(spec, "quadrature_law"):
-        if not damped:
-            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
-                                   shapes=shapes)
-        else:
-            _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
-                                   material=name == "damped_force_jacobians", fdot=fdot,
-                                   shapes=shapes)
+        _looped_point_jacobian(spec, point, bmat, f, s_total, dn, dshear, -1,
+                               fdot=fdot if damped else None, shapes=shapes)
     elif "jacobian" in quantities:
         z = [materialize(point, temps, row) for row in z_of(f)]
         y = [materialize(point, temps, row) for row in _law_rows(dn, dshear, z, d)]
@@ -306,9 +299,8 @@ def quadrature_law_kernel(spec: ElementSpec, name: str) -> Kernel:
             full = []
             for i in range(ndof):
                 for j in range(ndof):
-                    value = alpha * sum(yi[i] * zd[j] for yi, zd in zip(y, zdot, strict=True))
-                    if name == "damped_force_jacobians":
-                        value += material[(min(i, j), max(i, j))]
+                    value = (alpha * sum(yi[i] * zd[j] for yi, zd in zip(y, zdot, strict=True))
+                             + material[(min(i, j), max(i, j))])
                     full.append(-(value + geo(i, j)))
             store(point, "jacobian", materialize(point, temps, full), accumulate=True)
             upper = {ij: -alpha * value for ij, value in material.items()}
@@ -362,11 +354,11 @@ def _point_locals(spec: ElementSpec, damped: bool, gradients: bool = True) -> li
 
 
 def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn, dshear,
-                           scale, material: bool = True, fdot=None, shapes: bool = False) -> None:
+                           scale, fdot=None, shapes: bool = False) -> None:
     """The Jacobian at one point as loops (large elements): Z and Y = D Z, b and S b stored
     (unrolled, small), b S b^T by a loop, then jacobian += scale (sum_I Z_I Y_I^T +
     (b S b^T) kron I); with ``fdot``
-    (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric [+ material]) and
+    (damping) jacobian += scale (alpha sum_I Y_I Zdot_I^T + geometric + material) and
     jacobian_dot += scale alpha sum_I Z_I Y_I^T.  With ``shapes`` (``shape_looped``),
     ``bmat`` is the row of shape function k already in BM (``_shape_gradients``) and Z, Y,
     S b (and Zdot) are written for that k in one ``ShapeLoop``."""
@@ -405,8 +397,7 @@ def _looped_point_jacobian(spec: ElementSpec, point: list, bmat, fmat, smat, dn,
         if not shapes:
             rows_of("ZD", _z_rows(bmat, fdot, n, d))
         point.append(Loop("rows_product", "jacobian", ("Y", "ZD", rows), scale * alpha))
-        if material:
-            point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
+        point.append(Loop("rows_product", "jacobian", ("Z", "Y", rows), scale))
         point.append(Loop("rows_product", "jacobian_dot", ("Z", "Y", rows), scale * alpha))
     point.append(Loop("kron_full", "jacobian", ("GEO",), scale))
 

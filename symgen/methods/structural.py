@@ -141,7 +141,7 @@ def structural_kernel(spec: ElementSpec, name: str) -> Kernel:
         damping = [-alpha * sum(w * e * zi[i] for w, e, zi in zip(weights, rate, z,
                                                                   strict=True))
                    for i in range(ndof)]
-        force = damping if name == "damping_force" or name == "damping_jacobians" else \
+        force = damping if name == "damping_force" else \
             [a + b for a, b in zip(force, damping, strict=True)]
     if "force" in wanted:
         store(point, "force", materialize(point, temps, force), accumulate=True)
@@ -153,12 +153,9 @@ def structural_kernel(spec: ElementSpec, name: str) -> Kernel:
                 point.append(Assign(f"Z[{row * ndof + i}]", sp.sympify(value)))
                 point.append(Assign(f"Y[{row * ndof + i}]", weights[row] * ref("Z", row * ndof
                                                                                 + i)))
-        upper = geometric(strain) if name in ("jacobian", "force_jacobian",
-                                              "damped_force_jacobians") else None
+        upper = geometric(strain)
         if damped:
-            geo_rate = geometric(rate)
-            upper = [alpha * x for x in geo_rate] if upper is None else \
-                [x + alpha * y for x, y in zip(upper, geo_rate, strict=True)]
+            upper = [x + alpha * y for x, y in zip(upper, geometric(rate), strict=True)]
             for row, values in enumerate(rows(along(u, qd))):
                 for i, value in enumerate(values):
                     point.append(Assign(f"ZD[{row * ndof + i}]", sp.sympify(value)))
@@ -167,8 +164,7 @@ def structural_kernel(spec: ElementSpec, name: str) -> Kernel:
         for k in range(n):
             for p in range(n):
                 point.append(Assign(f"GEO[{k * n + p}]", sp.sympify(upper[pidx[(k, p)]])))
-        if name != "damping_jacobians":
-            point.append(Loop("rows_product", "jacobian", ("Z", "Y", count), -1))
+        point.append(Loop("rows_product", "jacobian", ("Z", "Y", count), -1))
         point.append(Loop("kron_full", "jacobian", ("GEO",), -1))
         if damped:
             point.append(Loop("rows_product", "jacobian_dot", ("Z", "Y", count), -alpha))
