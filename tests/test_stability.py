@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import json
 import math
 from dataclasses import fields
@@ -14,7 +15,7 @@ import pytest
 
 from runtime.catalog import generated_kinds
 from runtime.kernels.kind import element_kind
-from runtime.studies import stability
+from runtime.studies import stability, sweep
 from runtime.studies.stability.locking import beam_theory, euler_bernoulli
 from runtime.studies.sweep import SchedulerError
 
@@ -143,7 +144,10 @@ def test_tiny_sweep_on_a_two_worker_local_cluster(quick_rows):
                 math.isnan(parallel.measured) and math.isnan(serial.measured))
 
 
-def test_unreachable_scheduler_is_named():
+def test_unreachable_scheduler_is_named(monkeypatch):
+    # the study hands its scheduler to the sweep (whose own tests wait out the default 10 s)
+    monkeypatch.setattr(sweep, "run_cases", functools.partial(sweep.run_cases,
+                                                              connect_timeout_s=1.0))
     with pytest.raises(SchedulerError, match="tcp://127.0.0.1:9"):
         stability.stability_study(quick=True, scheduler="tcp://127.0.0.1:9")
 
