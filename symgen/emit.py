@@ -9,6 +9,7 @@ Output is byte-for-byte reproducible: no dates, sorted keys, deterministic print
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -91,8 +92,46 @@ def _statements(body: list, vector_arrays: set[str], vector_temps: set[str]) -> 
             out.append({"kind": "loop", "table": st.table, "width": None,
                         "body": _statements(list(st.body), vector_arrays, vector_temps)})
         elif isinstance(st, ShapeLoop):
+            shapes = _statements(list(st.body), vector_arrays, vector_temps)
             out.append({"kind": "shapes", "count": st.count, "index": SHAPE_INDEX,
-                        "body": _statements(list(st.body), vector_arrays, vector_temps)})
+                        "body": shapes,
+                        "arrays": _shape_arrays(shapes, st.count, vector_arrays)})
+    return out
+
+
+#: An array element of a ``ShapeLoop`` body as printed: name[stride*k + offset].
+_SHAPE_REF = re.compile(rf"\b([A-Za-z_]\w*)\[(\d+)\*{SHAPE_INDEX}(?: \+ (\d+))?\]")
+
+
+def _shape_arrays(body: list[dict], count: int, vector_arrays: set[str]) -> list[dict]:
+    """The statements of a ``ShapeLoop`` body for every shape function at once (the NumPy
+    backend: no Python loop over k): name[stride*k + offset] becomes the strided slice of
+    the ``count`` shape functions (a column for an array of one row, a table or shared
+    array, so it broadcasts against the elements), temporaries hold a row per shape
+    function, and a sum over k into an element that does not depend on k sums that axis
+    ({target, op, code} each)."""
+
+    def sliced(text: str) -> str:
+        def one(match: re.Match) -> str:
+            name, stride, offset = match[1], int(match[2]), int(match[3] or 0)
+            column = "" if name in vector_arrays else ", None"
+            return f"{name}[{offset}:{offset + stride * count}:{stride}{column}]"
+        return _SHAPE_REF.sub(one, text)
+
+    out = []
+    for st in body:
+        if st["kind"] not in ("temp", "store"):
+            raise ValueError(f"a shape loop holds only temporaries and stores, got {st['kind']}")
+        per_shape = _SHAPE_REF.search(st["target"]) is not None
+        if st["kind"] == "store" and not per_shape:
+            if not st["accumulate"] or not _SHAPE_REF.search(st["code"]):
+                raise ValueError(f"shape loop: {st['target']} must be a sum over k of terms "
+                                 f"that depend on k, got {st['code']}")
+            out.append({"target": st["target"], "op": "+=",
+                        "code": f"({sliced(st['code'])}).sum(axis=0)"})
+        else:
+            op = "+=" if st["kind"] == "store" and st["accumulate"] else "="
+            out.append({"target": sliced(st["target"]), "op": op, "code": sliced(st["code"])})
     return out
 
 

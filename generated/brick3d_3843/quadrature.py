@@ -15571,17 +15571,15 @@ def force(e_in, e0_in, material, table_in):
     for tab in table_in:
         J0[:9] = 0.0
 
-        for k in range(32):
-            J0[0] += Q0[3*k]*tab[3*k]
-            J0[1] += Q0[3*k]*tab[3*k + 1]
-            J0[2] += Q0[3*k]*tab[3*k + 2]
-            J0[3] += Q0[3*k + 1]*tab[3*k]
-            J0[4] += Q0[3*k + 1]*tab[3*k + 1]
-            J0[5] += Q0[3*k + 1]*tab[3*k + 2]
-            J0[6] += Q0[3*k + 2]*tab[3*k]
-            J0[7] += Q0[3*k + 2]*tab[3*k + 1]
-            J0[8] += Q0[3*k + 2]*tab[3*k + 2]
-
+        J0[0] += (Q0[0:96:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[1] += (Q0[0:96:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[2] += (Q0[0:96:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[3] += (Q0[1:97:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[4] += (Q0[1:97:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[5] += (Q0[1:97:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[6] += (Q0[2:98:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[7] += (Q0[2:98:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[8] += (Q0[2:98:3]*tab[2:98:3, None]).sum(axis=0)
         t387 = J0[0]*J0[4]*J0[8] + J0[1]*J0[5]*J0[6] + J0[2]*J0[3]*J0[7] - J0[0]*J0[5]*J0[7] - J0[1]*J0[3]*J0[8] - J0[2]*J0[4]*J0[6]
         t388 = (1.0/(t387))
         t389 = t388*(J0[4]*J0[8] - J0[5]*J0[7])
@@ -15593,24 +15591,20 @@ def force(e_in, e0_in, material, table_in):
         t395 = t388*(J0[3]*J0[7] - J0[4]*J0[6])
         t396 = t388*(J0[1]*J0[6] - J0[0]*J0[7])
         t397 = t388*(J0[0]*J0[4] - J0[1]*J0[3])
-        for k in range(32):
-            BM[3*k] = t389*tab[3*k] + t392*tab[3*k + 1] + t395*tab[3*k + 2]
-            BM[3*k + 1] = t390*tab[3*k] + t393*tab[3*k + 1] + t396*tab[3*k + 2]
-            BM[3*k + 2] = t391*tab[3*k] + t394*tab[3*k + 1] + t397*tab[3*k + 2]
-
+        BM[0:96:3] = t389*tab[0:96:3, None] + t392*tab[1:97:3, None] + t395*tab[2:98:3, None]
+        BM[1:97:3] = t390*tab[0:96:3, None] + t393*tab[1:97:3, None] + t396*tab[2:98:3, None]
+        BM[2:98:3] = t391*tab[0:96:3, None] + t394*tab[1:97:3, None] + t397*tab[2:98:3, None]
         H[:9] = 0.0
 
-        for k in range(32):
-            H[0] += BM[3*k]*DQ[3*k]
-            H[1] += BM[3*k + 1]*DQ[3*k]
-            H[2] += BM[3*k + 2]*DQ[3*k]
-            H[3] += BM[3*k]*DQ[3*k + 1]
-            H[4] += BM[3*k + 1]*DQ[3*k + 1]
-            H[5] += BM[3*k + 2]*DQ[3*k + 1]
-            H[6] += BM[3*k]*DQ[3*k + 2]
-            H[7] += BM[3*k + 1]*DQ[3*k + 2]
-            H[8] += BM[3*k + 2]*DQ[3*k + 2]
-
+        H[0] += (BM[0:96:3]*DQ[0:96:3]).sum(axis=0)
+        H[1] += (BM[1:97:3]*DQ[0:96:3]).sum(axis=0)
+        H[2] += (BM[2:98:3]*DQ[0:96:3]).sum(axis=0)
+        H[3] += (BM[0:96:3]*DQ[1:97:3]).sum(axis=0)
+        H[4] += (BM[1:97:3]*DQ[1:97:3]).sum(axis=0)
+        H[5] += (BM[2:98:3]*DQ[1:97:3]).sum(axis=0)
+        H[6] += (BM[0:96:3]*DQ[2:98:3]).sum(axis=0)
+        H[7] += (BM[1:97:3]*DQ[2:98:3]).sum(axis=0)
+        H[8] += (BM[2:98:3]*DQ[2:98:3]).sum(axis=0)
         t398 = 0.5*H[1]
         t399 = 0.5*H[3]
         t400 = 0.5*H[6]
@@ -15633,14 +15627,12 @@ def force(e_in, e0_in, material, table_in):
         t417 = t412 + t407*t413
         t418 = t412 + t408*t413
         t419 = t412 + t409*t413
-        for k in range(32):
-            t420 = BM[3*k + 1]*t414 + BM[3*k + 2]*t415 + BM[3*k]*t417
-            t421 = BM[3*k + 1]*t418 + BM[3*k + 2]*t416 + BM[3*k]*t414
-            t422 = BM[3*k + 1]*t416 + BM[3*k + 2]*t419 + BM[3*k]*t415
-            force[3*k] += -t411*(H[1]*t421 + H[2]*t422 + t420*(1.0 + H[0]))
-            force[3*k + 1] += -t411*(H[3]*t420 + H[5]*t422 + t421*(1.0 + H[4]))
-            force[3*k + 2] += -t411*(H[6]*t420 + H[7]*t421 + t422*(1.0 + H[8]))
-
+        t420 = BM[1:97:3]*t414 + BM[2:98:3]*t415 + BM[0:96:3]*t417
+        t421 = BM[1:97:3]*t418 + BM[2:98:3]*t416 + BM[0:96:3]*t414
+        t422 = BM[1:97:3]*t416 + BM[2:98:3]*t419 + BM[0:96:3]*t415
+        force[0:96:3] += -t411*(H[1]*t421 + H[2]*t422 + t420*(1.0 + H[0]))
+        force[1:97:3] += -t411*(H[3]*t420 + H[5]*t422 + t421*(1.0 + H[4]))
+        force[2:98:3] += -t411*(H[6]*t420 + H[7]*t421 + t422*(1.0 + H[8]))
 
 
     return force.T
@@ -16252,17 +16244,15 @@ def energy(e_in, e0_in, material, table_in):
     for tab in table_in:
         J0[:9] = 0.0
 
-        for k in range(32):
-            J0[0] += Q0[3*k]*tab[3*k]
-            J0[1] += Q0[3*k]*tab[3*k + 1]
-            J0[2] += Q0[3*k]*tab[3*k + 2]
-            J0[3] += Q0[3*k + 1]*tab[3*k]
-            J0[4] += Q0[3*k + 1]*tab[3*k + 1]
-            J0[5] += Q0[3*k + 1]*tab[3*k + 2]
-            J0[6] += Q0[3*k + 2]*tab[3*k]
-            J0[7] += Q0[3*k + 2]*tab[3*k + 1]
-            J0[8] += Q0[3*k + 2]*tab[3*k + 2]
-
+        J0[0] += (Q0[0:96:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[1] += (Q0[0:96:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[2] += (Q0[0:96:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[3] += (Q0[1:97:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[4] += (Q0[1:97:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[5] += (Q0[1:97:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[6] += (Q0[2:98:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[7] += (Q0[2:98:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[8] += (Q0[2:98:3]*tab[2:98:3, None]).sum(axis=0)
         t387 = J0[0]*J0[4]*J0[8] + J0[1]*J0[5]*J0[6] + J0[2]*J0[3]*J0[7] - J0[0]*J0[5]*J0[7] - J0[1]*J0[3]*J0[8] - J0[2]*J0[4]*J0[6]
         t388 = (1.0/(t387))
         t389 = t388*(J0[4]*J0[8] - J0[5]*J0[7])
@@ -16274,24 +16264,20 @@ def energy(e_in, e0_in, material, table_in):
         t395 = t388*(J0[3]*J0[7] - J0[4]*J0[6])
         t396 = t388*(J0[1]*J0[6] - J0[0]*J0[7])
         t397 = t388*(J0[0]*J0[4] - J0[1]*J0[3])
-        for k in range(32):
-            BM[3*k] = t389*tab[3*k] + t392*tab[3*k + 1] + t395*tab[3*k + 2]
-            BM[3*k + 1] = t390*tab[3*k] + t393*tab[3*k + 1] + t396*tab[3*k + 2]
-            BM[3*k + 2] = t391*tab[3*k] + t394*tab[3*k + 1] + t397*tab[3*k + 2]
-
+        BM[0:96:3] = t389*tab[0:96:3, None] + t392*tab[1:97:3, None] + t395*tab[2:98:3, None]
+        BM[1:97:3] = t390*tab[0:96:3, None] + t393*tab[1:97:3, None] + t396*tab[2:98:3, None]
+        BM[2:98:3] = t391*tab[0:96:3, None] + t394*tab[1:97:3, None] + t397*tab[2:98:3, None]
         H[:9] = 0.0
 
-        for k in range(32):
-            H[0] += BM[3*k]*DQ[3*k]
-            H[1] += BM[3*k + 1]*DQ[3*k]
-            H[2] += BM[3*k + 2]*DQ[3*k]
-            H[3] += BM[3*k]*DQ[3*k + 1]
-            H[4] += BM[3*k + 1]*DQ[3*k + 1]
-            H[5] += BM[3*k + 2]*DQ[3*k + 1]
-            H[6] += BM[3*k]*DQ[3*k + 2]
-            H[7] += BM[3*k + 1]*DQ[3*k + 2]
-            H[8] += BM[3*k + 2]*DQ[3*k + 2]
-
+        H[0] += (BM[0:96:3]*DQ[0:96:3]).sum(axis=0)
+        H[1] += (BM[1:97:3]*DQ[0:96:3]).sum(axis=0)
+        H[2] += (BM[2:98:3]*DQ[0:96:3]).sum(axis=0)
+        H[3] += (BM[0:96:3]*DQ[1:97:3]).sum(axis=0)
+        H[4] += (BM[1:97:3]*DQ[1:97:3]).sum(axis=0)
+        H[5] += (BM[2:98:3]*DQ[1:97:3]).sum(axis=0)
+        H[6] += (BM[0:96:3]*DQ[2:98:3]).sum(axis=0)
+        H[7] += (BM[1:97:3]*DQ[2:98:3]).sum(axis=0)
+        H[8] += (BM[2:98:3]*DQ[2:98:3]).sum(axis=0)
         t398 = 0.5*H[1]
         t399 = 0.5*H[3]
         t400 = 0.5*H[6]
@@ -16928,17 +16914,15 @@ def force_jacobian(e_in, e0_in, material, table_in):
     for tab in table_in:
         J0[:9] = 0.0
 
-        for k in range(32):
-            J0[0] += Q0[3*k]*tab[3*k]
-            J0[1] += Q0[3*k]*tab[3*k + 1]
-            J0[2] += Q0[3*k]*tab[3*k + 2]
-            J0[3] += Q0[3*k + 1]*tab[3*k]
-            J0[4] += Q0[3*k + 1]*tab[3*k + 1]
-            J0[5] += Q0[3*k + 1]*tab[3*k + 2]
-            J0[6] += Q0[3*k + 2]*tab[3*k]
-            J0[7] += Q0[3*k + 2]*tab[3*k + 1]
-            J0[8] += Q0[3*k + 2]*tab[3*k + 2]
-
+        J0[0] += (Q0[0:96:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[1] += (Q0[0:96:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[2] += (Q0[0:96:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[3] += (Q0[1:97:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[4] += (Q0[1:97:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[5] += (Q0[1:97:3]*tab[2:98:3, None]).sum(axis=0)
+        J0[6] += (Q0[2:98:3]*tab[0:96:3, None]).sum(axis=0)
+        J0[7] += (Q0[2:98:3]*tab[1:97:3, None]).sum(axis=0)
+        J0[8] += (Q0[2:98:3]*tab[2:98:3, None]).sum(axis=0)
         t387 = J0[0]*J0[4]*J0[8] + J0[1]*J0[5]*J0[6] + J0[2]*J0[3]*J0[7] - J0[0]*J0[5]*J0[7] - J0[1]*J0[3]*J0[8] - J0[2]*J0[4]*J0[6]
         t388 = (1.0/(t387))
         t389 = t388*(J0[4]*J0[8] - J0[5]*J0[7])
@@ -16950,24 +16934,20 @@ def force_jacobian(e_in, e0_in, material, table_in):
         t395 = t388*(J0[3]*J0[7] - J0[4]*J0[6])
         t396 = t388*(J0[1]*J0[6] - J0[0]*J0[7])
         t397 = t388*(J0[0]*J0[4] - J0[1]*J0[3])
-        for k in range(32):
-            BM[3*k] = t389*tab[3*k] + t392*tab[3*k + 1] + t395*tab[3*k + 2]
-            BM[3*k + 1] = t390*tab[3*k] + t393*tab[3*k + 1] + t396*tab[3*k + 2]
-            BM[3*k + 2] = t391*tab[3*k] + t394*tab[3*k + 1] + t397*tab[3*k + 2]
-
+        BM[0:96:3] = t389*tab[0:96:3, None] + t392*tab[1:97:3, None] + t395*tab[2:98:3, None]
+        BM[1:97:3] = t390*tab[0:96:3, None] + t393*tab[1:97:3, None] + t396*tab[2:98:3, None]
+        BM[2:98:3] = t391*tab[0:96:3, None] + t394*tab[1:97:3, None] + t397*tab[2:98:3, None]
         H[:9] = 0.0
 
-        for k in range(32):
-            H[0] += BM[3*k]*DQ[3*k]
-            H[1] += BM[3*k + 1]*DQ[3*k]
-            H[2] += BM[3*k + 2]*DQ[3*k]
-            H[3] += BM[3*k]*DQ[3*k + 1]
-            H[4] += BM[3*k + 1]*DQ[3*k + 1]
-            H[5] += BM[3*k + 2]*DQ[3*k + 1]
-            H[6] += BM[3*k]*DQ[3*k + 2]
-            H[7] += BM[3*k + 1]*DQ[3*k + 2]
-            H[8] += BM[3*k + 2]*DQ[3*k + 2]
-
+        H[0] += (BM[0:96:3]*DQ[0:96:3]).sum(axis=0)
+        H[1] += (BM[1:97:3]*DQ[0:96:3]).sum(axis=0)
+        H[2] += (BM[2:98:3]*DQ[0:96:3]).sum(axis=0)
+        H[3] += (BM[0:96:3]*DQ[1:97:3]).sum(axis=0)
+        H[4] += (BM[1:97:3]*DQ[1:97:3]).sum(axis=0)
+        H[5] += (BM[2:98:3]*DQ[1:97:3]).sum(axis=0)
+        H[6] += (BM[0:96:3]*DQ[2:98:3]).sum(axis=0)
+        H[7] += (BM[1:97:3]*DQ[2:98:3]).sum(axis=0)
+        H[8] += (BM[2:98:3]*DQ[2:98:3]).sum(axis=0)
         t398 = 0.5*H[1]
         t399 = 0.5*H[3]
         t400 = 0.5*H[6]
@@ -16990,55 +16970,51 @@ def force_jacobian(e_in, e0_in, material, table_in):
         t417 = t412 + t407*t413
         t418 = t412 + t408*t413
         t419 = t412 + t409*t413
-        for k in range(32):
-            t420 = BM[3*k + 1]*t414 + BM[3*k + 2]*t415 + BM[3*k]*t417
-            t421 = BM[3*k + 1]*t418 + BM[3*k + 2]*t416 + BM[3*k]*t414
-            t422 = BM[3*k + 1]*t416 + BM[3*k + 2]*t419 + BM[3*k]*t415
-            force[3*k] += -t411*(H[1]*t421 + H[2]*t422 + t420*(1.0 + H[0]))
-            force[3*k + 1] += -t411*(H[3]*t420 + H[5]*t422 + t421*(1.0 + H[4]))
-            force[3*k + 2] += -t411*(H[6]*t420 + H[7]*t421 + t422*(1.0 + H[8]))
-
-        for k in range(32):
-            Z[3*k] = BM[3*k]*(1.0 + H[0])
-            Z[3*k + 1] = BM[3*k]*H[3]
-            Z[3*k + 2] = BM[3*k]*H[6]
-            Z[3*k + 96] = BM[3*k + 1]*H[1]
-            Z[3*k + 97] = BM[3*k + 1]*(1.0 + H[4])
-            Z[3*k + 98] = BM[3*k + 1]*H[7]
-            Z[3*k + 192] = BM[3*k + 2]*H[2]
-            Z[3*k + 193] = BM[3*k + 2]*H[5]
-            Z[3*k + 194] = BM[3*k + 2]*(1.0 + H[8])
-            Z[3*k + 288] = BM[3*k + 1]*H[2] + BM[3*k + 2]*H[1]
-            Z[3*k + 289] = BM[3*k + 1]*H[5] + BM[3*k + 2]*(1.0 + H[4])
-            Z[3*k + 290] = BM[3*k + 1]*(1.0 + H[8]) + BM[3*k + 2]*H[7]
-            Z[3*k + 384] = BM[3*k + 2]*(1.0 + H[0]) + BM[3*k]*H[2]
-            Z[3*k + 385] = BM[3*k + 2]*H[3] + BM[3*k]*H[5]
-            Z[3*k + 386] = BM[3*k + 2]*H[6] + BM[3*k]*(1.0 + H[8])
-            Z[3*k + 480] = BM[3*k + 1]*(1.0 + H[0]) + BM[3*k]*H[1]
-            Z[3*k + 481] = BM[3*k + 1]*H[3] + BM[3*k]*(1.0 + H[4])
-            Z[3*k + 482] = BM[3*k + 1]*H[6] + BM[3*k]*H[7]
-            Y[3*k] = Z[3*k + 192]*material[0] + Z[3*k + 96]*material[0] + Z[3*k]*(material[0] + 2.0*material[1])
-            Y[3*k + 1] = Z[3*k + 193]*material[0] + Z[3*k + 1]*(material[0] + 2.0*material[1]) + Z[3*k + 97]*material[0]
-            Y[3*k + 2] = Z[3*k + 194]*material[0] + Z[3*k + 2]*(material[0] + 2.0*material[1]) + Z[3*k + 98]*material[0]
-            Y[3*k + 96] = Z[3*k + 192]*material[0] + Z[3*k + 96]*(material[0] + 2.0*material[1]) + Z[3*k]*material[0]
-            Y[3*k + 97] = Z[3*k + 193]*material[0] + Z[3*k + 1]*material[0] + Z[3*k + 97]*(material[0] + 2.0*material[1])
-            Y[3*k + 98] = Z[3*k + 194]*material[0] + Z[3*k + 2]*material[0] + Z[3*k + 98]*(material[0] + 2.0*material[1])
-            Y[3*k + 192] = Z[3*k + 192]*(material[0] + 2.0*material[1]) + Z[3*k + 96]*material[0] + Z[3*k]*material[0]
-            Y[3*k + 193] = Z[3*k + 193]*(material[0] + 2.0*material[1]) + Z[3*k + 1]*material[0] + Z[3*k + 97]*material[0]
-            Y[3*k + 194] = Z[3*k + 194]*(material[0] + 2.0*material[1]) + Z[3*k + 2]*material[0] + Z[3*k + 98]*material[0]
-            Y[3*k + 288] = Z[3*k + 288]*material[1]
-            Y[3*k + 289] = Z[3*k + 289]*material[1]
-            Y[3*k + 290] = Z[3*k + 290]*material[1]
-            Y[3*k + 384] = Z[3*k + 384]*material[1]
-            Y[3*k + 385] = Z[3*k + 385]*material[1]
-            Y[3*k + 386] = Z[3*k + 386]*material[1]
-            Y[3*k + 480] = Z[3*k + 480]*material[1]
-            Y[3*k + 481] = Z[3*k + 481]*material[1]
-            Y[3*k + 482] = Z[3*k + 482]*material[1]
-            SB[3*k] = BM[3*k + 1]*t414 + BM[3*k + 2]*t415 + BM[3*k]*t417
-            SB[3*k + 1] = BM[3*k + 1]*t418 + BM[3*k + 2]*t416 + BM[3*k]*t414
-            SB[3*k + 2] = BM[3*k + 1]*t416 + BM[3*k + 2]*t419 + BM[3*k]*t415
-
+        t420 = BM[1:97:3]*t414 + BM[2:98:3]*t415 + BM[0:96:3]*t417
+        t421 = BM[1:97:3]*t418 + BM[2:98:3]*t416 + BM[0:96:3]*t414
+        t422 = BM[1:97:3]*t416 + BM[2:98:3]*t419 + BM[0:96:3]*t415
+        force[0:96:3] += -t411*(H[1]*t421 + H[2]*t422 + t420*(1.0 + H[0]))
+        force[1:97:3] += -t411*(H[3]*t420 + H[5]*t422 + t421*(1.0 + H[4]))
+        force[2:98:3] += -t411*(H[6]*t420 + H[7]*t421 + t422*(1.0 + H[8]))
+        Z[0:96:3] = BM[0:96:3]*(1.0 + H[0])
+        Z[1:97:3] = BM[0:96:3]*H[3]
+        Z[2:98:3] = BM[0:96:3]*H[6]
+        Z[96:192:3] = BM[1:97:3]*H[1]
+        Z[97:193:3] = BM[1:97:3]*(1.0 + H[4])
+        Z[98:194:3] = BM[1:97:3]*H[7]
+        Z[192:288:3] = BM[2:98:3]*H[2]
+        Z[193:289:3] = BM[2:98:3]*H[5]
+        Z[194:290:3] = BM[2:98:3]*(1.0 + H[8])
+        Z[288:384:3] = BM[1:97:3]*H[2] + BM[2:98:3]*H[1]
+        Z[289:385:3] = BM[1:97:3]*H[5] + BM[2:98:3]*(1.0 + H[4])
+        Z[290:386:3] = BM[1:97:3]*(1.0 + H[8]) + BM[2:98:3]*H[7]
+        Z[384:480:3] = BM[2:98:3]*(1.0 + H[0]) + BM[0:96:3]*H[2]
+        Z[385:481:3] = BM[2:98:3]*H[3] + BM[0:96:3]*H[5]
+        Z[386:482:3] = BM[2:98:3]*H[6] + BM[0:96:3]*(1.0 + H[8])
+        Z[480:576:3] = BM[1:97:3]*(1.0 + H[0]) + BM[0:96:3]*H[1]
+        Z[481:577:3] = BM[1:97:3]*H[3] + BM[0:96:3]*(1.0 + H[4])
+        Z[482:578:3] = BM[1:97:3]*H[6] + BM[0:96:3]*H[7]
+        Y[0:96:3] = Z[192:288:3]*material[0] + Z[96:192:3]*material[0] + Z[0:96:3]*(material[0] + 2.0*material[1])
+        Y[1:97:3] = Z[193:289:3]*material[0] + Z[1:97:3]*(material[0] + 2.0*material[1]) + Z[97:193:3]*material[0]
+        Y[2:98:3] = Z[194:290:3]*material[0] + Z[2:98:3]*(material[0] + 2.0*material[1]) + Z[98:194:3]*material[0]
+        Y[96:192:3] = Z[192:288:3]*material[0] + Z[96:192:3]*(material[0] + 2.0*material[1]) + Z[0:96:3]*material[0]
+        Y[97:193:3] = Z[193:289:3]*material[0] + Z[1:97:3]*material[0] + Z[97:193:3]*(material[0] + 2.0*material[1])
+        Y[98:194:3] = Z[194:290:3]*material[0] + Z[2:98:3]*material[0] + Z[98:194:3]*(material[0] + 2.0*material[1])
+        Y[192:288:3] = Z[192:288:3]*(material[0] + 2.0*material[1]) + Z[96:192:3]*material[0] + Z[0:96:3]*material[0]
+        Y[193:289:3] = Z[193:289:3]*(material[0] + 2.0*material[1]) + Z[1:97:3]*material[0] + Z[97:193:3]*material[0]
+        Y[194:290:3] = Z[194:290:3]*(material[0] + 2.0*material[1]) + Z[2:98:3]*material[0] + Z[98:194:3]*material[0]
+        Y[288:384:3] = Z[288:384:3]*material[1]
+        Y[289:385:3] = Z[289:385:3]*material[1]
+        Y[290:386:3] = Z[290:386:3]*material[1]
+        Y[384:480:3] = Z[384:480:3]*material[1]
+        Y[385:481:3] = Z[385:481:3]*material[1]
+        Y[386:482:3] = Z[386:482:3]*material[1]
+        Y[480:576:3] = Z[480:576:3]*material[1]
+        Y[481:577:3] = Z[481:577:3]*material[1]
+        Y[482:578:3] = Z[482:578:3]*material[1]
+        SB[0:96:3] = BM[1:97:3]*t414 + BM[2:98:3]*t415 + BM[0:96:3]*t417
+        SB[1:97:3] = BM[1:97:3]*t418 + BM[2:98:3]*t416 + BM[0:96:3]*t414
+        SB[2:98:3] = BM[1:97:3]*t416 + BM[2:98:3]*t419 + BM[0:96:3]*t415
         GEO.reshape(N_SHAPE, N_SHAPE, -1)[...] = np.einsum("kcx,pcx->kpx", BM.reshape(N_SHAPE, DIM, -1), SB.reshape(N_SHAPE, DIM, -1))
 
         jacobian.reshape(NDOF, NDOF, -1)[...] += -t411 * np.einsum("rix,rjx->ijx", Z.reshape(6, NDOF, -1), Y.reshape(6, NDOF, -1))
