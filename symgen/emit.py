@@ -138,7 +138,8 @@ def _shape_arrays(body: list[dict], count: int, vector_arrays: set[str]) -> list
 def _demand_order(body: list[dict]) -> list[dict]:
     """``body`` with every temporary moved to just before its first use (dead ones dropped):
     short live ranges, so few temporaries cross from one part to the next.  Valid when no
-    statement reads an array that the body stores to."""
+    statement reads an array that the body stores to; temporaries defined outside the body
+    (before its point loop) are taken as given."""
     defining = {st["target"]: st for st in body if st["kind"] == "temp"}
     out, done = [], set()
 
@@ -149,7 +150,7 @@ def _demand_order(body: list[dict]) -> list[dict]:
             if top in done:
                 stack.pop()
                 continue
-            missing = [u for u in defining[top]["uses"] if u not in done]
+            missing = [u for u in defining[top]["uses"] if u not in done and u in defining]
             if missing:
                 stack.extend(missing)
             else:
@@ -160,19 +161,31 @@ def _demand_order(body: list[dict]) -> list[dict]:
     for st in body:
         if st["kind"] == "store":
             for u in st["uses"]:
-                need(u)
+                if u in defining:
+                    need(u)
             out.append(st)
     return out
 
 
 def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
     """The template-ready ``body`` of ``kernel`` in demand order, split into consecutive parts
-    of about ``C_PART_CHARS``, if it is straight-line code longer than that (else None):
-    per part its statements, the temporaries it reads from earlier parts (imports) and those
-    later parts read (exports), each with its slot in the spill array of its type; and the
-    parameters and arguments of the part functions (every array the body may touch)."""
+    of about ``C_PART_CHARS``, if it is straight-line code longer than that, or straight-line
+    code before a point loop whose body is (else None): per part its statements, the
+    temporaries it reads from earlier parts or from before the loop (imports) and those
+    later parts read (exports), each with its slot in the spill array of its type; the
+    parameters and arguments of the part functions (every array the body may touch, and
+    the point's table row ``tab`` in a loop); in a loop, the statements before it
+    (``before``, in the kernel) with the temporaries the parts read from them (``spilled``)
+    and the loop."""
+    straight = ("temp", "store")
+    loop = body[-1] if body and body[-1]["kind"] == "loop" else None
+    before = body[:-1] if loop else []
+    if loop is not None:
+        if any(st["kind"] not in straight for st in before):
+            return None
+        body = loop["body"]
     if sum(len(st["code"]) for st in body if "code" in st) <= C_PART_CHARS or any(
-            st["kind"] not in ("temp", "store") for st in body):
+            st["kind"] not in straight for st in body):
         return None
     stored = {st["target"].split("[")[0] for st in body if st["kind"] == "store"}
     if any(stored.intersection(st["reads"]) for st in body):
@@ -185,10 +198,13 @@ def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
     for st in body:
         parts[min(done * count // size, count - 1)].append(st)
         done += len(st["code"])
-    order = {st["target"]: j for j, st in enumerate(body) if st["kind"] == "temp"}
-    owner = {st["target"]: i for i, part in enumerate(parts) for st in part
-             if st["kind"] == "temp"}
-    vector = {st["target"]: st["vector"] for st in body if st["kind"] == "temp"}
+    outer = [st for st in before if st["kind"] == "temp"] + [st for st in body
+                                                             if st["kind"] == "temp"]
+    order = {st["target"]: j for j, st in enumerate(outer)}
+    owner = {st["target"]: -1 for st in before if st["kind"] == "temp"}
+    owner.update({st["target"]: i for i, part in enumerate(parts) for st in part
+                  if st["kind"] == "temp"})
+    vector = {st["target"]: st["vector"] for st in outer}
     read_later = {name for i, part in enumerate(parts) for st in part for name in st["uses"]
                   if owner[name] < i}
     slots, counts = {}, {True: 0, False: 0}
@@ -202,14 +218,18 @@ def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
 
     roles = {"batch": "const vd", "shared": "const double", "local": "vd", "output": "vd"}
     arrays = [(a.name, roles[a.role]) for role in roles for a in kernel.role(role)]
-    arrays += [("SV", "vd"), ("SD", "double")]
-    return {"vectors": counts[True], "scalars": counts[False],
-            "signature": ", ".join(f"{kind} *restrict {name}" for name, kind in arrays),
-            "arguments": ", ".join(name for name, _ in arrays), "parts": [
+    arrays += [("SV", "vd"), ("SD", "double")] + ([("tab", "const double")] if loop else [])
+    split = {"vectors": counts[True], "scalars": counts[False],
+             "signature": ", ".join(f"{kind} *restrict {name}" for name, kind in arrays),
+             "arguments": ", ".join(name for name, _ in arrays), "parts": [
         {"body": part,
          "imports": spilled({n for st in part for n in st["uses"] if owner[n] < i}),
          "exports": spilled({st["target"] for st in part if st["target"] in read_later})}
-        for i, part in enumerate(parts)]}
+        for i, part in enumerate(parts)], "loop": None}
+    if loop is not None:
+        split.update(before=before, loop=loop,
+                     spilled=spilled({n for n in read_later if owner[n] == -1}))
+    return split
 
 
 def c_parameters(kernel: Kernel) -> list[dict]:
