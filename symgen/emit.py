@@ -135,8 +135,9 @@ def _shape_arrays(body: list[dict], count: int, vector_arrays: set[str]) -> list
     return out
 
 
-def _demand_order(body: list[dict]) -> list[dict]:
-    """``body`` with every temporary moved to just before its first use (dead ones dropped):
+def _demand_order(body: list[dict], keep: frozenset = frozenset()) -> list[dict]:
+    """``body`` with every temporary moved to just before its first use (dead ones dropped,
+    but for those in ``keep``, which a point loop after the body reads: they come last):
     short live ranges, so few temporaries cross from one part to the next.  Valid when no
     statement reads an array that the body stores to; temporaries defined outside the body
     (before its point loop) are taken as given."""
@@ -164,47 +165,54 @@ def _demand_order(body: list[dict]) -> list[dict]:
                 if u in defining:
                     need(u)
             out.append(st)
+    for st in body:
+        if st["kind"] == "temp" and st["target"] in keep:
+            need(st["target"])
     return out
 
 
-def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
-    """The template-ready ``body`` of ``kernel`` in demand order, split into consecutive parts
-    of about ``C_PART_CHARS``, if it is straight-line code longer than that, or straight-line
-    code before a point loop whose body is (else None): per part its statements, the
-    temporaries it reads from earlier parts or from before the loop (imports) and those
-    later parts read (exports), each with its slot in the spill array of its type; the
-    parameters and arguments of the part functions (every array the body may touch, and
-    the point's table row ``tab`` in a loop); in a loop, the statements before it
-    (``before``, in the kernel) with the temporaries the parts read from them (``spilled``)
-    and the loop."""
-    straight = ("temp", "store")
-    loop = body[-1] if body and body[-1]["kind"] == "loop" else None
-    before = body[:-1] if loop else []
-    if loop is not None:
-        if any(st["kind"] not in straight for st in before):
-            return None
-        body = loop["body"]
-    if sum(len(st["code"]) for st in body if "code" in st) <= C_PART_CHARS or any(
-            st["kind"] not in straight for st in body):
-        return None
-    stored = {st["target"].split("[")[0] for st in body if st["kind"] == "store"}
-    if any(stored.intersection(st["reads"]) for st in body):
-        return None
-    body = _demand_order(body)
-    size = sum(len(st["code"]) for st in body)
+def _cut(body: list[dict], keep: frozenset = frozenset()) -> list[list[dict]]:
+    """``body`` in demand order (``_demand_order``) cut into consecutive parts of about
+    ``C_PART_CHARS`` of code (at least one)."""
+    body = _demand_order(body, keep)
+    size = max(1, sum(len(st["code"]) for st in body))
     count = -(-size // C_PART_CHARS)
     parts: list[list[dict]] = [[] for _ in range(count)]
     done = 0
     for st in body:
         parts[min(done * count // size, count - 1)].append(st)
         done += len(st["code"])
-    outer = [st for st in before if st["kind"] == "temp"] + [st for st in body
-                                                             if st["kind"] == "temp"]
-    order = {st["target"]: j for j, st in enumerate(outer)}
-    owner = {st["target"]: -1 for st in before if st["kind"] == "temp"}
-    owner.update({st["target"]: i for i, part in enumerate(parts) for st in part
-                  if st["kind"] == "temp"})
-    vector = {st["target"]: st["vector"] for st in outer}
+    return parts
+
+
+def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
+    """The template-ready ``body`` of ``kernel`` split into functions ("parts", called in
+    order) if it is straight-line code longer than ``C_PART_CHARS``, or straight-line code
+    and a point loop whose body is, longer than that together (else None): the code before
+    the loop in parts called once, the loop's body in parts called at every point, each
+    part in demand order (``_cut``).  Per part its statements, whether it runs per point,
+    the temporaries it reads from earlier parts (imports) and those later parts read
+    (exports), each with its slot in the spill array of its type; the parameters and
+    arguments of the part functions (every array the body may touch, and the point's table
+    row ``tab`` when there is a loop); and the loop."""
+    straight = ("temp", "store")
+    loop = body[-1] if body and body[-1]["kind"] == "loop" else None
+    before = body[:-1] if loop else body
+    inner = loop["body"] if loop else []
+    if any(st["kind"] not in straight for st in before + inner) or sum(
+            len(st["code"]) for st in before + inner) <= C_PART_CHARS:
+        return None
+    for segment in (before, inner):
+        stored = {st["target"].split("[")[0] for st in segment if st["kind"] == "store"}
+        if any(stored.intersection(st["reads"]) for st in segment):
+            return None
+    head = _cut(before, frozenset(u for st in inner for u in st["uses"])) if before else []
+    parts = head + (_cut(inner) if loop else [])
+    temps = [st for part in parts for st in part if st["kind"] == "temp"]
+    order = {st["target"]: j for j, st in enumerate(temps)}
+    owner = {st["target"]: i for i, part in enumerate(parts) for st in part
+             if st["kind"] == "temp"}
+    vector = {st["target"]: st["vector"] for st in temps}
     read_later = {name for i, part in enumerate(parts) for st in part for name in st["uses"]
                   if owner[name] < i}
     slots, counts = {}, {True: 0, False: 0}
@@ -219,17 +227,13 @@ def _c_parts(kernel: Kernel, body: list[dict]) -> dict | None:
     roles = {"batch": "const vd", "shared": "const double", "local": "vd", "output": "vd"}
     arrays = [(a.name, roles[a.role]) for role in roles for a in kernel.role(role)]
     arrays += [("SV", "vd"), ("SD", "double")] + ([("tab", "const double")] if loop else [])
-    split = {"vectors": counts[True], "scalars": counts[False],
-             "signature": ", ".join(f"{kind} *restrict {name}" for name, kind in arrays),
-             "arguments": ", ".join(name for name, _ in arrays), "parts": [
-        {"body": part,
+    return {"vectors": counts[True], "scalars": counts[False], "loop": loop,
+            "signature": ", ".join(f"{kind} *restrict {name}" for name, kind in arrays),
+            "arguments": ", ".join(name for name, _ in arrays), "parts": [
+        {"body": part, "index": i + 1, "per_point": i >= len(head),
          "imports": spilled({n for st in part for n in st["uses"] if owner[n] < i}),
          "exports": spilled({st["target"] for st in part if st["target"] in read_later})}
-        for i, part in enumerate(parts)], "loop": None}
-    if loop is not None:
-        split.update(before=before, loop=loop,
-                     spilled=spilled({n for n in read_later if owner[n] == -1}))
-    return split
+        for i, part in enumerate(parts)]}
 
 
 def c_parameters(kernel: Kernel) -> list[dict]:

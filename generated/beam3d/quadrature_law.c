@@ -2028,8 +2028,101 @@ void beam3d_quadrature_law_damping_force(long m, const double *e_in, long e_stri
   }
 }
 
-/* Part 1 of 2 of beam3d_quadrature_law_damped_force_jacobians (split so that it compiles fast). */
+/* Part 1 of 3 of beam3d_quadrature_law_damped_force_jacobians (split so that it compiles fast). */
 static void __attribute__((noinline)) beam3d_quadrature_law_damped_force_jacobians_part1(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
+{
+    const vd t0 = e[3] - e0[3];
+    const vd t1 = e[4] - e0[4];
+    const vd t2 = e[5] - e0[5];
+    const vd t3 = e[6] - e0[6];
+    const vd t4 = e[7] - e0[7];
+    const vd t5 = e[8] - e0[8];
+    const vd t6 = e[9] - e0[9];
+    const vd t7 = e[10] - e0[10];
+    const vd t8 = e[11] - e0[11];
+    const vd t15 = e0[12] - e0[0];
+    const vd t16 = t15 - e0[12];
+    const vd t19 = e0[0] + t16;
+    const vd t17 = t15 - t16;
+    const vd t18 = e0[12] - t17;
+    const vd t20 = t18 - t19;
+    const vd t9 = e[12] - e[0];
+    const vd t10 = t9 - e[12];
+    const vd t13 = e[0] + t10;
+    const vd t11 = t9 - t10;
+    const vd t12 = e[12] - t11;
+    const vd t14 = t12 - t13;
+    const vd t22 = t14 - t20;
+    const vd t21 = t9 - t15;
+    const vd t23 = t21 + t22;
+    const vd t30 = e0[13] - e0[1];
+    const vd t31 = t30 - e0[13];
+    const vd t34 = e0[1] + t31;
+    const vd t32 = t30 - t31;
+    const vd t33 = e0[13] - t32;
+    const vd t35 = t33 - t34;
+    const vd t24 = e[13] - e[1];
+    const vd t25 = t24 - e[13];
+    const vd t28 = e[1] + t25;
+    const vd t26 = t24 - t25;
+    const vd t27 = e[13] - t26;
+    const vd t29 = t27 - t28;
+    const vd t37 = t29 - t35;
+    const vd t36 = t24 - t30;
+    const vd t38 = t36 + t37;
+    const vd t45 = e0[14] - e0[2];
+    const vd t46 = t45 - e0[14];
+    const vd t49 = e0[2] + t46;
+    const vd t47 = t45 - t46;
+    const vd t48 = e0[14] - t47;
+    const vd t50 = t48 - t49;
+    const vd t39 = e[14] - e[2];
+    const vd t40 = t39 - e[14];
+    const vd t43 = e[2] + t40;
+    const vd t41 = t39 - t40;
+    const vd t42 = e[14] - t41;
+    const vd t44 = t42 - t43;
+    const vd t52 = t44 - t50;
+    const vd t51 = t39 - t45;
+    const vd t53 = t51 + t52;
+    const vd t54 = e[15] - e0[15];
+    const vd t55 = e[16] - e0[16];
+    const vd t56 = e[17] - e0[17];
+    const vd t57 = e[18] - e0[18];
+    const vd t58 = e[19] - e0[19];
+    const vd t59 = e[20] - e0[20];
+    const vd t60 = e[21] - e0[21];
+    const vd t61 = e[22] - e0[22];
+    const vd t62 = e[23] - e0[23];
+
+    SV[0] = t0;
+    SV[1] = t1;
+    SV[2] = t2;
+    SV[3] = t3;
+    SV[4] = t4;
+    SV[5] = t5;
+    SV[6] = t6;
+    SV[7] = t7;
+    SV[8] = t8;
+    SV[9] = t15;
+    SV[10] = t23;
+    SV[11] = t30;
+    SV[12] = t38;
+    SV[13] = t45;
+    SV[14] = t53;
+    SV[15] = t54;
+    SV[16] = t55;
+    SV[17] = t56;
+    SV[18] = t57;
+    SV[19] = t58;
+    SV[20] = t59;
+    SV[21] = t60;
+    SV[22] = t61;
+    SV[23] = t62;
+}
+
+/* Part 2 of 3 of beam3d_quadrature_law_damped_force_jacobians (split so that it compiles fast). */
+static void __attribute__((noinline)) beam3d_quadrature_law_damped_force_jacobians_part2(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
 {
     const vd t0 = SV[0];
     const vd t1 = SV[1];
@@ -3917,8 +4010,8 @@ static void __attribute__((noinline)) beam3d_quadrature_law_damped_force_jacobia
     SV[583] = t1268;
 }
 
-/* Part 2 of 2 of beam3d_quadrature_law_damped_force_jacobians (split so that it compiles fast). */
-static void __attribute__((noinline)) beam3d_quadrature_law_damped_force_jacobians_part2(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
+/* Part 3 of 3 of beam3d_quadrature_law_damped_force_jacobians (split so that it compiles fast). */
+static void __attribute__((noinline)) beam3d_quadrature_law_damped_force_jacobians_part3(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
 {
     const double t84 = SD[0];
     const double t81 = SD[1];
@@ -6273,98 +6366,12 @@ void beam3d_quadrature_law_damped_force_jacobians(long m, const double *e_in, lo
     for (int i = 0; i < 576; i++) jacobian_dot[i] = (vd){0};
     vd SV[584];
     double SD[12];
-    const vd t0 = e[3] - e0[3];
-    const vd t1 = e[4] - e0[4];
-    const vd t2 = e[5] - e0[5];
-    const vd t3 = e[6] - e0[6];
-    const vd t4 = e[7] - e0[7];
-    const vd t5 = e[8] - e0[8];
-    const vd t6 = e[9] - e0[9];
-    const vd t7 = e[10] - e0[10];
-    const vd t8 = e[11] - e0[11];
-    const vd t9 = e[12] - e[0];
-    const vd t10 = t9 - e[12];
-    const vd t11 = t9 - t10;
-    const vd t12 = e[12] - t11;
-    const vd t13 = e[0] + t10;
-    const vd t14 = t12 - t13;
-    const vd t15 = e0[12] - e0[0];
-    const vd t16 = t15 - e0[12];
-    const vd t17 = t15 - t16;
-    const vd t18 = e0[12] - t17;
-    const vd t19 = e0[0] + t16;
-    const vd t20 = t18 - t19;
-    const vd t21 = t9 - t15;
-    const vd t22 = t14 - t20;
-    const vd t23 = t21 + t22;
-    const vd t24 = e[13] - e[1];
-    const vd t25 = t24 - e[13];
-    const vd t26 = t24 - t25;
-    const vd t27 = e[13] - t26;
-    const vd t28 = e[1] + t25;
-    const vd t29 = t27 - t28;
-    const vd t30 = e0[13] - e0[1];
-    const vd t31 = t30 - e0[13];
-    const vd t32 = t30 - t31;
-    const vd t33 = e0[13] - t32;
-    const vd t34 = e0[1] + t31;
-    const vd t35 = t33 - t34;
-    const vd t36 = t24 - t30;
-    const vd t37 = t29 - t35;
-    const vd t38 = t36 + t37;
-    const vd t39 = e[14] - e[2];
-    const vd t40 = t39 - e[14];
-    const vd t41 = t39 - t40;
-    const vd t42 = e[14] - t41;
-    const vd t43 = e[2] + t40;
-    const vd t44 = t42 - t43;
-    const vd t45 = e0[14] - e0[2];
-    const vd t46 = t45 - e0[14];
-    const vd t47 = t45 - t46;
-    const vd t48 = e0[14] - t47;
-    const vd t49 = e0[2] + t46;
-    const vd t50 = t48 - t49;
-    const vd t51 = t39 - t45;
-    const vd t52 = t44 - t50;
-    const vd t53 = t51 + t52;
-    const vd t54 = e[15] - e0[15];
-    const vd t55 = e[16] - e0[16];
-    const vd t56 = e[17] - e0[17];
-    const vd t57 = e[18] - e0[18];
-    const vd t58 = e[19] - e0[19];
-    const vd t59 = e[20] - e0[20];
-    const vd t60 = e[21] - e0[21];
-    const vd t61 = e[22] - e0[22];
-    const vd t62 = e[23] - e0[23];
-
-    SV[0] = t0;
-    SV[1] = t1;
-    SV[2] = t2;
-    SV[3] = t3;
-    SV[4] = t4;
-    SV[5] = t5;
-    SV[6] = t6;
-    SV[7] = t7;
-    SV[8] = t8;
-    SV[9] = t15;
-    SV[10] = t23;
-    SV[11] = t30;
-    SV[12] = t38;
-    SV[13] = t45;
-    SV[14] = t53;
-    SV[15] = t54;
-    SV[16] = t55;
-    SV[17] = t56;
-    SV[18] = t57;
-    SV[19] = t58;
-    SV[20] = t59;
-    SV[21] = t60;
-    SV[22] = t61;
-    SV[23] = t62;
+    const double *tab = table_in;  /* (the parts before the loop do not read it) */
+    beam3d_quadrature_law_damped_force_jacobians_part1(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
     for (long point = 0; point < npoints; point++) {
-      const double *tab = table_in + point * 27;
-      beam3d_quadrature_law_damped_force_jacobians_part1(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
+      tab = table_in + point * 27;
       beam3d_quadrature_law_damped_force_jacobians_part2(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
+      beam3d_quadrature_law_damped_force_jacobians_part3(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
     }
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 24; i++) force_out[(first + j) * 24 + i] = force[i][j];

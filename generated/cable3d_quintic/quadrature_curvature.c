@@ -2019,8 +2019,89 @@ void cable3d_quintic_quadrature_curvature_damping_force(long m, const double *e_
   }
 }
 
-/* Part 1 of 2 of cable3d_quintic_quadrature_curvature_damped_force_jacobians (split so that it compiles fast). */
+/* Part 1 of 3 of cable3d_quintic_quadrature_curvature_damped_force_jacobians (split so that it compiles fast). */
 static void __attribute__((noinline)) cable3d_quintic_quadrature_curvature_damped_force_jacobians_part1(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
+{
+    const vd t0 = e[3] - e0[3];
+    const vd t1 = e[4] - e0[4];
+    const vd t2 = e[5] - e0[5];
+    const vd t3 = e[6] - e0[6];
+    const vd t4 = e[7] - e0[7];
+    const vd t5 = e[8] - e0[8];
+    const vd t12 = e0[9] - e0[0];
+    const vd t13 = t12 - e0[9];
+    const vd t16 = e0[0] + t13;
+    const vd t14 = t12 - t13;
+    const vd t15 = e0[9] - t14;
+    const vd t17 = t15 - t16;
+    const vd t6 = e[9] - e[0];
+    const vd t7 = t6 - e[9];
+    const vd t8 = t6 - t7;
+    const vd t9 = e[9] - t8;
+    const vd t10 = e[0] + t7;
+    const vd t11 = t9 - t10;
+    const vd t19 = t11 - t17;
+    const vd t18 = t6 - t12;
+    const vd t20 = t18 + t19;
+    const vd t27 = e0[10] - e0[1];
+    const vd t28 = t27 - e0[10];
+    const vd t31 = e0[1] + t28;
+    const vd t29 = t27 - t28;
+    const vd t30 = e0[10] - t29;
+    const vd t32 = t30 - t31;
+    const vd t21 = e[10] - e[1];
+    const vd t22 = t21 - e[10];
+    const vd t25 = e[1] + t22;
+    const vd t23 = t21 - t22;
+    const vd t24 = e[10] - t23;
+    const vd t26 = t24 - t25;
+    const vd t34 = t26 - t32;
+    const vd t33 = t21 - t27;
+    const vd t35 = t33 + t34;
+    const vd t42 = e0[11] - e0[2];
+    const vd t43 = t42 - e0[11];
+    const vd t46 = e0[2] + t43;
+    const vd t44 = t42 - t43;
+    const vd t45 = e0[11] - t44;
+    const vd t47 = t45 - t46;
+    const vd t36 = e[11] - e[2];
+    const vd t37 = t36 - e[11];
+    const vd t40 = e[2] + t37;
+    const vd t38 = t36 - t37;
+    const vd t39 = e[11] - t38;
+    const vd t41 = t39 - t40;
+    const vd t49 = t41 - t47;
+    const vd t48 = t36 - t42;
+    const vd t50 = t48 + t49;
+    const vd t51 = e[12] - e0[12];
+    const vd t52 = e[13] - e0[13];
+    const vd t53 = e[14] - e0[14];
+    const vd t54 = e[15] - e0[15];
+    const vd t55 = e[16] - e0[16];
+    const vd t56 = e[17] - e0[17];
+
+    SV[0] = t0;
+    SV[1] = t1;
+    SV[2] = t2;
+    SV[3] = t3;
+    SV[4] = t4;
+    SV[5] = t5;
+    SV[6] = t12;
+    SV[7] = t20;
+    SV[8] = t27;
+    SV[9] = t35;
+    SV[10] = t42;
+    SV[11] = t50;
+    SV[12] = t51;
+    SV[13] = t52;
+    SV[14] = t53;
+    SV[15] = t54;
+    SV[16] = t55;
+    SV[17] = t56;
+}
+
+/* Part 2 of 3 of cable3d_quintic_quadrature_curvature_damped_force_jacobians (split so that it compiles fast). */
+static void __attribute__((noinline)) cable3d_quintic_quadrature_curvature_damped_force_jacobians_part2(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
 {
     const vd t0 = SV[0];
     const vd t1 = SV[1];
@@ -3730,8 +3811,8 @@ static void __attribute__((noinline)) cable3d_quintic_quadrature_curvature_dampe
     SD[8] = t1106;
 }
 
-/* Part 2 of 2 of cable3d_quintic_quadrature_curvature_damped_force_jacobians (split so that it compiles fast). */
-static void __attribute__((noinline)) cable3d_quintic_quadrature_curvature_damped_force_jacobians_part2(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
+/* Part 3 of 3 of cable3d_quintic_quadrature_curvature_damped_force_jacobians (split so that it compiles fast). */
+static void __attribute__((noinline)) cable3d_quintic_quadrature_curvature_damped_force_jacobians_part3(const vd *restrict e, const vd *restrict e0, const vd *restrict e_dot, const double *restrict alpha, vd *restrict force, vd *restrict jacobian, vd *restrict jacobian_dot, vd *restrict SV, double *restrict SD, const double *restrict tab)
 {
     const vd t0 = SV[0];
     const vd t1 = SV[1];
@@ -5679,86 +5760,12 @@ void cable3d_quintic_quadrature_curvature_damped_force_jacobians(long m, const d
     for (int i = 0; i < 324; i++) jacobian_dot[i] = (vd){0};
     vd SV[395];
     double SD[9];
-    const vd t0 = e[3] - e0[3];
-    const vd t1 = e[4] - e0[4];
-    const vd t2 = e[5] - e0[5];
-    const vd t3 = e[6] - e0[6];
-    const vd t4 = e[7] - e0[7];
-    const vd t5 = e[8] - e0[8];
-    const vd t6 = e[9] - e[0];
-    const vd t7 = t6 - e[9];
-    const vd t8 = t6 - t7;
-    const vd t9 = e[9] - t8;
-    const vd t10 = e[0] + t7;
-    const vd t11 = t9 - t10;
-    const vd t12 = e0[9] - e0[0];
-    const vd t13 = t12 - e0[9];
-    const vd t14 = t12 - t13;
-    const vd t15 = e0[9] - t14;
-    const vd t16 = e0[0] + t13;
-    const vd t17 = t15 - t16;
-    const vd t18 = t6 - t12;
-    const vd t19 = t11 - t17;
-    const vd t20 = t18 + t19;
-    const vd t21 = e[10] - e[1];
-    const vd t22 = t21 - e[10];
-    const vd t23 = t21 - t22;
-    const vd t24 = e[10] - t23;
-    const vd t25 = e[1] + t22;
-    const vd t26 = t24 - t25;
-    const vd t27 = e0[10] - e0[1];
-    const vd t28 = t27 - e0[10];
-    const vd t29 = t27 - t28;
-    const vd t30 = e0[10] - t29;
-    const vd t31 = e0[1] + t28;
-    const vd t32 = t30 - t31;
-    const vd t33 = t21 - t27;
-    const vd t34 = t26 - t32;
-    const vd t35 = t33 + t34;
-    const vd t36 = e[11] - e[2];
-    const vd t37 = t36 - e[11];
-    const vd t38 = t36 - t37;
-    const vd t39 = e[11] - t38;
-    const vd t40 = e[2] + t37;
-    const vd t41 = t39 - t40;
-    const vd t42 = e0[11] - e0[2];
-    const vd t43 = t42 - e0[11];
-    const vd t44 = t42 - t43;
-    const vd t45 = e0[11] - t44;
-    const vd t46 = e0[2] + t43;
-    const vd t47 = t45 - t46;
-    const vd t48 = t36 - t42;
-    const vd t49 = t41 - t47;
-    const vd t50 = t48 + t49;
-    const vd t51 = e[12] - e0[12];
-    const vd t52 = e[13] - e0[13];
-    const vd t53 = e[14] - e0[14];
-    const vd t54 = e[15] - e0[15];
-    const vd t55 = e[16] - e0[16];
-    const vd t56 = e[17] - e0[17];
-
-    SV[0] = t0;
-    SV[1] = t1;
-    SV[2] = t2;
-    SV[3] = t3;
-    SV[4] = t4;
-    SV[5] = t5;
-    SV[6] = t12;
-    SV[7] = t20;
-    SV[8] = t27;
-    SV[9] = t35;
-    SV[10] = t42;
-    SV[11] = t50;
-    SV[12] = t51;
-    SV[13] = t52;
-    SV[14] = t53;
-    SV[15] = t54;
-    SV[16] = t55;
-    SV[17] = t56;
+    const double *tab = table_in;  /* (the parts before the loop do not read it) */
+    cable3d_quintic_quadrature_curvature_damped_force_jacobians_part1(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
     for (long point = 0; point < npoints; point++) {
-      const double *tab = table_in + point * 14;
-      cable3d_quintic_quadrature_curvature_damped_force_jacobians_part1(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
+      tab = table_in + point * 14;
       cable3d_quintic_quadrature_curvature_damped_force_jacobians_part2(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
+      cable3d_quintic_quadrature_curvature_damped_force_jacobians_part3(e, e0, e_dot, alpha, force, jacobian, jacobian_dot, SV, SD, tab);
     }
     for (int j = 0; j < ANCF_LANES && first + j < m; j++) {
       for (int i = 0; i < 18; i++) force_out[(first + j) * 18 + i] = force[i][j];
