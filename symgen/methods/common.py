@@ -29,8 +29,8 @@ def kernel_name(quantities) -> str:
 
 #: Kelvin-Voigt damping kernels (stress = D (eps + alpha eps_dot)) of the gram and
 #: quadrature_law families: the damping force alone, and the elastic plus damping force with
-#: both Jacobians in one pass (the Jacobians of the damping force alone are that kernel's
-#: minus the elastic ones, ``runtime.element.Element.damping_jacobians``).
+#: both Jacobians in one pass (the damping force's own d/de is that kernel's less the elastic
+#: Jacobian: ``Element.internal_force_and_jacobians`` less ``Element.elastic_jacobian``).
 DAMPING_KERNELS = ("damping_force", "damped_force_jacobians")
 
 
