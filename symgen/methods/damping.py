@@ -29,9 +29,7 @@ def damping_arrays(spec: ElementSpec, name: str) -> tuple[Array, list[Array]]:
     alpha = Array("alpha", 1, "shared", "Kelvin-Voigt damping coefficient alpha (s)")
     force_doc = {"damping_force": "damping force -alpha int (deps/de)^T D eps_dot dV0 (N)",
                  "damped_force_jacobians": "elastic plus damping force (N)"}
-    outputs = []
-    if name in force_doc:
-        outputs.append(Array("force", spec.ndof, "output", force_doc[name]))
+    outputs = [Array("force", spec.ndof, "output", force_doc[name])]
     if name != "damping_force":
         outputs += [Array("jacobian", spec.ndof**2, "output",
                           "d(elastic plus damping force)/de (N/m), row-major ndof x ndof"),
